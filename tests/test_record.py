@@ -1,0 +1,150 @@
+"""The run folder: round trip, PedPy reads the trajectory file unchanged, a killed writer
+leaves readable files."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+
+from crowdwalk.record import FOOTSTEP_COLUMNS, RunWriter, open_run
+
+SQUARE = "POLYGON ((0 0, 10 0, 10 5, 0 5, 0 0))"
+
+
+def _steps(k, t0=0.0):
+    rows = {c: np.zeros(k) for c in FOOTSTEP_COLUMNS}
+    rows["agent"] = np.arange(k)
+    rows["step"] = np.arange(k) + 1
+    rows["time"] = t0 + np.linspace(0, 1, k)
+    rows["foot"] = np.array(["left", "right"] * (k // 2) + ["left"] * (k % 2))
+    rows["planner"] = np.array(["best_first"] * k)
+    rows["group"] = np.array(["g"] * k)
+    rows["x"] = np.linspace(1, 2, k)
+    rows["kind"] = np.zeros(k, int)
+    rows["on_obstacle"] = np.zeros(k, int)
+    return rows
+
+
+def _write(tmp_path, poses=True):
+    skeleton = (["root", "l_hip", "l_knee"], [-1, 0, 1]) if poses else None
+    w = RunWriter(tmp_path, scenario_text="name: t\n", walkable_wkt=SQUARE, fps=10.0,
+                  skeleton=skeleton)
+    rng = np.random.default_rng(1)
+    for frame in range(5):
+        ids = np.array([3, 7]) if frame < 4 else np.array([7])
+        xy = rng.uniform(1, 4, (ids.size, 2))
+        ori = np.tile([1.0, 0.0], (ids.size, 1))
+        w.write_frame(frame, ids, xy, z=np.full(ids.size, 0.25 * frame), orientation=ori)
+        if poses:
+            k = ids.size
+            w.write_pose(frame, frame / 10, ids, xy @ np.eye(2, 3), np.tile([1, 0, 0, 0], (k, 1)),
+                         np.tile([1.0, 0, 0, 0], (k, 3, 1)), rng.normal(size=(k, 3, 3)),
+                         np.ones((k, 2), bool), np.zeros(k, bool))
+    w.write_agents(np.array([3, 7]), np.array([1.7, 1.8]), ["g", "g"], ["fixed", "fixed"])
+    w.write_footsteps(_steps(3))
+    w.write_summary({"agents": {"3": {"distance": np.float64(2.5)}}, "complete": True})
+    w.close()
+    return rng
+
+
+def test_round_trip(tmp_path):
+    _write(tmp_path)
+    run = open_run(tmp_path)
+    traj = run.trajectories()
+    assert traj.frame.tolist() == [0, 0, 1, 1, 2, 2, 3, 3, 4]
+    assert traj.id.tolist() == [3, 7] * 4 + [7]
+    np.testing.assert_allclose(traj.z, np.repeat([0, 0.25, 0.5, 0.75], 2).tolist() + [1.0])
+    assert run.fps == 10.0
+    assert run.walkable_area().area == pytest.approx(50.0)
+    steps = run.footsteps()
+    assert steps["agent"].tolist() == [0, 1, 2]
+    assert steps["foot"].tolist() == ["left", "right", "left"]
+    np.testing.assert_allclose(steps["x"], [1, 1.5, 2])
+    assert run.summary["agents"]["3"]["distance"] == 2.5
+    poses = run.poses()
+    assert poses.names == ["root", "l_hip", "l_knee"]
+    assert poses.parents.tolist() == [-1, 0, 1]
+    assert poses.frames.tolist() == [0, 1, 2, 3, 4]
+    rec = poses.frame(4)
+    assert rec.ids.tolist() == [7] and rec.joints.shape == (1, 3, 4)
+    track = poses.agent_track(3)
+    assert track["time"].shape == (4,) and track["positions"].shape == (4, 3, 3)
+    assert poses.body_heights == {3: 1.7, 7: 1.8}
+
+
+def test_pedpy_reads_trajectory_unchanged(tmp_path):
+    pedpy = pytest.importorskip("pedpy")
+    _write(tmp_path, poses=False)
+    path = tmp_path / "trajectories.sqlite"
+    traj = pedpy.load_trajectory_from_jupedsim_sqlite(trajectory_file=path)
+    assert traj.frame_rate == 10.0
+    assert len(traj.data) == 9
+    assert set(traj.data["id"]) == {3, 7}
+    area = pedpy.load_walkable_area_from_jupedsim_sqlite(trajectory_file=path)
+    assert area.polygon.area == pytest.approx(50.0)
+    assert not (tmp_path / "poses.sqlite").exists()
+    assert open_run(tmp_path).poses() is None
+
+
+def test_footsteps_need_every_column(tmp_path):
+    w = RunWriter(tmp_path, scenario_text="", walkable_wkt=SQUARE, fps=5)
+    rows = _steps(2)
+    del rows["energy"]
+    with pytest.raises(ValueError, match="RunWriter.footsteps must be"):
+        w.write_footsteps(rows)
+    w.close()
+
+
+def test_bad_fps_is_rejected(tmp_path):
+    with pytest.raises(ValueError, match=r"RunWriter.fps must be a positive frame rate \[1/s\]"):
+        RunWriter(tmp_path, scenario_text="", walkable_wkt=SQUARE, fps=0)
+
+
+def test_killed_writer_leaves_readable_files(tmp_path):
+    """A writer killed (SIGKILL) between flushes leaves everything up to the last flush."""
+    script = textwrap.dedent(
+        f"""
+        import sys, time
+        import numpy as np
+        from crowdwalk.record import RunWriter, FOOTSTEP_COLUMNS
+        w = RunWriter(sys.argv[1], scenario_text="x: 1\\n", walkable_wkt={SQUARE!r}, fps=10,
+                      skeleton=(["root"], [-1]))
+        for frame in range(10**6):
+            w.write_frame(frame, np.array([1]), np.array([[1.0, 1.0]]), np.zeros(1),
+                          np.array([[1.0, 0.0]]))
+            w.write_pose(frame, frame / 10, np.array([1]), np.zeros((1, 3)),
+                         np.array([[1.0, 0, 0, 0]]), np.zeros((1, 1, 4)), np.zeros((1, 1, 3)),
+                         np.ones((1, 2), bool), np.zeros(1, bool))
+            rows = {{c: np.zeros(1) for c in FOOTSTEP_COLUMNS}}
+            rows.update(foot=np.array(["left"]), planner=np.array(["fixed"]),
+                        group=np.array(["g"]))
+            w.write_footsteps(rows)
+            if frame % 10 == 9:
+                w.flush()
+                print(frame, flush=True)
+            time.sleep(0.002)
+        """
+    )
+    proc = subprocess.Popen([sys.executable, "-c", script, str(tmp_path)], stdout=subprocess.PIPE,
+                            text=True)
+    try:
+        for _ in range(3):  # wait for three flushes
+            assert proc.stdout.readline().strip()
+        time.sleep(0.05)
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+    run = open_run(tmp_path)
+    traj = run.trajectories()
+    assert traj.frame.size >= 30
+    assert np.array_equal(traj.frame, np.arange(traj.frame.size))
+    assert run.poses().frames.size >= 30
+    assert run.footsteps()["agent"].size >= 30
+    pedpy = pytest.importorskip("pedpy")
+    assert len(pedpy.load_trajectory_from_jupedsim_sqlite(
+        trajectory_file=tmp_path / "trajectories.sqlite").data) >= 30
