@@ -1,0 +1,162 @@
+"""The ground profile along a walking path: height as a function of arc length."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from planners.errors import invalid
+
+__all__ = ["GroundProfile"]
+
+
+@dataclass(frozen=True, eq=False)
+class GroundProfile:
+    """Piecewise-linear ground heights along a path.
+
+    Parameters
+    ----------
+    s : array_like, shape (m,)
+        Non-decreasing arc length of the vertices [m]. Two rows with the same ``s`` are a
+        vertical height change (a stair riser, the side of a block). ``s = 0`` is where
+        the current stance foot (its ankle) stands.
+    z : array_like, shape (m,)
+        Ground height of the vertices [m].
+
+    Notes
+    -----
+    Outside ``[s[0], s[-1]]`` the height continues flat at the end heights. At a vertical
+    change the height is right-continuous: ``height(s_jump)`` is the height after it.
+    """
+
+    s: np.ndarray
+    z: np.ndarray
+
+    def __post_init__(self) -> None:
+        s = _as_vector(self.s, "s")
+        z = _as_vector(self.z, "z")
+        if s.size == 0:
+            raise invalid("GroundProfile", "s", "a non-empty array [m]", s.tolist())
+        if z.size != s.size:
+            raise invalid("GroundProfile", "z", f"of the same length as s ({s.size})", z.size)
+        decreasing = np.flatnonzero(np.diff(s) < 0)
+        if decreasing.size:
+            i = int(decreasing[0])
+            raise invalid(
+                "GroundProfile", "s", "non-decreasing [m]",
+                f"s[{i}]={s[i]:g} > s[{i + 1}]={s[i + 1]:g}",
+            )
+        if s.size == 1:  # a single point is a flat ground at that height
+            s = np.array([s[0], s[0] + 1.0])
+            z = np.array([z[0], z[0]])
+        s.setflags(write=False)
+        z.setflags(write=False)
+        object.__setattr__(self, "s", s)
+        object.__setattr__(self, "z", z)
+
+    # -- construction ------------------------------------------------------------------
+
+    @classmethod
+    def flat(cls, length: float = 10.0, height: float = 0.0, start: float = -2.0):
+        """A flat ground from ``start`` to ``start + length`` [m] at ``height`` [m]."""
+        return cls(np.array([start, start + length]), np.array([height, height]))
+
+    @classmethod
+    def stairs(
+        cls, rise: float, tread: float, count: int, first_edge: float = 0.5,
+        length: float = 10.0, start: float = -2.0,
+    ):
+        """A flight of ``count`` steps [m]: first riser at ``first_edge`` [m].
+
+        ``rise`` > 0 goes up, < 0 goes down; each tread is ``tread`` deep [m].
+        """
+        s = [start]
+        z = [0.0]
+        for i in range(count):
+            edge = first_edge + i * tread
+            s += [edge, edge]
+            z += [i * rise, (i + 1) * rise]
+        s.append(max(start + length, first_edge + count * tread + 1.0))
+        z.append(count * rise)
+        return cls(np.array(s), np.array(z))
+
+    def shifted(self, ds: float = 0.0, dz: float = 0.0) -> GroundProfile:
+        """The same profile translated by ``ds`` along the path and ``dz`` up [m]."""
+        return GroundProfile(self.s + ds, self.z + dz)
+
+    # -- queries -----------------------------------------------------------------------
+
+    def height(self, s: np.ndarray | float) -> np.ndarray:
+        """Ground height [m] at arc lengths ``s`` [m] (any shape), right-continuous."""
+        q = np.asarray(s, dtype=float)
+        i = np.clip(np.searchsorted(self.s, q, side="right") - 1, 0, self.s.size - 2)
+        s0, s1 = self.s[i], self.s[i + 1]
+        z0, z1 = self.z[i], self.z[i + 1]
+        ds = s1 - s0
+        t = np.where(ds > 0, (q - s0) / np.where(ds > 0, ds, 1.0), 1.0)
+        return np.where(q <= self.s[0], self.z[0], np.where(
+            q >= self.s[-1], self.z[-1], z0 + np.clip(t, 0.0, 1.0) * (z1 - z0)))
+
+    @cached_property
+    def jumps(self) -> tuple[np.ndarray, np.ndarray]:
+        """Vertical height changes: arc lengths (j,) [m] and signed rises (j,) [m]."""
+        same = np.flatnonzero(np.diff(self.s) == 0)
+        return self.s[same], self.z[same + 1] - self.z[same]
+
+    @cached_property
+    def _range_max_table(self) -> list[np.ndarray]:
+        """Sparse table of vertex-height maxima over runs of 2**k vertices."""
+        table = [self.z]
+        width = 1
+        while 2 * width <= self.z.size:
+            prev = table[-1]
+            table.append(np.maximum(prev[:-width], prev[width:]))
+            width *= 2
+        return table
+
+    def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Highest ground [m] over the closed intervals ``[a, b]`` [m] (same shapes).
+
+        Exact for the piecewise-linear profile, including both sides of vertical
+        changes; vectorised with a sparse range-maximum table.
+        """
+        a = np.asarray(a, dtype=float)
+        b = np.maximum(np.asarray(b, dtype=float), a)
+        best = np.maximum(self.height(a), self.height(b))
+        lo = np.searchsorted(self.s, a, side="left")
+        hi = np.searchsorted(self.s, b, side="right")  # vertices lo..hi-1 lie in [a, b]
+        count = hi - lo
+        has = count > 0
+        if np.any(has):
+            table = self._range_max_table
+            k = np.zeros(count.shape, dtype=int)
+            k[has] = np.floor(np.log2(count[has])).astype(int)
+            k = np.minimum(k, len(table) - 1)
+            inner = np.full(count.shape, -np.inf)
+            for level in np.unique(k[has]):
+                sel = has & (k == level)
+                row = table[level]
+                width = 1 << int(level)
+                inner[sel] = np.maximum(row[lo[sel]], row[hi[sel] - width])
+            best = np.maximum(best, inner)
+        return best
+
+    def __repr__(self) -> str:
+        return (f"GroundProfile({self.s.size} vertices, s=[{self.s[0]:g}, {self.s[-1]:g}] m, "
+                f"z=[{self.z.min():g}, {self.z.max():g}] m)")
+
+
+def _as_vector(values, field: str) -> np.ndarray:
+    try:
+        arr = np.array(values, dtype=float).reshape(-1) if np.ndim(values) <= 1 else None
+    except (TypeError, ValueError):
+        raise invalid("GroundProfile", field, "an array of numbers [m]", values) from None
+    if arr is None:
+        raise invalid("GroundProfile", field, "one-dimensional [m]", np.shape(values))
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        i = int(bad[0])
+        raise invalid("GroundProfile", field, "finite [m]", f"{field}[{i}]={arr[i]}")
+    return arr
