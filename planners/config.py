@@ -1,0 +1,137 @@
+"""Planner parameters: search grid, legality limits and energy weights."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from planners.errors import invalid
+
+__all__ = ["EnergyWeights", "PlannerConfig"]
+
+
+@dataclass(frozen=True)
+class EnergyWeights:
+    """Weights of the energy model, Eqs. (3)-(4) of Chen & Li.
+
+    ``E = alpha*En + beta*Ev + gamma*Ej`` in J/kg per step.
+
+    Parameters
+    ----------
+    alpha : float
+        J/cal: Eq. (1) gives Ralston's energy in cal/kg per step; 4.184 J/cal.
+    beta : float
+        J/kg per unit of Eq. (2): chosen so that a 17 cm step up costs
+        g*h/0.25 = 6.7 J/kg (25 % muscle efficiency for positive work, Margaria 1976).
+    gamma : float
+        Dimensionless weight of the joint-rotation term Ej.
+    c_thigh, c_calf : float
+        J/kg per radian of thigh and calf rotation (Eq. 3); chosen so that the flat-ground
+        efficiency peaks near a 0.6 m step (Fig. 2) for the standard 1.75 m body.
+    down_ratio : float
+        Cost of stepping down relative to stepping up by the same height: negative
+        work costs about a third of positive work (Abbott, Bigland & Ritchie 1952).
+    """
+
+    alpha: float = 4.184
+    beta: float = 0.0961
+    gamma: float = 1.0
+    c_thigh: float = 1.0
+    c_calf: float = 0.1
+    down_ratio: float = 1.0 / 3.0
+
+    def __post_init__(self) -> None:
+        for name in ("alpha", "beta", "gamma", "c_thigh", "c_calf", "down_ratio"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise invalid("EnergyWeights", name, "finite and >= 0", value)
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Search grid and legality limits (defaults follow §4.2 and §6.2).
+
+    Lengths are in metres; ratios are fractions of the leg length (hip to ankle).
+
+    Parameters
+    ----------
+    n_steps : int
+        Planning horizon n (§4.2: three or four steps); 1..5.
+    intervals : int
+        Step-length grid intervals (§6.2: 13, also 11 and 7); the grid has
+        ``intervals + 1`` step lengths.
+    min_step_ratio, max_step_ratio : float
+        Range of reasonable step lengths as fractions of the leg length [-].
+    clearance : float
+        Sole clearance of the swing foot over the ground [m].
+    edge_margin : float
+        Distance the foot keeps from a stair edge or riser [m].
+    support_tolerance : float
+        Largest unevenness tolerated under a foot, and largest height change that is
+        not an edge [m].
+    max_step_rise : float
+        Largest height change of one step [m] (Eq. 2 is given for h < 40 cm).
+    max_foot_slope : float
+        Steepest ground under a foot [rise/run].
+    swing_lift : float
+        Initial height of both Bezier control points above the chord midpoint [m] (§5.2).
+    max_swing_lift : float
+        Legal region of the control points: at most this high above the higher end [m].
+    bezier_samples : int
+        Samples of the swing curve used for collision checks.
+    max_adjustments : int
+        Most §5.2 adjustment rounds per curve before the step is illegal.
+    knee_max_flexion : float
+        Largest knee flexion at a key frame [rad].
+    pelvis_height_ratio : float
+        Pelvis above the stance ankle at mid-stance, fraction of the leg length [-].
+    turn_threshold : float
+        Largest foot rotation per step on curved paths (§5.4) [rad].
+    weights : EnergyWeights
+        Energy model weights.
+    """
+
+    n_steps: int = 4
+    intervals: int = 13
+    min_step_ratio: float = 0.30
+    max_step_ratio: float = 1.05
+    clearance: float = 0.02
+    edge_margin: float = 0.02
+    support_tolerance: float = 0.02
+    max_step_rise: float = 0.40
+    max_foot_slope: float = 0.5
+    swing_lift: float = 0.10
+    max_swing_lift: float = 0.60
+    bezier_samples: int = 20
+    max_adjustments: int = 25
+    knee_max_flexion: float = math.radians(130.0)
+    pelvis_height_ratio: float = 0.96
+    turn_threshold: float = math.radians(45.0)
+    weights: EnergyWeights = field(default_factory=EnergyWeights)
+
+    def __post_init__(self) -> None:
+        ints = {"n_steps": (1, 5), "intervals": (2, 40), "bezier_samples": (4, 200),
+                "max_adjustments": (0, 1000)}
+        for name, (lo, hi) in ints.items():
+            value = getattr(self, name)
+            if not (isinstance(value, int) and lo <= value <= hi):
+                raise invalid("PlannerConfig", name, f"an integer in [{lo}, {hi}]", value)
+        positive = ("min_step_ratio", "max_step_ratio", "max_step_rise", "max_foot_slope",
+                    "max_swing_lift", "knee_max_flexion", "pelvis_height_ratio",
+                    "turn_threshold")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise invalid("PlannerConfig", name, "finite and > 0", value)
+        for name in ("clearance", "edge_margin", "support_tolerance", "swing_lift"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise invalid("PlannerConfig", name, "finite and >= 0 [m]", value)
+        if self.max_step_ratio <= self.min_step_ratio:
+            raise invalid("PlannerConfig", "max_step_ratio",
+                          f"> min_step_ratio = {self.min_step_ratio:g}", self.max_step_ratio)
+        if self.pelvis_height_ratio > 1:
+            raise invalid("PlannerConfig", "pelvis_height_ratio", "<= 1",
+                          self.pelvis_height_ratio)
+        if not isinstance(self.weights, EnergyWeights):
+            raise invalid("PlannerConfig", "weights", "an EnergyWeights", self.weights)

@@ -1,0 +1,81 @@
+"""The energy model of Chen & Li, Eqs. (1)-(5), vectorised.
+
+Units: ``En`` is Ralston's walking energy in cal/kg per step, ``Ev`` the printed stair
+term of Eq. (2) (its own unit, h in cm), ``Ej`` J/kg per step from joint rotations [rad].
+``total`` combines them with :class:`~planners.config.EnergyWeights` into J/kg per step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planners.config import EnergyWeights
+
+__all__ = ["walking_energy", "vertical_energy", "joint_energy", "total_energy",
+           "EV_PEAK_CM"]
+
+#: Height [cm] where the printed quadratic of Eq. (2) peaks: 7.14 / (2 * 0.18).
+EV_PEAK_CM = 7.14 / 0.36
+_EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
+
+
+def walking_energy(step_length: np.ndarray, speed: np.ndarray | float) -> np.ndarray:
+    """Eq. (1): En = (32 + 0.005 v^2) / n per step [cal/kg].
+
+    Parameters
+    ----------
+    step_length : array_like
+        Step lengths [m].
+    speed : array_like
+        Walking speed [m/s], broadcast against ``step_length``.
+
+    Notes
+    -----
+    Ralston's rate is in cal/(kg min) with v in m/min; the cadence n [steps/min] is
+    v / step_length because the walker keeps its target speed, so En = rate * L / v.
+    """
+    v = 60.0 * np.asarray(speed, dtype=float)
+    return (32.0 + 0.005 * v**2) * np.asarray(step_length, dtype=float) / v
+
+
+def vertical_energy(rise: np.ndarray, down_ratio: float = 1.0 / 3.0) -> np.ndarray:
+    """Eq. (2): Ev = -0.18 h^2 + 7.14 h for a rise h [cm], in Eq. (2)'s unit.
+
+    Parameters
+    ----------
+    rise : array_like
+        Signed height change of the step [m]; positive is up.
+    down_ratio : float
+        Cost of stepping down relative to stepping up the same height [-].
+
+    Notes
+    -----
+    Deviation: the printed quadratic peaks at h = 19.8 cm and falls after it. Above the
+    peak we continue linearly with the quadratic's mean slope over [0, peak]
+    (Ev_peak / h_peak per cm), so Ev is continuous and increasing. Stepping down costs
+    ``down_ratio`` times stepping up the same height (negative work).
+    """
+    h = 100.0 * np.asarray(rise, dtype=float)
+    a = np.abs(h)
+    up = np.where(a <= EV_PEAK_CM, -0.18 * a**2 + 7.14 * a,
+                  _EV_PEAK + (_EV_PEAK / EV_PEAK_CM) * (a - EV_PEAK_CM))
+    return np.where(h >= 0, up, down_ratio * up)
+
+
+def joint_energy(thigh_rotation: np.ndarray, calf_rotation: np.ndarray,
+                 weights: EnergyWeights) -> np.ndarray:
+    """Eq. (3): Ej = c_thigh (dθ1 + dθ3) + c_calf (dθ2 + dθ4) [J/kg].
+
+    Parameters
+    ----------
+    thigh_rotation, calf_rotation : array_like
+        Summed absolute rotation of both thighs and of both calves over the cycle [rad].
+    """
+    return weights.c_thigh * np.asarray(thigh_rotation) + weights.c_calf * np.asarray(
+        calf_rotation)
+
+
+def total_energy(En: np.ndarray, Ev: np.ndarray, Ej: np.ndarray,
+                 weights: EnergyWeights) -> np.ndarray:
+    """Eq. (4): E = alpha En + beta Ev + gamma Ej [J/kg per step]."""
+    return weights.alpha * En + weights.beta * Ev + weights.gamma * Ej
