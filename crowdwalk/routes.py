@@ -1,0 +1,406 @@
+"""Route graphs: places joined by walkable corridors, shortest routes by travel cost.
+
+A :class:`RouteGraph` wraps a ``networkx.DiGraph``. Nodes are places (``x``, ``y`` [m],
+optional ``area`` polygon); every corridor becomes one directed edge per walkable
+direction with attributes ``width`` [m], ``length`` [m], ``cost`` [m of flat-walking
+equivalent], ``geometry`` (shapely LineString) and ``oneway``.
+
+Cost model (documented deviation-free defaults, :class:`RouteCosts`): the cost of an edge
+is the time to walk it at free speed, expressed in metres of level walking, computed once
+from the terrain profile along its centre line:
+
+- on slopes, Tobler's hiking function (Tobler 1993) relative to level ground,
+  ``f(g) = exp(3.5 (|g + 0.05| − 0.05))``, floored at 1 so that no edge costs less than
+  its length (Tobler's mild-downhill bonus is dropped);
+- each vertical height change (stair riser, curb) adds ``climb·Δz`` going up and
+  ``descent·|Δz|`` going down. The factors follow Weidmann (1993): horizontal speed on
+  stairs 0.610 m/s up and 0.694 m/s down against 1.34 m/s on the level, i.e. 2.20× and
+  1.93× the level travel time, spread over the 1.76 m of run per metre of rise of a
+  standard 0.17/0.30 m stair: (2.20 − 1) · 1.76 = 2.1 and (1.93 − 1) · 1.76 = 1.6;
+- a single vertical change higher than ``max_step`` (0.5 m) is not walkable: building a
+  corridor over it is an error.
+
+One Dijkstra distance field per destination (:meth:`RouteGraph.distances_to`, cached)
+serves every agent going there.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Point, Polygon
+
+from crowdwalk.errors import InfeasibleError, invalid
+
+__all__ = ["Place", "Corridor", "RouteCosts", "RouteGraph", "spawn_points"]
+
+
+@dataclass(frozen=True, eq=False)
+class Place:
+    """A route node: a named place at (x, y) [m] with an optional area polygon [m]."""
+
+    name: str
+    x: float
+    y: float
+    area: Polygon | None = None
+
+    def __post_init__(self):
+        if not (np.isfinite(self.x) and np.isfinite(self.y)):
+            raise invalid("Place", "xy", "finite [m]", (self.x, self.y))
+        if self.area is not None:
+            area = self.area if isinstance(self.area, Polygon) else Polygon(self.area)
+            if not area.is_valid or area.area <= 0:
+                raise invalid(f"Place[{self.name!r}]", "area",
+                              "a valid polygon with positive area [m²]", area.wkt)
+            object.__setattr__(self, "area", area)
+
+
+@dataclass(frozen=True, eq=False)
+class Corridor:
+    """A walkable corridor between places ``a`` and ``b``.
+
+    Parameters
+    ----------
+    a, b : node names
+    width : clear width [m], > 0
+    via : (k, 2) intermediate centre-line points [m] (may be empty)
+    oneway : walkable only from ``a`` to ``b``
+    """
+
+    a: str
+    b: str
+    width: float
+    via: tuple[tuple[float, float], ...] = ()
+    oneway: bool = False
+
+    def __post_init__(self):
+        name = f"Corridor[{self.a!r}->{self.b!r}]"
+        if not (np.isfinite(self.width) and self.width > 0):
+            raise invalid(name, "width", "> 0 [m]", self.width)
+        if self.a == self.b:
+            raise invalid(name, "b", "a different node than a", self.b)
+        object.__setattr__(self, "via", tuple(tuple(float(c) for c in p) for p in self.via))
+
+
+@dataclass(frozen=True)
+class RouteCosts:
+    """Travel-cost factors (see the module docstring for sources).
+
+    Attributes
+    ----------
+    tobler : Tobler's exponent [1/(m/m)]
+    climb : extra cost per metre of vertical rise [m/m]
+    descent : extra cost per metre of vertical drop [m/m]
+    max_step : highest walkable single vertical change [m]
+    min_length : shortest accepted corridor [m]
+    """
+
+    tobler: float = 3.5
+    climb: float = 2.1
+    descent: float = 1.6
+    max_step: float = 0.5
+    min_length: float = 0.05
+
+
+def _slope_factor(grade: np.ndarray, tobler: float) -> np.ndarray:
+    """Tobler (1993) travel-time factor relative to level ground, floored at 1."""
+    return np.maximum(1.0, np.exp(tobler * (np.abs(grade + 0.05) - 0.05)))
+
+
+def spawn_points(area, n: int, rng: np.random.Generator, min_spacing: float = 0.5,
+                 attempts: int = 30) -> np.ndarray:
+    """Up to ``n`` seeded random points inside ``area`` at least ``min_spacing`` apart.
+
+    Parameters
+    ----------
+    area : shapely geometry with positive area [m]
+    n : number of points
+    rng : numpy Generator (the only source of randomness)
+    min_spacing : minimal distance between points [m]
+    attempts : candidates drawn per requested point
+
+    Returns
+    -------
+    (n, 2) points [m]. Raises :class:`~crowdwalk.errors.InputError` if ``n`` points do not
+    fit.
+    """
+    if n < 0 or int(n) != n:
+        raise invalid("spawn_points", "n", "an integer ≥ 0", n)
+    if n == 0:
+        return np.zeros((0, 2))
+    if area is None or area.area <= 0:
+        raise invalid("spawn_points", "area", "a polygon with positive area [m²]", area)
+    if not min_spacing >= 0:
+        raise invalid("spawn_points", "min_spacing", "≥ 0 [m]", min_spacing)
+    shapely.prepare(area)
+    x0, y0, x1, y1 = area.bounds
+    m = attempts * n
+    cand = rng.uniform((x0, y0), (x1, y1), size=(int(m / max(area.area / ((x1 - x0) * (y1 - y0)),
+                                                             1e-3)) + 1, 2))
+    cand = cand[shapely.contains_xy(area, cand[:, 0], cand[:, 1])][:m]
+    chosen = np.empty((n, 2))
+    k = 0
+    d2 = min_spacing**2
+    for c in cand:
+        if k == 0 or np.min(np.sum((chosen[:k] - c) ** 2, axis=1)) >= d2:
+            chosen[k] = c
+            k += 1
+            if k == n:
+                return chosen
+    fit = max(k, 1)
+    raise invalid("spawn_points", "n", f"at most about {fit} for an area of {area.area:.1f} m² "
+                  f"at min_spacing {min_spacing} m", n)
+
+
+class RouteGraph:
+    """Places and corridors as a networkx DiGraph with travel costs from the terrain.
+
+    Parameters
+    ----------
+    places : iterable of :class:`Place`
+    corridors : iterable of :class:`Corridor`
+    terrain : :class:`crowdwalk.terrain.Terrain` or None (level ground everywhere)
+    costs : :class:`RouteCosts`
+    """
+
+    def __init__(self, places, corridors, terrain=None, costs: RouteCosts = RouteCosts()):
+        self.terrain = terrain
+        self.costs = costs
+        self.places = {}
+        for p in places:
+            if p.name in self.places:
+                raise invalid("RouteGraph", "nodes", "unique names", p.name)
+            self.places[p.name] = p
+        self.corridors = tuple(corridors)
+        g = nx.DiGraph()
+        for p in self.places.values():
+            g.add_node(p.name, x=p.x, y=p.y, area=p.area)
+            if terrain is not None and not terrain.area.covers(Point(p.x, p.y)):
+                raise invalid(f"RouteGraph.nodes[{p.name!r}]", "xy",
+                              f"inside the terrain extent {terrain.bounds} [m]", (p.x, p.y))
+        seen = set()
+        for c in self.corridors:
+            self._add_corridor(g, c, seen)
+        self.graph = g
+        self._fields: dict[str, tuple[dict, dict]] = {}
+        self._paths: dict[tuple, np.ndarray] = {}
+
+    # -- construction --
+
+    def _add_corridor(self, g: nx.DiGraph, c: Corridor, seen: set) -> None:
+        name = f"RouteGraph.edges[{c.a!r}->{c.b!r}]"
+        for end in (c.a, c.b):
+            if end not in self.places:
+                raise invalid(name, "node", f"one of {sorted(self.places)}", end)
+        key = frozenset((c.a, c.b))
+        if key in seen:
+            raise invalid(name, "nodes", "joined by one corridor only", f"{c.a!r}, {c.b!r}")
+        seen.add(key)
+        pa, pb = self.places[c.a], self.places[c.b]
+        pts = np.array([(pa.x, pa.y), *c.via, (pb.x, pb.y)], dtype=float)
+        line = LineString(pts)
+        if line.length < self.costs.min_length:
+            raise invalid(name, "length", f"≥ {self.costs.min_length} m (merge the two places)",
+                          round(line.length, 6))
+        if self.terrain is not None:
+            band = line.buffer(c.width / 2)
+            if not self.terrain.area.buffer(1e-9).covers(band):
+                raise invalid(name, "corridor", f"inside the terrain extent {self.terrain.bounds}"
+                              " [m]", f"bounds {tuple(round(v, 2) for v in band.bounds)}")
+        fwd = self._edge_cost(pts, name)
+        g.add_edge(c.a, c.b, width=c.width, length=line.length, cost=fwd, geometry=line,
+                   oneway=c.oneway)
+        if not c.oneway:
+            back = self._edge_cost(pts[::-1], name)
+            g.add_edge(c.b, c.a, width=c.width, length=line.length, cost=back,
+                       geometry=LineString(pts[::-1]), oneway=False)
+
+    def _edge_cost(self, pts: np.ndarray, name: str) -> float:
+        """Travel cost [m of level walking] along centre line ``pts`` (k, 2) [m]."""
+        length = float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
+        if self.terrain is None:
+            return length
+        s, z = self.terrain.profile_arrays(pts)
+        ds, dz = np.diff(s), np.diff(z)
+        jump = ds <= 1e-12
+        if jump.any() and np.abs(dz[jump]).max() > self.costs.max_step:
+            k = np.flatnonzero(jump & (np.abs(dz) > self.costs.max_step))[0]
+            raise invalid(name, "corridor", f"free of vertical steps above "
+                          f"{self.costs.max_step} m", f"{dz[k]:+.3f} m at s = {s[k]:.3f} m")
+        run = ~jump
+        grade = np.zeros_like(ds)
+        grade[run] = dz[run] / ds[run]
+        cost = np.sum(ds[run] * _slope_factor(grade[run], self.costs.tobler))
+        up = np.clip(dz[jump], 0, None).sum()
+        down = np.clip(-dz[jump], 0, None).sum()
+        return float(max(cost, length) + self.costs.climb * up + self.costs.descent * down)
+
+    @classmethod
+    def from_graphml(cls, path, terrain=None, costs: RouteCosts = RouteCosts()) -> RouteGraph:
+        """Read places and corridors from GraphML written by :meth:`to_graphml` (or any
+        GraphML with node attributes ``x``, ``y`` [m] and edge attribute ``width`` [m];
+        optional ``area`` and ``geometry`` as WKT, ``oneway`` bool)."""
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(2, "No such file", str(path))
+        try:
+            g = nx.read_graphml(path)
+        except Exception as exc:  # noqa: BLE001 - parser errors of several kinds
+            raise invalid("GraphML", "file", "valid GraphML", f"{path}: {exc}") from exc
+        places, corridors = [], []
+        for n, d in g.nodes(data=True):
+            if "x" not in d or "y" not in d:
+                raise invalid(f"GraphML.nodes[{n!r}]", "x/y", "present [m]", sorted(d))
+            area = shapely.from_wkt(d["area"]) if d.get("area") else None
+            places.append(Place(str(n), float(d["x"]), float(d["y"]), area))
+        for a, b, d in g.edges(data=True):
+            if "width" not in d:
+                raise invalid(f"GraphML.edges[{a!r}->{b!r}]", "width", "present [m]", sorted(d))
+            via = ()
+            if d.get("geometry"):
+                via = tuple(map(tuple, shapely.get_coordinates(shapely.from_wkt(d["geometry"]))
+                                [1:-1]))
+            corridors.append(Corridor(str(a), str(b), float(d["width"]), via,
+                                      bool(d.get("oneway", False))))
+        return cls(places, corridors, terrain, costs)
+
+    def to_graphml(self, path) -> None:
+        """Write places and corridors (one edge per corridor) as GraphML."""
+        g = nx.DiGraph()
+        for p in self.places.values():
+            g.add_node(p.name, x=p.x, y=p.y, area=p.area.wkt if p.area is not None else "")
+        for c in self.corridors:
+            line = self.graph.edges[c.a, c.b]["geometry"]
+            g.add_edge(c.a, c.b, width=c.width, oneway=c.oneway, geometry=line.wkt)
+        nx.write_graphml(g, path)
+
+    # -- geometry --
+
+    def node_xy(self, name: str) -> np.ndarray:
+        """Position (2,) [m] of node ``name``."""
+        self._check_node(name, "node")
+        p = self.places[name]
+        return np.array([p.x, p.y])
+
+    def node_area(self, name: str) -> Polygon:
+        """Where agents may stand at node ``name``: its area polygon, or else a disc of the
+        widest incident corridor's half width (at least 0.5 m) [m]."""
+        self._check_node(name, "node")
+        p = self.places[name]
+        if p.area is not None:
+            return p.area
+        widths = [d["width"] for *_, d in self.graph.in_edges(name, data=True)]
+        widths += [d["width"] for *_, d in self.graph.out_edges(name, data=True)]
+        return Point(p.x, p.y).buffer(max([0.5] + [w / 2 for w in widths]))
+
+    @functools.cached_property
+    def walkable_area(self):
+        """Union of the corridors (centre lines buffered by half their width) and the node
+        areas, as one shapely geometry [m]."""
+        parts = [c_line.buffer(d["width"] / 2)
+                 for _, _, d in self.graph.edges(data=True) for c_line in [d["geometry"]]]
+        parts += [self.node_area(n) for n in self.graph.nodes]
+        geom = shapely.union_all(parts)
+        shapely.prepare(geom)
+        return geom
+
+    # -- routing --
+
+    def _check_node(self, name, field_name: str) -> None:
+        if name not in self.places:
+            raise invalid("RouteGraph", field_name, f"one of {sorted(self.places)}", name)
+
+    def distances_to(self, dest: str) -> dict[str, float]:
+        """Travel cost [m] from every node that can reach ``dest`` (cached per destination)."""
+        return self._field(dest)[0]
+
+    def _field(self, dest: str):
+        self._check_node(dest, "destination")
+        if dest not in self._fields:
+            dist, paths = nx.single_source_dijkstra(self.graph.reverse(copy=False), dest,
+                                                    weight="cost")
+            self._fields[dest] = (dist, paths)
+        return self._fields[dest]
+
+    def route(self, a: str, b: str) -> list[str]:
+        """Cheapest node sequence from ``a`` to ``b``; raises
+        :class:`~crowdwalk.errors.InfeasibleError` if ``b`` cannot be reached."""
+        self._check_node(a, "origin")
+        dist, paths = self._field(b)
+        if a not in dist:
+            raise InfeasibleError(f"RouteGraph: no route from {a!r} to {b!r} "
+                                  "(check one-way corridors and disconnected parts).")
+        return list(reversed(paths[a]))
+
+    def route_cost(self, a: str, b: str) -> float:
+        """Travel cost [m] of the cheapest route from ``a`` to ``b``."""
+        self.route(a, b)
+        return float(self.distances_to(b)[a])
+
+    def raw_path(self, nodes: list[str]) -> np.ndarray:
+        """Centre-line polyline (k, 2) [m] through a node sequence."""
+        if len(nodes) == 1:
+            return self.node_xy(nodes[0])[None, :]
+        pts = [np.asarray(self.graph.edges[u, v]["geometry"].coords) for u, v in
+               zip(nodes[:-1], nodes[1:], strict=True)]
+        return np.concatenate([pts[0]] + [p[1:] for p in pts[1:]])
+
+    def path(self, a: str, b: str, start=None, radius: float | None = None) -> np.ndarray:
+        """Smooth polyline (k, 2) [m] from ``a`` (or from ``start`` (2,) [m]) to ``b`` along
+        the cheapest route, inside the walkable area.
+
+        Corners are rounded by quadratic Bézier arcs cut back by at most ``radius`` [m]
+        (default: half the narrower adjacent corridor width) and half of each adjacent leg;
+        an arc that would leave the walkable area is shrunk until it stays inside.
+        """
+        nodes = self.route(a, b)
+        key = (a, b, None if start is None else tuple(np.round(start, 9)), radius)
+        if key not in self._paths:
+            raw = self.raw_path(nodes)
+            if start is not None:
+                raw = np.vstack([np.asarray(start, float)[None, :], raw[1:] if len(raw) > 1
+                                 else raw])
+            widths = [self.graph.edges[u, v]["width"] for u, v in
+                      zip(nodes[:-1], nodes[1:], strict=True)]
+            self._paths[key] = self._round_corners(raw, radius, min(widths, default=1.0))
+        return self._paths[key].copy()
+
+    def _round_corners(self, raw: np.ndarray, radius, width: float) -> np.ndarray:
+        keep = np.concatenate([[True], np.linalg.norm(np.diff(raw, axis=0), axis=1) > 1e-9])
+        raw = raw[keep]
+        if len(raw) < 3:
+            return raw
+        r_max = width / 2 if radius is None else float(radius)
+        area = self.walkable_area.buffer(1e-9)
+        out = [raw[0]]
+        t = np.linspace(0.0, 1.0, 9)[:, None]
+        for i in range(1, len(raw) - 1):
+            p0, v, p1 = raw[i - 1], raw[i], raw[i + 1]
+            d_in, d_out = v - p0, p1 - v
+            l_in, l_out = np.linalg.norm(d_in), np.linalg.norm(d_out)
+            cosang = float(np.dot(d_in, d_out) / (l_in * l_out))
+            if cosang > 1 - 1e-9:
+                out.append(v)
+                continue
+            r = min(r_max, 0.5 * l_in, 0.5 * l_out)
+            arc = None
+            for _ in range(6):
+                a_pt, b_pt = v - d_in / l_in * r, v + d_out / l_out * r
+                cand = (1 - t) ** 2 * a_pt + 2 * (1 - t) * t * v + t**2 * b_pt
+                if area.covers(LineString(np.vstack([out[-1], cand]))):
+                    arc = cand
+                    break
+                r /= 2
+            out.extend(arc if arc is not None else [v])
+        out.append(raw[-1])
+        return np.asarray(out)
+
+    def __repr__(self) -> str:
+        return (f"RouteGraph({self.graph.number_of_nodes()} nodes, {len(self.corridors)} "
+                f"corridors, walkable {self.walkable_area.area:.1f} m²)")
+
