@@ -1,0 +1,619 @@
+"""ElevWalker: full-body poses from sagittal elevation angles (Sun & Metaxas 2001, §4, §8).
+
+Per frame and agent, given the stance leg's elevation angles at ``t`` and the swing leg's
+at ``t + 0.5`` (columns foot, shank, thigh, pelvis, :mod:`crowdwalk.gait.datasets`):
+
+1. **Root from the foot–floor interaction model (§4.1).** The stance foot rotates about
+   its instantaneous contact point until its elevation equals the data: about the heel
+   while the foot is pitched up relative to the ground, about the first metatarsal head
+   (ball) once the heel rises; then the toe joint takes the foot elevation and the toes
+   stay flat. Heel and ball points are fixed in the world for the whole step, so the foot
+   never slides, and both lie on the ground plane, so it never penetrates.
+2. **Stance ankle complex (§4.3, Eq. 8).** Talocrural and subtalar angles (skew Inman
+   axes, :mod:`crowdwalk.body`) from two constraints — the shank elevation and the
+   stance width — by batched Gauss–Newton warm-started from the previous frame. The
+   stance knee inside it is the analytic single-DOF solve (§4.2, Eqs. 2–7).
+3. **Hip complex (§4.3).** The pelvis takes the (exact) data pelvis elevation, the pelvic
+   list ``L(t)`` and the heading; the stance hip's 3 DOFs follow in closed form. The
+   swing hip's 3 DOFs solve thigh elevation, swing width and toe-out by Gauss–Newton.
+   Swing knee and swing talocrural joint: analytic single-DOF solves.
+4. **Curved locomotion (§4.4)** through the sagittal-plane heading ψ, per agent.
+5. **Upper body (§8).** Arms swing with the opposite thigh; the spine cancels pelvic
+   tilt, list and rotation so trunk and head stay upright and face the heading.
+
+Optionally the swing ankle is pulled toward a target with IK on the swing leg (the
+Animator's landing correction and swing-clearance blend, issue item 6).
+
+Everything is vectorised over agents: each Gauss–Newton iteration evaluates the
+residuals at the point and at its finite-difference neighbours in one stacked batch.
+Conventions: world x east, y north, z up; ψ from +x; angles [rad]; lengths [m].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from crowdwalk.body import (
+    JOINT,
+    JOINT_NAMES,
+    LEG_JOINTS,
+    SUBTALAR_AXIS,
+    TALOCRURAL_AXIS,
+    Body,
+    axis_angle_matrix,
+    forward_kinematics,
+    mirrored_axis,
+    rotation_x,
+    rotation_y,
+    rotation_z,
+)
+from crowdwalk.errors import invalid
+
+__all__ = [
+    "GaitStyle",
+    "StanceFoot",
+    "WarmStart",
+    "WalkerPose",
+    "elevwalker_pose",
+    "sagittal_elevation",
+    "solve_single_dof",
+    "leg_elevations",
+    "foot_points",
+]
+
+_EY = np.array([0.0, 1.0, 0.0])
+_DOWN = np.array([0.0, 0.0, -1.0])
+_FWD = np.array([1.0, 0.0, 0.0])
+# Skew ankle axes per side (row 0 left, row 1 right), unit vectors in the parent frame.
+_TC_AXES = np.stack([TALOCRURAL_AXIS, mirrored_axis(TALOCRURAL_AXIS)])
+_SUB_AXES = np.stack([SUBTALAR_AXIS, mirrored_axis(SUBTALAR_AXIS)])
+
+
+@dataclass(frozen=True)
+class GaitStyle:
+    """Procedural gait parameters that the sagittal data leave open (§4.3, §8).
+
+    Attributes
+    ----------
+    step_width : float
+        Lateral distance between the left and right ankle lines, fraction of body height
+        [1] (0.05 H ≈ 9 cm for 1.75 m; adult stride width 8–10 cm, Gouelle normals).
+    sway : float
+        Amplitude of the pelvis's lateral sway toward the stance foot, fraction of body
+        height [1] (COM sway ≈ ±2 cm at natural speed).
+    pelvic_list : float
+        Amplitude of pelvic list L(t), swing side down [rad] (Bovi 2011: ≈ ±4°).
+    toe_out : float
+        Default toe-out O(t) of the feet [rad] (foot progression angle 5–10°).
+    arm_swing : float
+        Upper-arm elevation per unit of the opposite thigh's elevation [1] (§8).
+    elbow_flexion : float
+        Elbow flexion at arm's neutral [rad]; half the forward arm swing is added.
+    tolerance : float
+        Gauss–Newton convergence threshold on the residuals [rad or m].
+    max_iterations : int
+        Gauss–Newton iterations before a solve counts as not converged.
+    """
+
+    step_width: float = 0.05
+    sway: float = 0.012
+    pelvic_list: float = float(np.deg2rad(4.0))
+    toe_out: float = float(np.deg2rad(7.0))
+    arm_swing: float = 0.75
+    elbow_flexion: float = float(np.deg2rad(20.0))
+    tolerance: float = 1e-7
+    max_iterations: int = 8
+
+    def __post_init__(self) -> None:
+        for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise invalid("GaitStyle", name, "finite and >= 0", value)
+        if not (np.isfinite(self.toe_out) and abs(self.toe_out) < np.pi / 3):
+            raise invalid("GaitStyle", "toe_out", "finite and in (-60°, 60°) [rad]", self.toe_out)
+        if not (np.isfinite(self.tolerance) and self.tolerance > 0):
+            raise invalid("GaitStyle", "tolerance", "finite and > 0", self.tolerance)
+        if not self.max_iterations >= 1:
+            raise invalid("GaitStyle", "max_iterations", ">= 1", self.max_iterations)
+
+
+@dataclass(frozen=True, eq=False)
+class StanceFoot:
+    """Where the stance foot touches the ground, for k agents.
+
+    Attributes
+    ----------
+    ball : numpy.ndarray
+        (k, 3) world point under the first metatarsal head [m]; fixed during a step.
+    yaw : numpy.ndarray
+        (k,) direction the foot points, from +x [rad].
+    slope : numpy.ndarray
+        (k,) pitch of the ground along the foot, positive uphill [rad].
+    """
+
+    ball: np.ndarray
+    yaw: np.ndarray
+    slope: np.ndarray
+
+    @classmethod
+    def from_foothold(
+        cls, body: Body, foothold: np.ndarray, yaw: np.ndarray, slope: np.ndarray
+    ) -> StanceFoot:
+        """The contact of a foot placed flat with its ankle above ``foothold`` (k, 3) [m]
+        (the ``planners`` convention: a foothold is the ground point below the ankle)."""
+        d = _direction(yaw, slope)
+        return cls(np.asarray(foothold, float) + body.ball_offset[:, None] * d, yaw, slope)
+
+    def heel(self, body: Body) -> np.ndarray:
+        """(k, 3) world point under the back of the heel when the foot is flat [m]."""
+        d = _direction(self.yaw, self.slope)
+        return self.ball - (body.heel_offset + body.ball_offset)[:, None] * d
+
+
+@dataclass(frozen=True, eq=False)
+class WarmStart:
+    """Gauss–Newton starting points: stance ankle (k, 2) [rad] (talocrural, subtalar) and
+    swing hip (k, 3) [rad] (intrinsic Y-X-Z Euler angles of the hip's local rotation)."""
+
+    ankle: np.ndarray
+    hip: np.ndarray
+
+    @classmethod
+    def neutral(cls, k: int) -> WarmStart:
+        """Zero angles for k agents."""
+        return cls(np.zeros((k, 2)), np.zeros((k, 3)))
+
+
+@dataclass(frozen=True, eq=False)
+class WalkerPose:
+    """ElevWalker output for k agents.
+
+    Attributes
+    ----------
+    root_position : (k, 3) ``HumanoidRoot`` (mid-hip) world position [m].
+    root_rotation : (k, 3, 3) pelvis world orientation.
+    local : (k, J, 3, 3) local joint rotations (entry 0 = ``root_rotation``).
+    positions : (k, J, 3) joint world positions [m].
+    rotations : (k, J, 3, 3) world orientation of the segment distal to each joint.
+    contact : (k, 2) bool, left/right foot on the ground.
+    converged : (k,) bool, every analytic and Gauss–Newton solve succeeded.
+    warm : WarmStart for the next frame.
+    """
+
+    root_position: np.ndarray
+    root_rotation: np.ndarray
+    local: np.ndarray
+    positions: np.ndarray
+    rotations: np.ndarray
+    contact: np.ndarray
+    converged: np.ndarray
+    warm: WarmStart
+
+
+# --- geometry helpers -------------------------------------------------------------------
+
+
+def _direction(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+    """Unit vectors (k, 3) with heading ``yaw`` and upward pitch ``pitch`` [rad]."""
+    cp = np.cos(pitch)
+    return np.stack([cp * np.cos(yaw), cp * np.sin(yaw), np.sin(pitch)], axis=-1)
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def _mv(m: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Batched matrix @ vector: (k,3,3) @ (k,3) or (3,) → (k,3)."""
+    if v.ndim == 1:
+        return m @ v
+    return np.einsum("kab,kb->ka", m, v)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ka,ka->k", a, b)
+
+
+def _frame(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sagittal forward unit vector and sagittal-plane normal (left), each (k, 3)."""
+    c, s, z = np.cos(heading), np.sin(heading), np.zeros_like(heading)
+    return np.stack([c, s, z], axis=-1), np.stack([-s, c, z], axis=-1)
+
+
+def sagittal_elevation(v: np.ndarray, heading: np.ndarray) -> np.ndarray:
+    """Sagittal elevation angle of segment vectors (Eq. 1) [rad].
+
+    Parameters
+    ----------
+    v : numpy.ndarray
+        (k, 3) proximal→distal vectors, world frame.
+    heading : numpy.ndarray
+        (k,) sagittal-plane orientation ψ [rad].
+
+    Returns
+    -------
+    numpy.ndarray
+        (k,) angle from the downward vertical of the projection of ``v`` onto the sagittal
+        plane, positive when the distal end is anterior.
+    """
+    fwd = v[:, 0] * np.cos(heading) + v[:, 1] * np.sin(heading)
+    return np.arctan2(fwd, -v[:, 2])
+
+
+def solve_single_dof(
+    parent: np.ndarray, axis: np.ndarray, w: np.ndarray, heading: np.ndarray, phi: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint angle θ that gives a segment the sagittal elevation φ (§4.2, Eqs. 2–7).
+
+    The segment direction is ``v(θ) = parent @ Rot(axis, θ) @ w``. Splitting ``w`` into
+    its components along and around the (possibly skew) axis gives the circle of Eq. 2,
+    ``v = d cos θ + e sin θ + f``; the elevation constraint (Eq. 3), multiplied by cos φ to
+    stay finite at φ = ±90°, is ``A cos θ + B sin θ + C = 0`` with Eqs. 5–7's A, B, C.
+    Of its two roots one gives φ and the other φ + π (the "−φ" of the paper); the one
+    whose projected direction agrees with φ is returned.
+
+    Parameters
+    ----------
+    parent : (k, 3, 3) world orientation of the joint's parent frame.
+    axis : (3,) or (k, 3) unit joint axis in the parent frame.
+    w : (3,) or (k, 3) segment direction in the child frame at θ = 0.
+    heading : (k,) sagittal-plane orientation ψ [rad].
+    phi : (k,) required elevation angle [rad].
+
+    Returns
+    -------
+    theta : (k,) joint angle [rad] in (-π, π].
+    ok : (k,) bool, False when no θ reaches φ (the closest angle is returned).
+    """
+    k = parent.shape[0]
+    axis = np.broadcast_to(axis, (k, 3))
+    w = np.broadcast_to(w, (k, 3))
+    qw = _dot(axis, w)
+    wc = w - axis * qw[:, None]
+    ws = np.cross(axis, w)
+    wq = axis * qw[:, None]
+    d, e, f = _mv(parent, wc), _mv(parent, ws), _mv(parent, wq)
+    ch, sh = np.cos(heading), np.sin(heading)
+    cphi, sphi = np.cos(phi), np.sin(phi)
+
+    def coeff(u: np.ndarray) -> np.ndarray:
+        return (u[:, 0] * ch + u[:, 1] * sh) * cphi + u[:, 2] * sphi
+
+    A, B, C = coeff(d), coeff(e), coeff(f)
+    R = np.hypot(A, B)
+    ratio = -C / np.where(R > 1e-12, R, 1e-12)
+    ok = (np.abs(ratio) <= 1.0) & (R > 1e-12)
+    base = np.arctan2(B, A)
+    delta = np.arccos(np.clip(ratio, -1.0, 1.0))
+    best = np.empty(k)
+    score = np.full(k, -np.inf)
+    for cand in (base + delta, base - delta):
+        v = d * np.cos(cand)[:, None] + e * np.sin(cand)[:, None] + f
+        g = (v[:, 0] * ch + v[:, 1] * sh) * sphi - v[:, 2] * cphi  # v · (unit vector at φ)
+        better = g > score
+        best = np.where(better, cand, best)
+        score = np.where(better, g, score)
+    return _wrap(best), ok & (score > 0)
+
+
+def _gauss_newton(residual, x0: np.ndarray, tol: float, max_iter: int):
+    """Batched Gauss–Newton with forward-difference Jacobians.
+
+    ``residual(X)`` maps stacked points ((m+1)·k, m) to residuals ((m+1)·k, m); each
+    iteration evaluates the point and its m neighbours in one call. Returns the solution
+    (k, m), a converged flag (k,) and the final residual (k, m).
+    """
+    k, m = x0.shape
+    eps = 1e-6
+    x = x0.copy()
+    eye = np.eye(m) * eps
+    for _ in range(max_iter):
+        stacked = np.concatenate([x] + [x + eye[i] for i in range(m)], axis=0)
+        r = residual(stacked).reshape(m + 1, k, m)
+        r0 = r[0]
+        jac = np.stack([(r[i + 1] - r0) / eps for i in range(m)], axis=-1)  # (k, m, m)
+        done = np.all(np.abs(r0) < tol, axis=1)
+        if done.all():
+            return x, done, r0
+        jt = np.swapaxes(jac, 1, 2)
+        lhs = jt @ jac + 1e-12 * np.eye(m)
+        rhs = -np.einsum("kij,kj->ki", jt, r0)
+        good = np.isfinite(lhs).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=1)
+        lhs[~good] = np.eye(m)
+        rhs[~good] = 0.0
+        step = np.linalg.solve(lhs, rhs[..., None])[..., 0]
+        step = np.clip(step, -0.5, 0.5)  # trust region: at most 0.5 rad per iteration
+        x = np.where(done[:, None], x, x + step)
+    r0 = residual(x)
+    return x, np.all(np.abs(r0) < tol, axis=1) & np.isfinite(x).all(axis=1), r0
+
+
+# --- the walker -------------------------------------------------------------------------
+
+
+def _stance_foot_pose(body: Body, foot: StanceFoot, pitch: np.ndarray):
+    """Foot orientation, ankle position and toe angle from the foot–floor model (§4.1)."""
+    r_foot = rotation_z(foot.yaw) @ rotation_y(-pitch)
+    on_heel = pitch >= foot.slope
+    k = len(body)
+    z = np.zeros(k)
+    heel_to_ankle = np.stack([body.heel_offset, z, body.ankle_height], axis=1)
+    ball_to_ankle = np.stack([-body.ball_offset, z, body.ankle_height], axis=1)
+    pivot = np.where(on_heel[:, None], foot.heel(body), foot.ball)
+    ankle = pivot + _mv(r_foot, np.where(on_heel[:, None], heel_to_ankle, ball_to_ankle))
+    toe = np.where(on_heel, 0.0, pitch - foot.slope)  # toes stay flat on the ground
+    return r_foot, ankle, toe
+
+
+def elevwalker_pose(
+    body: Body,
+    stance_left: np.ndarray,
+    phase: np.ndarray,
+    stance_angles: np.ndarray,
+    swing_angles: np.ndarray,
+    heading: np.ndarray,
+    foot: StanceFoot,
+    toe_out: np.ndarray,
+    warm: WarmStart,
+    style: GaitStyle | None = None,
+    stance_fraction: np.ndarray | float = 0.6,
+    swing_target: np.ndarray | None = None,
+    swing_blend: np.ndarray | None = None,
+) -> WalkerPose:
+    """Full-body poses of k walkers for one frame (§4, §8).
+
+    Parameters
+    ----------
+    body : Body
+        k bodies.
+    stance_left : (k,) bool
+        True where the left foot is the stance foot.
+    phase : (k,) normalised stride time t ∈ [0, 0.5) of the stance leg [1].
+    stance_angles, swing_angles : (k, 4)
+        Elevation angles [rad] (foot, shank, thigh, pelvis) of the stance leg at ``t`` and
+        the swing leg at ``t + 0.5``.
+    heading : (k,) sagittal-plane orientation ψ [rad].
+    foot : StanceFoot
+        Stance-foot ground contact.
+    toe_out : (k,) swing-leg toe-out O(t), positive outward [rad].
+    warm : WarmStart
+        Previous frame's Gauss–Newton solutions.
+    style : GaitStyle, optional
+    stance_fraction : float or (k,)
+        Stance phase of the data [1] (for the swing foot's contact flag in double support).
+    swing_target : (k, 3), optional
+        World position the swing ankle is pulled toward [m].
+    swing_blend : (k,), optional
+        Weight of ``swing_target`` in [0, 1]; IK on the swing leg where > 0.
+
+    Returns
+    -------
+    WalkerPose
+    """
+    style = style or GaitStyle()
+    k = len(body)
+    left = np.asarray(stance_left, dtype=bool)
+    side_st = np.where(left, 1.0, -1.0)  # +1: stance leg is the left one
+    st_row = np.where(left, 0, 1)
+    sw_row = 1 - st_row
+    heading = np.asarray(heading, dtype=float)
+    phase = np.asarray(phase, dtype=float)
+    fwd, normal = _frame(heading)
+    h = body.height
+    half_hips = 0.5 * body.hip_separation
+    sway = style.sway * h * np.sin(2.0 * np.pi * phase)
+    half_width = 0.5 * style.step_width * h
+    w_stance = side_st * (half_width - half_hips - sway)  # Eq. 8's W_st(t), (a - h)·n
+    w_swing = side_st * (half_hips - half_width - sway)
+
+    phi_st = np.asarray(stance_angles, dtype=float)
+    phi_sw = np.asarray(swing_angles, dtype=float)
+
+    # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
+    #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
+    pitch = np.arctan(np.tan(phi_st[:, 0]) * np.cos(foot.yaw - heading))
+    r_foot, ankle, toe_angle = _stance_foot_pose(body, foot, pitch)
+
+    # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
+    tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
+    rep = lambda a, n: np.concatenate([a] * n, axis=0)  # noqa: E731
+
+    def stance_chain(x, n_rep):
+        rf, ank = rep(r_foot, n_rep), rep(ankle, n_rep)
+        r_talus = rf @ np.swapaxes(axis_angle_matrix(rep(sub_axis, n_rep), x[:, 1]), 1, 2)
+        r_shank = r_talus @ np.swapaxes(axis_angle_matrix(rep(tc_axis, n_rep), x[:, 0]), 1, 2)
+        knee = ank + rep(body.shank, n_rep)[:, None] * r_shank[:, :, 2]
+        psi = rep(heading, n_rep)
+        theta, ok = solve_single_dof(r_shank, _EY, _DOWN, psi, rep(phi_st[:, 2], n_rep))
+        r_thigh = r_shank @ rotation_y(theta)
+        hip = knee + rep(body.thigh, n_rep)[:, None] * r_thigh[:, :, 2]
+        return r_shank, knee, theta, ok, r_thigh, hip
+
+    def stance_residual(x):
+        n_rep = x.shape[0] // k
+        r_shank, _, _, _, _, hip = stance_chain(x, n_rep)
+        psi = rep(heading, n_rep)
+        e = _wrap(sagittal_elevation(-r_shank[:, :, 2], psi) - rep(phi_st[:, 1], n_rep))
+        width = _dot(rep(ankle, n_rep) - hip, rep(normal, n_rep)) - rep(w_stance, n_rep)
+        return np.stack([e, width], axis=1)
+
+    x_ankle, ok_ankle, _ = _gauss_newton(
+        stance_residual, warm.ankle, style.tolerance, style.max_iterations
+    )
+    r_shank_st, _, knee_rel, ok_knee_st, r_thigh_st, hip_st = stance_chain(x_ankle, 1)
+
+    # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
+    lst = side_st * style.pelvic_list * np.sin(2.0 * np.pi * phase)
+    tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
+    tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
+    r_pelvis = rotation_z(heading) @ rotation_x(lst) @ rotation_y(tilt)
+    y_pelvis = r_pelvis[:, :, 1]
+    root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
+    hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
+    side_sw = -side_st
+
+    def swing_chain(x, n_rep):
+        rp = rep(r_pelvis, n_rep)
+        r_thigh = rp @ rotation_y(x[:, 0]) @ rotation_x(x[:, 1]) @ rotation_z(x[:, 2])
+        psi = rep(heading, n_rep)
+        knee_angle, ok = solve_single_dof(r_thigh, _EY, _DOWN, psi, rep(phi_sw[:, 1], n_rep))
+        r_shank = r_thigh @ rotation_y(knee_angle)
+        hp = rep(hip_sw, n_rep)
+        knee = hp - rep(body.thigh, n_rep)[:, None] * r_thigh[:, :, 2]
+        ank = knee - rep(body.shank, n_rep)[:, None] * r_shank[:, :, 2]
+        return r_thigh, knee_angle, ok, r_shank, knee, ank
+
+    def swing_residual(x):
+        n_rep = x.shape[0] // k
+        r_thigh, _, _, _, _, ank = swing_chain(x, n_rep)
+        psi, nrm, fw = rep(heading, n_rep), rep(normal, n_rep), rep(fwd, n_rep)
+        e = _wrap(sagittal_elevation(-r_thigh[:, :, 2], psi) - rep(phi_sw[:, 2], n_rep))
+        width = _dot(ank - rep(hip_sw, n_rep), nrm) - rep(w_swing, n_rep)
+        f = r_thigh[:, :, 0]
+        out = rep(side_sw, n_rep) * np.arctan2(_dot(f, nrm), _dot(f, fw))
+        return np.stack([e, width, _wrap(out - rep(toe_out, n_rep))], axis=1)
+
+    x_hip, ok_hip, _ = _gauss_newton(swing_residual, warm.hip, style.tolerance,
+                                     style.max_iterations)  # fmt: skip
+    r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, knee_pos_sw, ankle_sw = swing_chain(x_hip, 1)
+
+    # Optional swing-ankle target with two-link IK on the swing leg.
+    if swing_target is not None and swing_blend is not None:
+        blend = np.clip(np.asarray(swing_blend, dtype=float), 0.0, 1.0)
+        goal = ankle_sw + blend[:, None] * (np.asarray(swing_target, float) - ankle_sw)
+        r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, knee_pos_sw, goal, r_thigh_sw)
+        use = blend > 0
+        r_thigh_sw = np.where(use[:, None, None], r_thigh_ik, r_thigh_sw)
+        knee_sw = np.where(use, knee_ik, knee_sw)
+        r_shank_sw = r_thigh_sw @ rotation_y(knee_sw)
+
+    # Swing talocrural: analytic for the foot elevation (heel→toe from the horizontal is
+    # π/2 + φ from the downward vertical); the swing subtalar joint stays neutral.
+    ankle_sw_angle, ok_foot_sw = solve_single_dof(
+        r_shank_sw, _TC_AXES[sw_row], _FWD, heading, 0.5 * np.pi + phi_sw[:, 0]
+    )
+
+    # Assemble local rotations.
+    nj = len(JOINT_NAMES)
+    local = np.broadcast_to(np.eye(3), (k, nj, 3, 3)).copy()
+    rows = np.arange(k)
+    st_j, sw_j = LEG_JOINTS[st_row], LEG_JOINTS[sw_row]  # (k, 5)
+    local[:, 0] = r_pelvis
+    local[rows, st_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_st
+    local[rows, st_j[:, 1]] = rotation_y(-knee_rel)
+    local[rows, st_j[:, 2]] = axis_angle_matrix(tc_axis, x_ankle[:, 0])
+    local[rows, st_j[:, 3]] = axis_angle_matrix(sub_axis, x_ankle[:, 1])
+    local[rows, st_j[:, 4]] = rotation_y(toe_angle)
+    local[rows, sw_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_sw
+    local[rows, sw_j[:, 1]] = rotation_y(knee_sw)
+    local[rows, sw_j[:, 2]] = axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
+
+    # 5. Upper body (§8): trunk upright along ψ, arms with the opposite thigh.
+    r_trunk = rotation_z(heading)
+    local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ r_trunk
+    thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
+    thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
+    for side, opposite, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):
+        arm = style.arm_swing * opposite
+        local[:, JOINT[f"{side}_shoulder"]] = rotation_y(-arm) @ rotation_x(
+            np.full(k, sign * 0.08)
+        )
+        elbow = style.elbow_flexion + 0.5 * np.maximum(arm, 0.0)
+        local[:, JOINT[f"{side}_elbow"]] = rotation_y(-elbow)
+
+    positions, rotations = forward_kinematics(body, root, r_pelvis, local)
+    swing_phase = phase + 0.5
+    contact = np.empty((k, 2), dtype=bool)
+    contact[rows, st_row] = True
+    contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
+    converged = ok_ankle & ok_hip & ok_knee_st & ok_knee_sw & ok_foot_sw
+    converged &= np.isfinite(positions).all(axis=(1, 2)) & np.isfinite(local).all(axis=(1, 2, 3))
+    return WalkerPose(
+        root_position=root,
+        root_rotation=r_pelvis,
+        local=local,
+        positions=positions,
+        rotations=rotations,
+        contact=contact,
+        converged=converged,
+        warm=WarmStart(x_ankle, x_hip),
+    )
+
+
+def _two_link_ik(body: Body, hip, knee, goal, r_thigh):
+    """Thigh orientation and knee flexion that put the ankle at ``goal`` (k, 3) [m].
+
+    The knee bends in the plane through hip, goal and the current knee; the thigh's
+    hinge axis (local y) is kept as close as possible to its current direction.
+    """
+    l1, l2 = body.thigh, body.shank
+    to_goal = goal - hip
+    dist = np.linalg.norm(to_goal, axis=1)
+    dist_c = np.clip(dist, np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
+    u = to_goal / np.maximum(dist, 1e-9)[:, None]
+    pole = knee - hip
+    v = pole - u * _dot(pole, u)[:, None]
+    nv = np.linalg.norm(v, axis=1)
+    fallback = r_thigh[:, :, 0]  # bend forward if the knee is on the hip–goal line
+    v = np.where((nv > 1e-9)[:, None], v / np.maximum(nv, 1e-12)[:, None], fallback)
+    cos_b = np.clip((l1**2 + dist_c**2 - l2**2) / (2 * l1 * dist_c), -1.0, 1.0)
+    sin_b = np.sqrt(1.0 - cos_b**2)
+    knee_new = hip + l1[:, None] * (cos_b[:, None] * u + sin_b[:, None] * v)
+    ankle_new = hip + dist_c[:, None] * u
+    z_axis = (hip - knee_new) / l1[:, None]
+    y_old = r_thigh[:, :, 1]
+    y_axis = np.cross(z_axis, u)  # perpendicular to the leg plane
+    y_axis *= np.where(_dot(y_axis, y_old) < 0, -1.0, 1.0)[:, None]
+    ny = np.linalg.norm(y_axis, axis=1)
+    y_axis = np.where((ny > 1e-9)[:, None], y_axis / np.maximum(ny, 1e-12)[:, None], y_old)
+    x_axis = np.cross(y_axis, z_axis)
+    r_new = np.stack([x_axis, y_axis, z_axis], axis=2)
+    shank = np.einsum("kba,kb->ka", r_new, ankle_new - knee_new)  # thigh frame
+    knee_angle = np.arctan2(-shank[:, 0], -shank[:, 2])
+    return r_new, knee_angle
+
+
+# --- measurements on poses ------------------------------------------------------------
+
+
+def foot_points(body: Body, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
+    """Heel, ball and toe-tip world points of both feet, (k, 2, 3, 3) [m].
+
+    Axis 1 is left/right, axis 2 heel/ball/toe, from the joint positions and orientations
+    of :func:`crowdwalk.body.forward_kinematics`.
+    """
+    k = len(body)
+    out = np.empty((k, 2, 3, 3))
+    z = np.zeros(k)
+    heel_local = np.stack([-body.heel_offset, z, -body.ankle_height], axis=1)
+    tip_local = np.stack([body.toe_offset - body.ball_offset, z, z], axis=1)
+    for s in range(2):
+        tc, sub, mtp = LEG_JOINTS[s, 2], LEG_JOINTS[s, 3], LEG_JOINTS[s, 4]
+        out[:, s, 0] = positions[:, tc] + _mv(rotations[:, sub], heel_local)
+        out[:, s, 1] = positions[:, mtp]
+        out[:, s, 2] = positions[:, mtp] + _mv(rotations[:, mtp], tip_local)
+    return out
+
+
+def leg_elevations(
+    body: Body, positions: np.ndarray, rotations: np.ndarray, heading: np.ndarray
+) -> np.ndarray:
+    """Elevation angles measured on posed skeletons, (k, 2, 4) [rad].
+
+    Axis 1 is left/right; columns foot (heel→ball from the horizontal, toe-up
+    positive), shank (knee→ankle), thigh (hip→knee), pelvis (anterior tilt of the pelvis's
+    up axis in the sagittal plane) — the conventions of the datasets.
+    """
+    out = np.empty((len(body), 2, 4))
+    pts = foot_points(body, positions, rotations)
+    for s in range(2):
+        hip, knee, ankle = (positions[:, LEG_JOINTS[s, i]] for i in range(3))
+        foot = pts[:, s, 1] - pts[:, s, 0]
+        out[:, s, 0] = sagittal_elevation(foot, heading) - 0.5 * np.pi
+        out[:, s, 1] = sagittal_elevation(ankle - knee, heading)
+        out[:, s, 2] = sagittal_elevation(knee - hip, heading)
+        # the pelvis's up axis leaning forward = anterior tilt
+        out[:, s, 3] = -sagittal_elevation(-rotations[:, 0, :, 2], heading)
+    return out
