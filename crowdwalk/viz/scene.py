@@ -22,7 +22,13 @@ from crowdwalk.viz.figures import StickFigures
 from crowdwalk.viz.footprints import COLOR_FIELDS, FootprintMesh, Footsteps
 from crowdwalk.viz.playback import Playback
 from crowdwalk.viz.sources import PoseSource, RunPoses, TrajectoryPoses, frame_index
-from crowdwalk.viz.world_meshes import outline_lines, route_lines, terrain_edges, terrain_mesh
+from crowdwalk.viz.world_meshes import (
+    flat_ground,
+    outline_lines,
+    route_lines,
+    terrain_edges,
+    terrain_mesh,
+)
 
 __all__ = ["Scene", "SceneView", "COLOR_FIELDS", "MOVIE_SUFFIXES"]
 
@@ -314,6 +320,7 @@ class SceneView:
         self.frame: int | None = None
         self.agent_ids = np.zeros(0, dtype=int)
         self.agent_roots = np.zeros((0, 3))
+        self._framed: int | None = None
         plotter.set_background("white", top="#dde6ee")
         bounds = self._add_world()
         self._add_agents()
@@ -330,9 +337,11 @@ class SceneView:
         bounds = None
         if scene.terrain is not None:
             ground = terrain_mesh(scene.terrain)
+            heights = ground.point_data["height"]
             p.add_mesh(
                 ground, scalars="height", cmap="gist_earth", smooth_shading=False,
-                show_scalar_bar=True, name="terrain", ambient=0.25,
+                show_scalar_bar=bool(np.ptp(heights) > 1e-6), name="terrain", ambient=0.25,
+                clim=[heights.min() - 1.0, max(heights.max(), heights.min() + 0.5) + 0.5],
                 scalar_bar_args=dict(title="height [m]", vertical=True, position_x=0.9,
                                      position_y=0.3, height=0.4, width=0.05, fmt="%.1f",
                                      color="black"),
@@ -341,6 +350,10 @@ class SceneView:
             if edges.n_cells:
                 p.add_mesh(edges, color="#333333", line_width=1, name="terrain edges")
             bounds = np.array(ground.bounds)
+        elif scene.walkable_area is not None and not scene.walkable_area.is_empty:
+            ground = flat_ground(scene.walkable_area)
+            if ground.n_points:
+                p.add_mesh(ground, color="#e9ecef", name="terrain", ambient=0.3)
         if scene.walkable_area is not None and not scene.walkable_area.is_empty:
             outline = outline_lines(scene.walkable_area, scene.terrain)
             if outline.n_points:
@@ -397,7 +410,7 @@ class SceneView:
         if fp is None:
             return
         style = _COLOR_STYLE[self.color]
-        bar = dict(title=style["title"], color="black", position_x=0.3, position_y=0.03,
+        bar = dict(title=style["title"], color="black", position_x=0.3, position_y=0.05,
                    width=0.4, height=0.06, fmt="%.3g")
         kwargs = dict(scalars=self.color, cmap=style["cmap"], name="footprints",
                       scalar_bar_args=bar, show_scalar_bar=True)
@@ -431,7 +444,9 @@ class SceneView:
         if getattr(self.scene.routes, "graph", None) is not None:
             entries.append(["route graph", ROUTE_COLOR])
         if entries:
-            self.plotter.add_legend(entries, bcolor="white", border=True, size=(0.17, 0.1),
+            # trailing spaces keep VTK's legend box from clipping the longest label
+            entries = [[label + "    ", color] for label, color in entries]
+            self.plotter.add_legend(entries, bcolor="white", border=True, size=(0.2, 0.12),
                                     loc="upper right", face="rectangle")
 
     # --- animation ------------------------------------------------------------------
@@ -456,6 +471,10 @@ class SceneView:
         if self.follow is not None:
             root = self.agent_root(self.follow)
             if root is not None:
+                if self._framed != self.follow:
+                    box = np.repeat(root, 2) + np.array([-3.0, 3.0, -3.0, 3.0, -0.5, 1.5])
+                    self.plotter.camera_position = cam.oblique_view(box, elevation=0.45)
+                    self._framed = self.follow
                 cam.follow(self.plotter, root)
         self.plotter.reset_camera_clipping_range()
         n = len(self.agent_ids)

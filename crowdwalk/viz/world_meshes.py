@@ -14,6 +14,7 @@ from crowdwalk.errors import invalid
 
 __all__ = [
     "terrain_mesh",
+    "flat_ground",
     "terrain_edges",
     "outline_lines",
     "route_lines",
@@ -35,6 +36,22 @@ def terrain_mesh(terrain) -> pv.PolyData:
     faces = np.asarray(tm.faces, dtype=np.int64)
     mesh = pv.PolyData(vertices, faces=np.column_stack([np.full(len(faces), 3), faces]).ravel())
     mesh.point_data["height"] = vertices[:, 2]
+    return mesh
+
+
+def flat_ground(geometry, z: float = 0.0) -> pv.PolyData:
+    """A flat surface at height ``z`` [m] filling a shapely (multi)polygon [m], for runs
+    whose terrain cannot be rebuilt; carries the point scalar ``height`` like the terrain."""
+    import shapely
+
+    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(geometry))
+    if len(tris) == 0:
+        return pv.PolyData()
+    corners = shapely.get_coordinates(tris).reshape(len(tris), 4, 2)[:, :3]
+    points = np.column_stack([corners.reshape(-1, 2), np.full(3 * len(tris), z)])
+    faces = np.column_stack([np.full(len(tris), 3), np.arange(3 * len(tris)).reshape(-1, 3)])
+    mesh = pv.PolyData(points, faces=faces.ravel()).clean()
+    mesh.point_data["height"] = mesh.points[:, 2]
     return mesh
 
 
