@@ -87,6 +87,81 @@ def schema() -> None:
 
 # --- viewer (issue 6): view, render -------------------------------------------------
 
+_COLOR_HELP = "Colour footprints by: energy, planner or agent."
+_GL_MISSING = (
+    "off-screen rendering needs an EGL/GL stack; install the Debian packages "
+    "libegl1 libegl-mesa0 libgl1-mesa-dri (see install.sh)."
+)
+
+
+@app.command()
+@friendly_errors
+def view(
+    target: Path = typer.Argument(..., help="Run folder, or a scenario YAML (world only)."),
+    follow: int | None = typer.Option(None, "--follow", help="Agent id the camera follows."),
+    color: str = typer.Option("energy", "--color", help=_COLOR_HELP),
+    time: float | None = typer.Option(None, "--time", help="Start at this simulated time [s]."),
+    trail: float | None = typer.Option(
+        None, "--trail", help="Show only footprints of the last TRAIL seconds [s]."
+    ),
+) -> None:
+    """Open the interactive viewer (keys: space play/pause, ←/→ one frame, ↑/↓ speed,
+    c colour, f follow)."""
+    from crowdwalk.viz.headless import has_display
+
+    if not has_display():
+        _fail("view needs a display (DISPLAY or WAYLAND_DISPLAY is unset); "
+              "use `crowdwalk render` for pictures and movies off-screen.", 2)
+    from crowdwalk.viz import Scene
+
+    Scene.load(target, color=color, follow=follow, footprint_trail=trail).show(time=time)
+
+
+@app.command()
+@friendly_errors
+def render(
+    target: Path = typer.Argument(..., help="Run folder, or a scenario YAML (world only)."),
+    out: Path = typer.Option(..., "--out", help="Output file: .png, .gif or .mp4."),
+    time: float | None = typer.Option(None, "--time", help="PNG: simulated time [s]."),
+    start: float | None = typer.Option(None, "--start", help="Movie: first time [s]."),
+    end: float | None = typer.Option(None, "--end", help="Movie: last time [s]."),
+    size: str = typer.Option("1280x800", "--size", help="Image size WIDTHxHEIGHT [px]."),
+    follow: int | None = typer.Option(None, "--follow", help="Agent id the camera follows."),
+    color: str = typer.Option("energy", "--color", help=_COLOR_HELP),
+    fps: float | None = typer.Option(None, "--fps", help="Movie frame rate [1/s]."),
+    speed: float = typer.Option(1.0, "--speed", help="Movie: simulated seconds per second."),
+    trail: float | None = typer.Option(
+        None, "--trail", help="Show only footprints of the last TRAIL seconds [s]."
+    ),
+) -> None:
+    """Render a run off-screen: one instant to PNG, or a time range to GIF/MP4."""
+    from crowdwalk.errors import invalid
+    from crowdwalk.viz.scene import MOVIE_SUFFIXES, parse_size
+
+    suffix = out.suffix.lower()
+    if suffix not in (".png", *MOVIE_SUFFIXES):
+        raise invalid("render", "out", "a .png, .gif or .mp4 file", str(out))
+    width_height = parse_size(size)
+    from crowdwalk.viz.headless import gl_available
+
+    if not gl_available():
+        _fail(_GL_MISSING, 2)
+    from crowdwalk.viz import Scene
+
+    scene = Scene.load(target, color=color, follow=follow, footprint_trail=trail)
+    if suffix == ".png":
+        scene.render_png(out, time=time, size=width_height)
+    else:
+        from rich.progress import Progress
+
+        with Progress(transient=True) as bar:
+            task = bar.add_task(f"rendering {out.name}", total=None)
+            scene.render_movie(
+                out, start=start, end=end, fps=fps, size=width_height, speed=speed,
+                progress=lambda done, total: bar.update(task, completed=done, total=total),
+            )
+    typer.echo(f"wrote {out}")
+
 
 def main() -> None:
     """Entry point of the ``crowdwalk`` script."""

@@ -1,0 +1,44 @@
+"""Visual inspection in pyvista: the only package of crowdwalk that imports pyvista.
+
+One scene builder serves the interactive window, off-screen pictures and movies, the
+CLI (``crowdwalk view``, ``crowdwalk render``) and notebooks::
+
+    from crowdwalk.viz import Scene
+    scene = Scene.from_run("runs/quickstart", color="energy")
+    scene.render_png("frame.png", time=10.0, size=(1280, 800))
+    scene.render_movie("walk.mp4", start=0.0, end=20.0)
+    scene.show()  # interactive window (needs a display)
+
+Without a display, rendering goes through EGL (see :mod:`crowdwalk.viz.headless`).
+"""
+
+from crowdwalk.viz.camera import follow, oblique_view, project_to_pixels
+from crowdwalk.viz.figures import StickFigures
+from crowdwalk.viz.footprints import COLOR_FIELDS, FootprintMesh, Footsteps
+from crowdwalk.viz.headless import configure_offscreen, gl_available, has_display
+from crowdwalk.viz.playback import Playback
+from crowdwalk.viz.scene import Scene, SceneView, parse_size
+from crowdwalk.viz.sources import ArrayPoses, PoseSource, RunPoses, TrajectoryPoses
+from crowdwalk.viz.synthetic import synthetic_crowd
+
+__all__ = [
+    "COLOR_FIELDS",
+    "ArrayPoses",
+    "FootprintMesh",
+    "Footsteps",
+    "Playback",
+    "PoseSource",
+    "RunPoses",
+    "Scene",
+    "SceneView",
+    "StickFigures",
+    "TrajectoryPoses",
+    "configure_offscreen",
+    "follow",
+    "gl_available",
+    "has_display",
+    "oblique_view",
+    "parse_size",
+    "project_to_pixels",
+    "synthetic_crowd",
+]
