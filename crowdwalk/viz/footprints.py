@@ -134,7 +134,8 @@ class Footsteps:
         needed = ("agent", "time", "x", "y", "z", "energy", "planner")
         missing = [c for c in needed if c not in table]
         if missing:
-            raise invalid("Footsteps", "columns", f"include {','.join(needed)}", missing)
+            constraint = f"a table with the columns {','.join(needed)}"
+            raise invalid("Footsteps", "columns", constraint, missing)
         position = np.column_stack([np.asarray(table[c], dtype=float) for c in ("x", "y", "z")])
         heading = np.asarray(table["heading"], dtype=float) if "heading" in table else None
         return cls(

@@ -136,7 +136,8 @@ def node_positions(graph) -> dict:
         elif "x" in data and "y" in data:
             xy = (data["x"], data["y"])
         else:
-            raise invalid("RouteGraph", f"nodes[{node!r}]", "given a 'pos' (x, y) [m]", data)
+            constraint = "a node with 'pos' (or 'x' and 'y') [m]"
+            raise invalid("RouteGraph", f"nodes[{node!r}]", constraint, data)
         out[node] = np.asarray(xy, dtype=float)[:2]
     return out
 

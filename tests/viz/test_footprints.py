@@ -1,0 +1,92 @@
+"""Footprints: walking directions, outlines at the footholds, time windows."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crowdwalk.errors import InputError
+from crowdwalk.viz.footprints import FootprintMesh, Footsteps, foot_outline, walking_headings
+
+
+def _straight_walk(heading, n, start=(0.0, 0.0), step=0.7, width=0.18):
+    """Alternating left/right footholds of one agent walking along heading [rad]."""
+    d = np.array([np.cos(heading), np.sin(heading)])
+    left = np.array([-d[1], d[0]])
+    k = np.arange(n)
+    side = np.where(k % 2 == 0, 0.5, -0.5) * width
+    return np.asarray(start) + step * k[:, None] * d + side[:, None] * left
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(-np.pi, np.pi), st.integers(2, 12), st.floats(-50, 50), st.floats(-50, 50))
+def test_headings_follow_the_walking_direction(heading, n, x0, y0):
+    xy = _straight_walk(heading, n, (x0, y0))
+    got = walking_headings(np.zeros(n, int), np.arange(n) * 0.5, xy)
+    err = np.angle(np.exp(1j * (got - heading)))
+    # the lateral alternation tilts one-sided ends by at most atan(width / step)
+    assert np.all(np.abs(err[1:-1]) < 1e-9)
+    assert np.all(np.abs(err) <= np.arctan(0.18 / 0.7) + 1e-9)
+
+
+def test_headings_do_not_mix_agents_and_ignore_row_order():
+    a = _straight_walk(0.0, 4)
+    b = _straight_walk(np.pi / 2, 4, (10.0, 0.0))
+    agent = np.r_[np.zeros(4, int), np.ones(4, int)]
+    time = np.r_[np.arange(4), np.arange(4)] * 0.5
+    xy = np.vstack([a, b])
+    order = np.random.default_rng(0).permutation(8)
+    got = walking_headings(agent[order], time[order], xy[order])
+    expected = walking_headings(agent, time, xy)
+    np.testing.assert_allclose(got, expected[order])
+    np.testing.assert_allclose(expected[1:3], 0.0, atol=1e-12)
+    np.testing.assert_allclose(expected[5:7], np.pi / 2, atol=1e-12)
+
+
+def _steps(n=6, heading=0.3):
+    xy = _straight_walk(heading, n)
+    return Footsteps(np.zeros(n, int), np.arange(n) * 0.5, np.column_stack([xy, np.ones(n)]),
+                     np.linspace(10, 20, n), np.array(["best_first", "fixed"] * (n // 2)))
+
+
+def test_outlines_point_along_the_heading_at_the_foothold():
+    steps = _steps(heading=0.3)
+    mesh = FootprintMesh(steps, lift=0.01).mesh
+    outline = foot_outline()
+    v = len(outline)
+    pts = np.asarray(mesh.points).reshape(len(steps), v, 3)
+    np.testing.assert_allclose(pts[:, :, 2], 1.01, atol=1e-6)
+    toe, heel = pts[:, 4, :2], pts[:, 0, :2]
+    direction = toe - heel
+    np.testing.assert_allclose(np.arctan2(direction[:, 1], direction[:, 0]), steps.heading,
+                               atol=1e-6)
+    # the ankle foothold lies on the heel–toe line, heel_offset from the heel
+    along = np.linalg.norm(steps.position[:, :2] - heel, axis=1)
+    np.testing.assert_allclose(along, -outline[0, 0], atol=1e-6)
+    np.testing.assert_allclose(mesh.point_data["energy"].reshape(len(steps), v)[:, 0],
+                               steps.energy, rtol=1e-6)
+
+
+def test_time_window_keeps_only_footprints_placed_in_it():
+    steps = _steps(n=10)
+    fp = FootprintMesh(steps)
+    per_step = fp.mesh.n_cells // 10
+    assert fp.show_window(1.0, 2.0) == 3  # placed at 1.0, 1.5, 2.0 s
+    assert fp.mesh.n_cells == 3 * per_step
+    assert fp.show_window(-np.inf, 0.2) == 1
+    assert fp.show_window(10.0, 20.0) == 0 and fp.mesh.n_cells == 0
+    assert fp.show_window(-np.inf, np.inf) == 10 and fp.mesh.n_cells == 10 * per_step
+
+
+def test_planner_codes_follow_sorted_names():
+    fp = FootprintMesh(_steps(n=4))
+    assert fp.planners == ["best_first", "fixed"]
+    codes = fp.mesh.point_data["planner"].reshape(4, -1)[:, 0]
+    assert codes.tolist() == [0.0, 1.0, 0.0, 1.0]
+
+
+def test_missing_columns_and_ragged_arrays_are_rejected():
+    with pytest.raises(InputError, match=r"Footsteps\.columns must be a table with the columns"):
+        Footsteps.from_table({"agent": [1], "time": [0.0]})
+    with pytest.raises(InputError, match=r"Footsteps\.energy must be of length 2"):
+        Footsteps(np.zeros(2), np.zeros(2), np.zeros((2, 3)), np.zeros(3), np.array(["a", "b"]))
