@@ -1,0 +1,211 @@
+"""ElevInterp (Sun & Metaxas 2001, §5): Eq. 10 forward kinematics and inverse interpolation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crowdwalk.errors import InputError
+from crowdwalk.gait.datasets import dataset_by_name, load_datasets
+from crowdwalk.gait.elevinterp import (
+    ElevInterp,
+    ElevInterpConfig,
+    SagittalLeg,
+    dataset_step,
+    step_of,
+)
+
+CM = 0.01
+LEVEL = ["level_xs", "level_s", "level_natural", "level_m", "level_l"]
+
+
+def leg(height):
+    return SagittalLeg.from_body_height(height)
+
+
+# --- Eq. 10 forward kinematics -------------------------------------------------------
+
+
+def test_standing_upright_is_a_zero_step():
+    zero = np.zeros(4)
+    np.testing.assert_allclose(step_of(zero, zero, leg(1.75)), [0.0, 0.0], atol=1e-12)
+
+
+def test_symmetric_scissor_step_has_textbook_length():
+    # Straight legs spread by ±a, feet flat: ankles 2 (thigh + shank) sin a apart, and the
+    # swing ankle lands at the same height as the stance ankle.
+    a = np.deg2rad(20)
+    body = leg(1.75)
+    stance = np.array([0.0, -a, -a, 0.0])
+    swing = np.array([0.0, a, a, 0.0])
+    sl, sh = step_of(stance, swing, body)
+    assert sl == pytest.approx(2 * (body.thigh + body.shank) * np.sin(a), abs=1e-12)
+    assert sh == pytest.approx(0.0, abs=1e-12)
+
+
+def test_foot_roll_keeps_contact_points_fixed():
+    # Stance foot rolling on its toe lifts the ankle but the toe stays at toe_offset,
+    # so a vertical stance leg puts the hip above ankle height + rise.
+    body = leg(1.75)
+    phi = np.deg2rad(-30)
+    stance = np.array([phi, 0.0, 0.0, 0.0])
+    swing = np.array([0.0, 0.0, 0.0, 0.0])
+    sl, sh = step_of(stance, swing, body)
+    rise = body.toe_offset * np.sin(-phi) + body.ankle_height * (np.cos(phi) - 1)
+    heel_advance = body.toe_offset * (1 - np.cos(phi)) + body.ankle_height * np.sin(-phi)
+    assert sh == pytest.approx(rise, abs=1e-12)  # swing foot (flat) hangs that much higher
+    assert sl == pytest.approx(heel_advance, abs=1e-12)
+
+
+def test_dataset_steps_match_measured_strides():
+    # Eq. 10 on the measured curves reproduces half of Bovi's measured stride (±3 %).
+    for name in LEVEL:
+        d = dataset_by_name(name)
+        sl, sh = dataset_step(d, leg(d.body_height)) / d.body_height
+        assert sl == pytest.approx(d.stride_length / 2, rel=0.03), name
+        assert abs(sh) < 0.02, name
+
+
+def test_step_scales_with_body_height():
+    d = dataset_by_name("level_natural")
+    small, tall = dataset_step(d, leg(1.5)), dataset_step(d, leg(1.95))
+    np.testing.assert_allclose(tall, small * 1.95 / 1.5, rtol=1e-12)
+
+
+# --- ElevInterp ----------------------------------------------------------------------
+
+
+def test_source_datasets_reproduce_their_own_steps_exactly():
+    interp = ElevInterp()
+    body = leg(1.75)
+    steps = interp.source_steps(body)
+    out = interp.request(body, steps[:, 0], steps[:, 1])
+    assert not out.refined.any() and not out.clamped.any()
+    np.testing.assert_allclose(out.step_length, steps[:, 0], atol=1e-9)
+    np.testing.assert_allclose(out.step_height, steps[:, 1], atol=1e-9)
+    for k, d in enumerate(load_datasets()):
+        np.testing.assert_allclose(out.angles[k], d.angles, atol=1e-9)
+        assert out.stance_fraction[k] == pytest.approx(d.stance_fraction)
+
+
+def test_interpolation_between_speeds_is_monotonic():
+    # Along the segment from the natural to the fast (L) dataset, the blend shifts
+    # monotonically: thigh excursion grows and stance fraction shrinks.
+    interp = ElevInterp()
+    body = leg(1.75)
+    steps = interp.source_steps(body)
+    a, b = steps[LEVEL.index("level_natural")], steps[LEVEL.index("level_l")]
+    s = np.linspace(0, 1, 21)
+    req = a + s[:, None] * (b - a)
+    out = interp.request(body, req[:, 0], req[:, 1])
+    assert out.converged.all() and not out.clamped.any()
+    thigh_rom = np.ptp(out.angles[:, :, 2], axis=1)
+    assert np.all(np.diff(thigh_rom) > -1e-9)
+    assert np.all(np.diff(out.stance_fraction) < 1e-9)
+    assert np.all(np.diff(out.step_length) > 0)
+
+
+def random_requests(interp, body, rng, n):
+    """Points inside the legal region (convex combinations of its corners, shrunk 10 %)."""
+    poly = interp.legal_region(body)
+    w = rng.dirichlet(np.ones(len(poly)), size=n)
+    centre = poly.mean(axis=0)
+    return centre + 0.9 * (w @ poly - centre)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(1.50, 1.95), st.integers(0, 2**31 - 1))
+def test_refined_step_matches_request_within_1cm(height, seed):
+    interp = ElevInterp(config=ElevInterpConfig(max_inserted=0))  # every request searched
+    body = leg(height)
+    req = random_requests(interp, body, np.random.default_rng(seed), 8)
+    out = interp.request(body, req[:, 0], req[:, 1])
+    assert out.converged.all() and not out.clamped.any()
+    assert np.all(np.abs(out.step_length - req[:, 0]) < 1 * CM)
+    assert np.all(np.abs(out.step_height - req[:, 1]) < 1 * CM)
+    # The produced dataset really has that step (independent re-measurement).
+    np.testing.assert_allclose(dataset_step(out.angles, body), req, atol=1 * CM)
+    assert np.all(np.isfinite(out.angles))
+
+
+def test_mixed_bodies_in_one_batch():
+    rng = np.random.default_rng(7)
+    heights = rng.uniform(1.5, 1.95, 40)
+    body = leg(heights)
+    interp = ElevInterp()
+    region = interp.legal_region(leg(1.5))  # smallest body: inside for every body
+    centre = region.mean(axis=0)
+    req = centre + 0.5 * (region[rng.integers(0, len(region), 40)] - centre)
+    out = interp.request(body, req[:, 0], req[:, 1])
+    achieved = np.stack([out.step_length, out.step_height], axis=1)
+    assert np.abs(achieved - req).max() < 1 * CM
+    np.testing.assert_allclose(dataset_step(out.angles, body), achieved, atol=1e-9)
+    assert out.angles.shape == (40, 100, 4)
+
+
+def test_same_dataset_for_every_body_size_at_the_same_normalised_step():
+    # Size invariance: a step scaled with leg length gets the same angle curves.
+    sizes = np.array([1.5, 1.7, 1.95])
+    body = leg(sizes)
+    req = np.array([0.42, 0.02]) * body.length[:, None]
+    out = ElevInterp().request(body, req[:, 0], req[:, 1])
+    np.testing.assert_allclose(out.angles[0], out.angles[2], atol=1e-9)
+    np.testing.assert_allclose(out.step_length / body.length, 0.42, atol=1e-3)
+
+
+def test_solved_datasets_are_inserted_and_reused():
+    interp = ElevInterp()
+    body = leg(1.75)
+    req = random_requests(interp, body, np.random.default_rng(3), 20)
+    first = interp.request(body, req[:, 0], req[:, 1])
+    assert first.refined.any()
+    inserted = interp.stats["inserted"]
+    assert inserted > 0
+    again = interp.request(body, req[:, 0], req[:, 1])
+    # Inserted datasets are now vertices: their requests (nearly) all need no search.
+    assert again.refined.sum() <= 0.1 * first.refined.sum()
+    assert interp.stats["inserted"] == inserted  # nothing new
+    np.testing.assert_allclose(again.step_length, req[:, 0], atol=interp.config.tolerance)
+
+
+def test_request_outside_is_clamped_to_nearest_legal_step():
+    interp = ElevInterp()
+    body = leg(1.75)
+    region = interp.legal_region(body)
+    out = interp.request(body, [1.5, 0.6, 0.6], [0.0, 0.5, 0.0])
+    assert list(out.clamped) == [True, True, False]
+    assert out.converged.all()
+    for k, want in enumerate([[1.5, 0.0], [0.6, 0.5]]):
+        got = out.target[k]
+        # No vertex of the region is nearer to the request than the clamped target.
+        assert np.linalg.norm(got - want) <= np.linalg.norm(region - want, axis=1).min() + 1e-9
+        assert abs(out.step_length[k] - got[0]) < 0.002 + 1e-9
+    assert out.target[0, 0] < 1.0  # longest step the data allow for this body
+    assert interp.stats["clamped"] == 2
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field", "value"),
+    [
+        ({"step_length": np.nan, "step_height": 0.0}, "step_length", "nan"),
+        ({"step_length": -0.5, "step_height": 0.0}, "step_length", "-0.5"),
+        ({"step_length": 0.6, "step_height": np.inf}, "step_height", "inf"),
+    ],
+)
+def test_bad_requests_name_field_and_value(kwargs, field, value):
+    with pytest.raises(InputError, match=rf"ElevInterp\.{field} must be .*got {value}"):
+        ElevInterp().request(leg(1.75), **kwargs)
+
+
+def test_bad_leg_and_config_are_rejected():
+    bad = SagittalLeg(-0.4, 0.43, 0.07, 0.05, 0.2)
+    with pytest.raises(InputError, match=r"ElevInterp\.leg\.thigh must be finite and > 0"):
+        ElevInterp().request(bad, 0.6, 0.0)
+    with pytest.raises(InputError, match=r"ElevInterpConfig\.tolerance"):
+        ElevInterpConfig(tolerance=0.0)
+    with pytest.raises(InputError, match=r"ElevInterp\.datasets"):
+        ElevInterp(load_datasets()[:2])
+    with pytest.raises(InputError, match=r"SagittalLeg\.height"):
+        SagittalLeg.from_body_height(np.nan)
