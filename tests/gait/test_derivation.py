@@ -1,0 +1,83 @@
+"""The shipped gait data are exactly what scripts/derive_gait_data.py derives from the
+measured sources (skipped when ../shared is not present)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+GAIT_DIR = REPO / ".." / "shared" / "data" / "gait"
+DATA = REPO / "crowdwalk" / "data"
+
+pytestmark = pytest.mark.skipif(
+    not (GAIT_DIR / "bovi2011_multitask_reference_mmc3.xls").exists(),
+    reason="measured gait data (../shared/data/gait) not available",
+)
+
+
+@pytest.fixture(scope="module")
+def script():
+    pytest.importorskip("xlrd")
+    spec = importlib.util.spec_from_file_location("derive", REPO / "scripts/derive_gait_data.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def derived(script):
+    return script.derive_all(GAIT_DIR)
+
+
+def test_shipped_npz_matches_rederivation(script, derived):
+    angles, meta, _ = derived
+    with np.load(DATA / "elevation_datasets.npz") as shipped:
+        np.testing.assert_array_equal(shipped["angles"], angles)
+        assert json.loads(str(shipped["meta"])) == json.loads(json.dumps(script._fields(meta)))
+
+
+def test_shipped_normative_matches_rederivation(derived):
+    _, _, norm = derived
+    assert json.loads((DATA / "normative.json").read_text()) == norm
+
+
+def test_check_mode_reports_match(script, capsys):
+    assert script.main(["--gait-dir", str(GAIT_DIR), "--out-dir", str(DATA), "--check"]) == 0
+    assert "shipped files match" in capsys.readouterr().out
+
+
+def test_conventions_against_the_raw_bovi_columns(script):
+    curves = script.read_bovi_curves(GAIT_DIR / script.BOVI_FILE)["Natural"]
+    thigh = curves["Thigh Flex/Extension"]
+    hip = curves["Hip Flex/Extension"]
+    tilt = curves["Pelvic Ant/Posterior Tilt"]
+    knee = curves["Knee Flex/Extension"]
+    shank = curves["Shank Flex/Extension"]
+    # Bovi's pelvic tilt is posterior-positive: thigh (lab) = hip (pelvis) + tilt.
+    assert np.abs(thigh - (hip + tilt)).max() < 2.0
+    assert tilt.mean() < -5  # i.e. about 9 deg anterior
+    # Knee flexion = thigh - shank elevation (both distal-anterior positive).
+    assert np.abs(knee - (thigh - shank)).max() < 2.5
+
+
+def test_foot_offset_and_pelvis_sign_in_the_derived_data(derived):
+    angles, meta, _ = derived
+    names = [m["name"] for m in meta["datasets"]]
+    natural = np.rad2deg(angles[names.index("level_natural")].astype(float))
+    assert abs(np.median(natural[15:30, 0])) < 1.0  # flat foot = 0 at mid-stance
+    assert natural[0, 0] > 10  # toe-up at heel strike
+    assert abs(natural[:, 3].mean()) < 0.5  # pelvis zero = natural-speed mean
+    fast = np.rad2deg(angles[names.index("level_l")].astype(float))
+    assert fast[:, 3].mean() > 2  # faster walking tilts the pelvis further anterior
+
+
+def test_level_kinematics_reproduce_measured_strides(derived):
+    _, meta, _ = derived
+    for m in meta["datasets"]:
+        if m["kind"] == "level":
+            assert m["fk_step_length"] == pytest.approx(m["stride_length"] / 2, rel=0.03)
