@@ -96,11 +96,11 @@ class PlannerConfig:
     min_step_ratio: float = 0.30
     max_step_ratio: float = 1.05
     clearance: float = 0.02
-    edge_margin: float = 0.02
+    edge_margin: float = 0.0
     support_tolerance: float = 0.02
     max_step_rise: float = 0.40
     max_foot_slope: float = 0.5
-    swing_lift: float = 0.10
+    swing_lift: float = 0.15
     max_swing_lift: float = 0.60
     bezier_samples: int = 20
     max_adjustments: int = 25

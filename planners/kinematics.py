@@ -45,7 +45,7 @@ def leg_angles(hip_s, hip_z, ankle_s, ankle_z, leg: Leg, min_reach: float):
     dz = hip_z - ankle_z
     d = np.hypot(ds, dz)
     reachable = (d <= leg.length * (1 + 1e-9)) & (d >= min_reach)
-    dc = np.clip(d, max(min_reach, 1e-6), leg.length)
+    dc = np.clip(d, np.maximum(min_reach, 1e-6), leg.length)
     direction = np.arctan2(ds, dz)
     a, b = leg.thigh, leg.shank
     at_hip = np.arccos(np.clip((a * a + dc * dc - b * b) / (2 * a * dc), -1.0, 1.0))
@@ -75,18 +75,19 @@ class KeyFrames:
     reachable: np.ndarray
 
 
-def key_frames(back_s, back_z, stance_s, stance_z, front_s, front_z, summit_s, summit_z,
-               leg: Leg, pelvis_ratio: float, knee_max_flexion: float,
-               nominal_lift: float) -> KeyFrames:
+def key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg: Leg,
+               pelvis_ratio: float, knee_max_flexion: float, nominal_lift: float) -> KeyFrames:
     """Key frames of one step (§5.1) and the joint rotations between them (Eq. 3).
 
-    The swing foot moves from ``back`` over the ``stance`` foot to ``front``; ground
-    heights are of the footholds [m], ``summit`` is the highest ankle point of the swing
-    curve [m]. Key frames (Fig. 5): K1 mid-swing (pelvis above the stance ankle, swing
-    ankle at the summit); K2 front heel strike (pelvis midway, both feet flat); K3 back
-    toe-off (pelvis at 70 % of the step, back foot pitched 35 deg about its toe); K1'
-    the next mid-swing with the legs swapped (swing ankle ``nominal_lift`` above the new
-    stance foot). The pelvis is ``pelvis_ratio`` x leg length above the stance ankle at
+    The swing foot moves past the ``stance`` foot to ``front``; ground heights are of the
+    footholds [m], ``summit`` is the highest ankle point of the swing curve [m]. ``leg``
+    may hold arrays (one leg per step) instead of floats.
+
+    Key frames (Fig. 5): K1 mid-swing (pelvis above the stance ankle, swing ankle at
+    the summit); K2 front heel strike (pelvis midway, both feet flat); K3 back toe-off
+    (pelvis at 70 % of the step, back foot pitched 35 deg about its toe); K1' the next
+    mid-swing with the legs swapped (swing ankle ``nominal_lift`` above the new stance
+    foot). The pelvis is ``pelvis_ratio`` x leg length above the stance ankle at
     mid-stance; in double support it is as high as both legs allow with the straighter
     leg at 99 % of its length (knees nearly straight at heel strike and toe-off).
     """
@@ -94,9 +95,8 @@ def key_frames(back_s, back_z, stance_s, stance_z, front_s, front_z, summit_s, s
     L = leg.length
     H = pelvis_ratio * L
     cos_knee = np.cos(np.pi - knee_max_flexion)
-    min_reach = float(np.sqrt(leg.thigh**2 + leg.shank**2 - 2 * leg.thigh * leg.shank
-                              * cos_knee))
-    zb, zs, zf = back_z + a, stance_z + a, front_z + a  # ankle heights
+    min_reach = np.sqrt(leg.thigh**2 + leg.shank**2 - 2 * leg.thigh * leg.shank * cos_knee)
+    zs, zf = stance_z + a, front_z + a  # ankle heights
 
     reach = DOUBLE_SUPPORT_REACH * L
 

@@ -106,13 +106,16 @@ class GroundProfile:
         return self.s[same], self.z[same + 1] - self.z[same]
 
     @cached_property
-    def _range_max_table(self) -> list[np.ndarray]:
-        """Sparse table of vertex-height maxima over runs of 2**k vertices."""
-        table = [self.z]
+    def _range_max_table(self) -> np.ndarray:
+        """Sparse table (levels, m): max of vertex heights over runs of 2**k vertices."""
+        m = self.z.size
+        levels = max(1, int(np.floor(np.log2(m))) + 1)
+        table = np.full((levels, m), -np.inf)
+        table[0] = self.z
         width = 1
-        while 2 * width <= self.z.size:
-            prev = table[-1]
-            table.append(np.maximum(prev[:-width], prev[width:]))
+        for k in range(1, levels):
+            table[k, : m - 2 * width + 1] = np.maximum(
+                table[k - 1, : m - 2 * width + 1], table[k - 1, width: m - width + 1])
             width *= 2
         return table
 
@@ -128,20 +131,12 @@ class GroundProfile:
         lo = np.searchsorted(self.s, a, side="left")
         hi = np.searchsorted(self.s, b, side="right")  # vertices lo..hi-1 lie in [a, b]
         count = hi - lo
-        has = count > 0
-        if np.any(has):
-            table = self._range_max_table
-            k = np.zeros(count.shape, dtype=int)
-            k[has] = np.floor(np.log2(count[has])).astype(int)
-            k = np.minimum(k, len(table) - 1)
-            inner = np.full(count.shape, -np.inf)
-            for level in np.unique(k[has]):
-                sel = has & (k == level)
-                row = table[level]
-                width = 1 << int(level)
-                inner[sel] = np.maximum(row[lo[sel]], row[hi[sel] - width])
-            best = np.maximum(best, inner)
-        return best
+        k = np.log2(np.maximum(count, 1)).astype(int)
+        table = self._range_max_table
+        last = table.shape[1] - 1
+        inner = np.maximum(table[k, np.minimum(lo, last)],
+                           table[k, np.clip(hi - (1 << k), 0, last)])
+        return np.where(count > 0, np.maximum(best, inner), best)
 
     def __repr__(self) -> str:
         return (f"GroundProfile({self.s.size} vertices, s=[{self.s[0]:g}, {self.s[-1]:g}] m, "

@@ -1,0 +1,71 @@
+"""Legality of a foothold and of a step (§4.2, §5.2), vectorised, with reasons."""
+
+from __future__ import annotations
+
+from enum import IntFlag
+
+import numpy as np
+
+from planners.config import PlannerConfig
+from planners.profile import GroundProfile
+
+__all__ = ["Reason", "foot_support", "describe"]
+
+
+class Reason(IntFlag):
+    """Why a step is illegal (bit flags; 0 means legal)."""
+
+    EDGE = 1  #: a stair edge, riser or block side lies under the foot
+    SLOPE = 2  #: the ground under the foot is too steep or uneven
+    STEP_HEIGHT = 4  #: the height change of the step exceeds the limit
+    KNEE_REACH = 8  #: a key frame is out of the leg's reach or knee-flexion limit
+    SWING = 16  #: no Bezier swing curve clears the ground inside the legal region
+
+
+_TEXT = {
+    Reason.EDGE: "the foot would stand across an edge or riser",
+    Reason.SLOPE: "the ground under the foot is too steep or uneven",
+    Reason.STEP_HEIGHT: "the height change exceeds the largest step rise",
+    Reason.KNEE_REACH: "the knee cannot reach a key frame",
+    Reason.SWING: "the swing foot cannot clear the ground",
+}
+
+
+def describe(reason: int) -> str:
+    """Human-readable text of the most important flag in ``reason``."""
+    for flag in (Reason.STEP_HEIGHT, Reason.EDGE, Reason.SLOPE, Reason.KNEE_REACH,
+                 Reason.SWING):
+        if reason & flag:
+            return _TEXT[flag]
+    return "legal"
+
+
+def foot_support(ankle_s: np.ndarray, profile: GroundProfile, heel_offset, toe_offset,
+                 config: PlannerConfig) -> np.ndarray:
+    """Whether a foot placed with its ankle at ``ankle_s`` [m] is fully supported.
+
+    The foot spans heel to toe, widened by ``edge_margin`` [m]. Legal when (§4.2) no
+    vertical change larger than ``support_tolerance`` lies strictly inside the span
+    (heel and toe on the same tread: never across a stair edge, never on a riser), no
+    ground pokes more than ``support_tolerance`` above the higher of heel and toe, and
+    the heel-to-toe slope is at most ``max_foot_slope``.
+
+    Returns
+    -------
+    reason : ndarray of int, shape of ``ankle_s``
+        0 where supported, else :class:`Reason` flags (EDGE, SLOPE).
+    """
+    heel = ankle_s - heel_offset
+    toe = ankle_s + toe_offset
+    lo = heel - config.edge_margin
+    hi = toe + config.edge_margin
+    jump_s, jump_dz = profile.jumps
+    big = jump_s[np.abs(jump_dz) > config.support_tolerance]
+    edges = np.searchsorted(big, hi, side="left") - np.searchsorted(big, lo, side="right")
+    eps = 1e-9  # a riser exactly at the heel or toe is beside the foot, not under it
+    z_heel = profile.height(heel + eps)
+    z_toe = profile.height(toe - eps)
+    bump = profile.max_height(heel + eps, toe - eps) - np.maximum(z_heel, z_toe)
+    slope = np.abs(z_toe - z_heel) / (toe - heel)
+    uneven = (bump > config.support_tolerance) | (slope > config.max_foot_slope)
+    return np.where(edges > 0, int(Reason.EDGE), 0) | np.where(uneven, int(Reason.SLOPE), 0)
