@@ -476,6 +476,24 @@ def _node_at(root, loc: tuple):
     return node
 
 
+def _clean_loc(root, loc: tuple) -> tuple:
+    """The location without union tags (parts that are no key of the YAML mapping)."""
+    node, out = root, []
+    for part in loc:
+        if isinstance(node, yaml.MappingNode):
+            nxt = next((v for k, v in node.value if k.value == str(part)), None)
+            if nxt is None and isinstance(part, str) and any(
+                    k.value == "type" and v.value == part for k, v in node.value):
+                continue  # the discriminator tag pydantic inserts
+            node = nxt
+        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int):
+            node = node.value[part] if part < len(node.value) else None
+        else:
+            node = None
+        out.append(part)
+    return tuple(out)
+
+
 def _key_node(root, loc: tuple):
     """The key node of the last location part if it is a mapping key (for unknown keys)."""
     parent = _node_at(root, loc[:-1]) if loc else root
@@ -543,7 +561,7 @@ def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scen
     except ValidationError as exc:
         errs = exc.errors()
         e = errs[0]
-        loc = tuple(e["loc"])
+        loc = _clean_loc(root, tuple(e["loc"]))
         msg = e["msg"].removeprefix("Value error, ")
         more = f" ({len(errs) - 1} more problem(s))" if len(errs) > 1 else ""
         if e["type"] == "extra_forbidden":

@@ -315,14 +315,18 @@ class StairFlight:
     def gradient(self, xy):
         return np.zeros((len(xy), 2))
 
-    def breaks(self):
+    def breaks(self, overshoot: float = 0.0):
         p, d, lat = self._axes
         u = np.arange(1, self.steps)[:, None] * self.going
-        risers = np.stack([p + u * d - lat * self.width / 2, p + u * d + lat * self.width / 2],
-                          axis=1)
+        half = self.width / 2 + overshoot
+        risers = np.stack([p + u * d - lat * half, p + u * d + lat * half], axis=1)
         return np.concatenate([_ring_segments(self.footprint), risers.reshape(-1, 2, 2)])
 
-    outline = breaks
+    def outline(self):
+        # risers overshoot the sides by 0.1 µm so that noding sees a true crossing (a
+        # T-junction computed in floating point may miss the side line); the dangling
+        # ends are dropped by polygonize and are too short to make walls
+        return self.breaks(overshoot=1e-7)
 
 
 @dataclass(frozen=True, eq=False)
@@ -408,7 +412,10 @@ class Heightfield:
         lower = fx + fy <= 1
         gx = np.where(lower, z10 - z00, z11 - z01)
         gy = np.where(lower, z01 - z00, z11 - z10)
-        return i, j, z00, gx, gy
+        # the plane's value at the cell corner (0, 0): z00 below the diagonal, else
+        # extrapolated back from z11
+        anchor = np.where(lower, z00, z11 - gx - gy)
+        return i, j, anchor, gx, gy
 
     def surface(self, xy, ref):
         i, j, z00, gx, gy = self._plane(ref)
@@ -538,9 +545,11 @@ class MeshFeature:
     def breaks(self):
         tri = self.triangles()
         e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-        key = np.sort(np.round(e.reshape(len(e), 4), 9).view("f8,f8").reshape(-1, 2), axis=1)
-        _, idx = np.unique(key, return_index=True)
-        return e[idx]
+        swap = (e[:, 0, 0] > e[:, 1, 0]) | ((e[:, 0, 0] == e[:, 1, 0]) & (e[:, 0, 1] > e[:, 1, 1]))
+        e[swap] = e[swap][:, ::-1]
+        _, idx = np.unique(np.round(e.reshape(len(e), 4), 9), axis=0, return_index=True)
+        e = e[idx]
+        return e[np.linalg.norm(e[:, 1] - e[:, 0], axis=1) > 1e-12]
 
 
 Feature = Block | Slope | StairFlight | Heightfield | MeshFeature
@@ -666,8 +675,8 @@ class Terrain:
         if len(p) < 2:
             raise invalid("Terrain", "polyline", "at least 2 points [m]", len(p))
         seg_len = np.linalg.norm(np.diff(p, axis=0), axis=1)
-        keep = np.concatenate([[True], seg_len > 0])
-        p, seg_len = p[keep], seg_len[seg_len > 0]
+        keep = np.concatenate([[True], seg_len > 1e-9])  # drop repeated points
+        p, seg_len = p[keep], seg_len[seg_len > 1e-9]
         if len(p) < 2:
             s0 = np.zeros(1)
             return s0, self.height(p[:1])
@@ -692,6 +701,8 @@ class Terrain:
         # pieces between consecutive cut points of the same segment
         same = seg[1:] == seg[:-1]
         i0 = np.flatnonzero(same & (s[1:] - s[:-1] > 1e-12))
+        if len(i0) == 0:
+            return np.zeros(1), self.height(p[:1])
         mid = 0.5 * (pts[i0] + pts[i0 + 1])
         own = self.owner(mid)
         za = self._surface(pts[i0], mid, own)
@@ -787,7 +798,7 @@ class Terrain:
         a, b = segs[:, 0], segs[:, 1]
         d = b - a
         length = np.linalg.norm(d, axis=1)
-        segs, a, b, d, length = (x[length > 1e-12] for x in (segs, a, b, d, length))
+        segs, a, b, d, length = (x[length > 1e-6] for x in (segs, a, b, d, length))
         nrm = np.column_stack([-d[:, 1], d[:, 0]]) / length[:, None]
         mid = 0.5 * (a + b)
         left, right = mid + 1e-6 * nrm, mid - 1e-6 * nrm

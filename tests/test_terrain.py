@@ -1,0 +1,241 @@
+"""Terrain: exact heights at edges, override composition, profiles, normals, kinds, mesh."""
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from crowdwalk.errors import InputError
+from crowdwalk.terrain import (
+    Block,
+    Heightfield,
+    MeshFeature,
+    Slope,
+    StairFlight,
+    Terrain,
+    TerrainKind,
+)
+
+EXTENT = (-20.0, -20.0, 20.0, 20.0)
+coord = st.floats(-8, 8, allow_nan=False)
+angle = st.floats(-math.pi, math.pi, allow_nan=False)
+FAST = settings(max_examples=40, deadline=None)
+
+
+def profile_height(s_rows, z_rows, s):
+    """Height of a piecewise-linear profile at s strictly between its vertices."""
+    i = np.searchsorted(s_rows, s, side="right") - 1
+    i = np.clip(i, 0, len(s_rows) - 2)
+    s0, s1, z0, z1 = s_rows[i], s_rows[i + 1], z_rows[i], z_rows[i + 1]
+    w = np.where(s1 > s0, (s - s0) / np.where(s1 > s0, s1 - s0, 1), 0)
+    return z0 + w * (z1 - z0)
+
+
+def demo_terrain():
+    return Terrain(EXTENT, 0.0, (
+        Slope.ramp((-10, -10), 0.3, 8, 3, 0.0, 0.6),
+        StairFlight((0, 0), 0.4, 2.0, 0.28, 0.16, 7),
+        Block.box((4.0, 3.0), (3, 2), 1.12, heading=0.4),
+        Block([(-5, 5), (-2, 5), (-3, 8)], 0.15),
+        Heightfield.noise((6, -12), (6, 5), 0.5, 0.05, 1.0, seed=3, base=0.1),
+        StairFlight((-12, 10), -1.2, 2.5, 0.3, 0.15, 4, z0=0.0, up=False),
+    ))
+
+
+@FAST
+@given(cx=coord, cy=coord, length=st.floats(0.2, 6), width=st.floats(0.2, 6),
+       heading=angle, top=st.floats(-1, 2), base=st.floats(-1, 1),
+       pts=st.lists(st.tuples(st.floats(-15, 15), st.floats(-15, 15)), min_size=1, max_size=40))
+def test_block_top_inside_base_outside(cx, cy, length, width, heading, top, base, pts):
+    block = Block.box((cx, cy), (length, width), top, heading)
+    ter = Terrain(EXTENT, base, (block,))
+    xy = np.array(pts)
+    z = ter.height(xy)
+    inside = shapely.contains_xy(block.footprint, xy[:, 0], xy[:, 1])
+    outside = ~shapely.intersects_xy(block.footprint, xy[:, 0], xy[:, 1])
+    assert np.all(z[inside] == top)
+    assert np.all(z[outside] == base)
+    assert np.all(ter.kind(xy)[inside] == TerrainKind.BLOCK)
+    assert np.all(ter.kind(xy)[outside] == TerrainKind.FLAT)
+
+
+@FAST
+@given(sx=coord, sy=coord, heading=angle, width=st.floats(0.5, 4), going=st.floats(0.2, 0.5),
+       rise=st.floats(0.05, 0.25), steps=st.integers(1, 12), up=st.booleans(),
+       z0=st.floats(-1, 1))
+def test_stair_edges_exactly_where_built(sx, sy, heading, width, going, rise, steps, up, z0):
+    flight = StairFlight((sx, sy), heading, width, going, rise, steps, z0, up)
+    ter = Terrain((-30, -30, 30, 30), z0, (flight,))
+    d = np.array([math.cos(heading), math.sin(heading)])
+    lat = np.array([-d[1], d[0]])
+    eps = 1e-6
+    for k in range(steps + 1):
+        for v in (-0.45 * width, 0.0, 0.45 * width):
+            before = np.array([sx, sy]) + (k * going - eps) * d + v * lat
+            after = np.array([sx, sy]) + (k * going + eps) * d + v * lat
+            zb, za = ter.height(np.stack([before, after]))
+            sign = 1 if up else -1
+            assert zb == pytest.approx(z0 + sign * k * rise, abs=1e-12)
+            expect_after = z0 + sign * (k + 1) * rise if k < steps else z0
+            assert za == pytest.approx(expect_after, abs=1e-12)
+    # sideways off the flight is the base
+    side = np.array([sx, sy]) + 0.5 * going * d + (width / 2 + eps) * lat
+    assert ter.height(side)[0] == z0
+
+
+@FAST
+@given(pts=st.lists(st.tuples(st.floats(-15, 15), st.floats(-15, 15)), min_size=2, max_size=6),
+       frac=st.lists(st.floats(0.001, 0.999), min_size=5, max_size=30))
+def test_profile_agrees_with_point_queries(pts, frac):
+    ter = demo_terrain()
+    poly = np.array(pts)
+    s_rows, z_rows = ter.profile_arrays(poly)
+    assert np.all(np.diff(s_rows) >= 0)
+    seg = np.linalg.norm(np.diff(poly, axis=0), axis=1)
+    total = seg.sum()
+    if total < 1e-6:
+        return
+    assert s_rows[-1] == pytest.approx(total, abs=1e-9)
+    s = np.array(frac) * total
+    # query away from the profile's vertices: at a vertical change the profile has two
+    # values, and a path may merely touch a footprint's corner there (measure zero)
+    s = s[np.all(np.abs(s[:, None] - s_rows[None, :]) > 1e-7, axis=1)]
+    if len(s) == 0:
+        return
+    cum = np.concatenate([[0], np.cumsum(seg)])
+    j = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(seg) - 1)
+    ok = seg[j] > 0
+    s, j = s[ok], j[ok]
+    xy = poly[j] + ((s - cum[j]) / seg[j])[:, None] * (poly[j + 1] - poly[j])
+    np.testing.assert_allclose(profile_height(s_rows, z_rows, s), ter.height(xy), atol=1e-9)
+
+
+@FAST
+@given(offset=st.floats(-0.9, 0.9), angle_off=st.floats(-1.0, 1.0))
+def test_profile_locates_every_riser(offset, angle_off):
+    """A straight line across a flight: each vertical change sits on the riser line."""
+    flight = StairFlight((0.0, 0.0), 0.0, 2.0, 0.3, 0.17, 5)
+    ter = Terrain(EXTENT, 0.0, (flight,))
+    a = np.array([-2.0, offset - 2 * math.tan(angle_off) * 0.3])
+    direction = np.array([math.cos(angle_off), math.sin(angle_off)])
+    b = a + 6 * direction
+    s_rows, z_rows = ter.profile_arrays(np.stack([a, b]))
+    jump_s = s_rows[1:][np.diff(s_rows) == 0]
+    jump_xy = a + jump_s[:, None] * direction
+    on_flight = np.abs(jump_xy[:, 1]) < 1 - 1e-9
+    u = jump_xy[on_flight, 0]
+    # every vertical change on the flight lies on a riser line u = k * going (< 1 mm; exact)
+    k = np.round(u / 0.3)
+    np.testing.assert_allclose(u, k * 0.3, atol=1e-9)
+    # and the heights agree with point queries just before/after each change
+    for sj in jump_s:
+        zb, za = ter.height(a + np.array([sj - 1e-4, sj + 1e-4])[:, None] * direction)
+        rows = z_rows[1:][np.diff(s_rows) == 0][jump_s == sj]
+        assert za == pytest.approx(rows[0], abs=1e-9)
+
+
+def test_ground_profile_type_and_right_continuity():
+    ter = Terrain(EXTENT, 0.0, (StairFlight((1.0, 0.0), 0.0, 2.0, 0.3, 0.17, 3),))
+    prof = ter.profile([[0.0, 0.0], [3.0, 0.0]])
+    assert type(prof).__name__ == "GroundProfile"
+    np.testing.assert_allclose(prof.height(np.array([0.5, 1.0, 1.15, 1.3, 1.8, 2.5])),
+                               [0, 0.17, 0.17, 0.34, 0.51, 0], atol=1e-12)
+
+
+def test_override_order_later_feature_wins():
+    platform = Block.box((0, 0), (6, 6), 1.0)
+    pit_stairs = StairFlight((0, 0), 0.0, 2.0, 0.3, 0.2, 4, z0=1.0, up=False)
+    ter = Terrain(EXTENT, 0.0, (platform, pit_stairs))
+    assert ter.height([[0.1, 0.0]])[0] == pytest.approx(0.8)
+    assert ter.height([[1.0, 0.0]])[0] == pytest.approx(0.2)
+    assert ter.height([[-1.0, 0.0]])[0] == 1.0
+    swapped = Terrain(EXTENT, 0.0, (pit_stairs, platform))
+    assert swapped.height([[1.0, 0.0]])[0] == 1.0
+
+
+def test_normals_slope_and_treads():
+    grade = 0.1
+    ramp = Slope.ramp((0, 0), math.pi / 2, 5, 2, 0.0, 5 * grade)
+    ter = Terrain(EXTENT, 0.0, (ramp, StairFlight((5, 0), 0.0, 2, 0.3, 0.17, 3)))
+    n = ter.normal([[0, 1], [5.1, 0], [-5, -5]])
+    np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0)
+    np.testing.assert_allclose(n[0], np.array([0, -grade, 1]) / math.hypot(1, grade), atol=1e-12)
+    np.testing.assert_allclose(n[1:], [[0, 0, 1], [0, 0, 1]])
+    assert list(ter.kind([[0, 1], [5.1, 0], [-5, -5]])) == [TerrainKind.SLOPE,
+                                                            TerrainKind.STAIRS, TerrainKind.FLAT]
+
+
+def test_slope_incline_heights():
+    s = Slope([(0, 0), (4, 0), (4, 4), (0, 4)], (0, 0), 0.5, 0.0, math.tan(math.radians(5)))
+    ter = Terrain(EXTENT, 0.0, (s,))
+    assert ter.height([[2.0, 1.0]])[0] == pytest.approx(0.5 + 2 * math.tan(math.radians(5)))
+
+
+def test_heightfield_nodes_exact_and_seeded():
+    h = np.array([[0.0, 0.1, 0.3], [0.2, 0.4, 0.0]])
+    hf = Heightfield((1.0, 2.0), 0.5, h)
+    ter = Terrain(EXTENT, 0.0, (hf,))
+    jj, ii = np.meshgrid(range(2), range(3), indexing="ij")
+    nodes = np.stack([1.0 + 0.5 * ii.ravel(), 2.0 + 0.5 * jj.ravel()], 1)
+    np.testing.assert_allclose(ter.height(nodes), h.ravel(), atol=1e-12)
+    assert ter.kind(nodes[:1])[0] == TerrainKind.ROUGH
+    a = Heightfield.noise((0, 0), (4, 4), 0.25, 0.05, 1.0, seed=7)
+    b = Heightfield.noise((0, 0), (4, 4), 0.25, 0.05, 1.0, seed=7)
+    c = Heightfield.noise((0, 0), (4, 4), 0.25, 0.05, 1.0, seed=8)
+    assert np.array_equal(a.heights, b.heights) and not np.array_equal(a.heights, c.heights)
+    assert a.heights.std() == pytest.approx(0.05, rel=1e-6)
+
+
+def test_mesh_feature_from_file(tmp_path):
+    box = trimesh.creation.box(extents=(2, 2, 0.5))
+    box.apply_translation((3, 3, 0.25))
+    path = tmp_path / "box.stl"
+    box.export(path)
+    feat = MeshFeature.load(path, translate=(1.0, 0.0, 0.0))
+    ter = Terrain(EXTENT, 0.0, (feat,))
+    z = ter.height([[4.0, 3.0], [4.0, 5.5], [4.5, 2.5]])
+    np.testing.assert_allclose(z, [0.5, 0.0, 0.5], atol=1e-9)
+    assert list(ter.kind([[4.0, 3.0], [0, 0]])) == [TerrainKind.MESH, TerrainKind.FLAT]
+    s, zp = ter.profile_arrays([[0.0, 3.0], [8.0, 3.0]])
+    jumps = s[1:][np.diff(s) == 0]
+    np.testing.assert_allclose(jumps, [3.0, 5.0], atol=1e-9)
+    with pytest.raises(FileNotFoundError):
+        MeshFeature.load(tmp_path / "missing.obj")
+
+
+def test_mesh_matches_heights_and_covers_extent():
+    ter = demo_terrain()
+    mesh = ter.mesh()
+    up = np.abs(mesh.face_normals[:, 2]) > 1e-9
+    c = mesh.triangles_center[up]
+    np.testing.assert_allclose(ter.height(c[:, :2]), c[:, 2], atol=1e-9)
+    projected = (mesh.area_faces[up] * np.abs(mesh.face_normals[up, 2])).sum()
+    x0, y0, x1, y1 = EXTENT
+    assert projected == pytest.approx((x1 - x0) * (y1 - y0), rel=1e-9)
+    assert (mesh.face_normals[up, 2] > 0).all()
+
+
+def test_mesh_block_walls_are_vertical_and_complete():
+    ter = Terrain(EXTENT, 0.0, (Block.box((0, 0), (2, 1), 0.3, heading=0.7),))
+    mesh = ter.mesh()
+    wall = np.abs(mesh.face_normals[:, 2]) < 1e-9
+    assert mesh.area_faces[wall].sum() == pytest.approx(2 * (2 + 1) * 0.3, rel=1e-9)
+
+
+def test_bad_input_messages():
+    with pytest.raises(InputError, match=r"StairFlight\.rise must be > 0 \[m\]; got -0\.1"):
+        StairFlight((0, 0), 0.0, 1.0, 0.3, -0.1, 3)
+    with pytest.raises(InputError, match=r"StairFlight\.steps must be an integer ≥ 1"):
+        StairFlight((0, 0), 0.0, 1.0, 0.3, 0.1, 0)
+    with pytest.raises(InputError, match=r"Terrain\.features\[0\] must be inside the extent"):
+        Terrain((0, 0, 5, 5), 0.0, (Block.box((5, 5), (1, 1), 0.2),))
+    with pytest.raises(InputError, match=r"Terrain\.xy must be an \(n, 2\) array"):
+        Terrain.flat((0, 0, 5, 5)).height(np.zeros((3, 3)))
+    with pytest.raises(InputError, match=r"Block\.footprint must be a valid polygon"):
+        Block([(0, 0), (1, 1), (1, 0), (0, 1)], 0.2)
+    with pytest.raises(InputError, match=r"Terrain\.extent must be"):
+        Terrain((0, 0, -1, 5))
