@@ -359,8 +359,10 @@ def elevwalker_pose(
     warm: WarmStart,
     style: GaitStyle | None = None,
     stance_fraction: np.ndarray | float = 0.6,
+    swing_offset: np.ndarray | None = None,
     swing_target: np.ndarray | None = None,
     swing_blend: np.ndarray | None = None,
+    stance_hip_offset: np.ndarray | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -383,10 +385,18 @@ def elevwalker_pose(
     style : GaitStyle, optional
     stance_fraction : float or (k,)
         Stance phase of the data [1] (for the swing foot's contact flag in double support).
+    swing_offset : (k, 3), optional
+        Displacement added to the data-driven swing ankle [m].
     swing_target : (k, 3), optional
-        World position the swing ankle is pulled toward [m].
+        World position the (displaced) swing ankle is blended toward [m].
     swing_blend : (k,), optional
-        Weight of ``swing_target`` in [0, 1]; IK on the swing leg where > 0.
+        Weight of ``swing_target`` in [0, 1]. Where the offset or the blend is non-zero
+        the swing leg reaches the resulting ankle goal by two-link IK.
+    stance_hip_offset : (k, 3), optional
+        Displacement of the stance hip from where the data put it [m]: the stance shank
+        and thigh elevations are replaced by a sagittal two-link IK solution and the
+        stance width shifted (the Animator uses it to keep the root continuous when the
+        legs swap roles).
 
     Returns
     -------
@@ -415,6 +425,14 @@ def elevwalker_pose(
     #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
     pitch = np.arctan(np.tan(phi_st[:, 0]) * np.cos(foot.yaw - heading))
     r_foot, ankle, toe_angle = _stance_foot_pose(body, foot, pitch)
+
+    if stance_hip_offset is not None:
+        phi_st = phi_st.copy()
+        offset = np.asarray(stance_hip_offset, dtype=float)
+        phi_st[:, 1], phi_st[:, 2] = _shifted_stance_leg(
+            body, ankle, phi_st[:, 1], phi_st[:, 2], heading, offset
+        )
+        w_stance = w_stance - _dot(offset, normal)
 
     # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
     tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
@@ -480,11 +498,18 @@ def elevwalker_pose(
     r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, knee_pos_sw, ankle_sw = swing_chain(x_hip, 1)
 
     # Optional swing-ankle target with two-link IK on the swing leg.
-    if swing_target is not None and swing_blend is not None:
-        blend = np.clip(np.asarray(swing_blend, dtype=float), 0.0, 1.0)
-        goal = ankle_sw + blend[:, None] * (np.asarray(swing_target, float) - ankle_sw)
+    if swing_offset is not None or (swing_target is not None and swing_blend is not None):
+        goal = ankle_sw.copy()
+        use = np.zeros(k, dtype=bool)
+        if swing_offset is not None:
+            offset = np.asarray(swing_offset, dtype=float)
+            goal += offset
+            use |= np.any(offset != 0.0, axis=1)
+        if swing_target is not None and swing_blend is not None:
+            blend = np.clip(np.asarray(swing_blend, dtype=float), 0.0, 1.0)
+            goal += blend[:, None] * (np.asarray(swing_target, dtype=float) - goal)
+            use |= blend > 0
         r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, knee_pos_sw, goal, r_thigh_sw)
-        use = blend > 0
         r_thigh_sw = np.where(use[:, None, None], r_thigh_ik, r_thigh_sw)
         knee_sw = np.where(use, knee_ik, knee_sw)
         r_shank_sw = r_thigh_sw @ rotation_y(knee_sw)
@@ -494,6 +519,13 @@ def elevwalker_pose(
     ankle_sw_angle, ok_foot_sw = solve_single_dof(
         r_shank_sw, _TC_AXES[sw_row], _FWD, heading, 0.5 * np.pi + phi_sw[:, 0]
     )
+
+    # The swing foot's toes stay flat on the ground while it pushes off (double support).
+    r_foot_sw = r_shank_sw @ axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
+    pitch_sw = np.arcsin(np.clip(r_foot_sw[:, 2, 0], -1.0, 1.0))
+    push = np.asarray(stance_fraction, dtype=float) - 0.5 + 0.05
+    flat = 1.0 - np.clip((phase / push), 0.0, 1.0) ** 2
+    toe_sw = flat * np.minimum(pitch_sw, 0.0)
 
     # Assemble local rotations.
     nj = len(JOINT_NAMES)
@@ -509,6 +541,7 @@ def elevwalker_pose(
     local[rows, sw_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_sw
     local[rows, sw_j[:, 1]] = rotation_y(knee_sw)
     local[rows, sw_j[:, 2]] = axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
+    local[rows, sw_j[:, 4]] = rotation_y(toe_sw)
 
     # 5. Upper body (§8): trunk upright along ψ, arms with the opposite thigh.
     r_trunk = rotation_z(heading)
@@ -540,6 +573,23 @@ def elevwalker_pose(
         converged=converged,
         warm=WarmStart(x_ankle, x_hip),
     )
+
+
+def _shifted_stance_leg(body: Body, ankle, phi_shank, phi_thigh, heading, offset):
+    """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
+    in the sagittal plane: two-link IK from the ankle, knee forward."""
+    ch, sh = np.cos(heading), np.sin(heading)
+    l1, l2 = body.thigh, body.shank
+    # Data hip relative to the ankle in sagittal coordinates (forward, up).
+    fwd = -l2 * np.sin(phi_shank) - l1 * np.sin(phi_thigh)
+    up = l2 * np.cos(phi_shank) + l1 * np.cos(phi_thigh)
+    fwd = fwd + offset[:, 0] * ch + offset[:, 1] * sh
+    up = up + offset[:, 2]
+    dist = np.clip(np.hypot(fwd, up), np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
+    line = np.arctan2(-fwd, up)  # elevation of the hip→ankle line
+    at_hip = np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1.0, 1.0))
+    at_ankle = np.arccos(np.clip((l2**2 + dist**2 - l1**2) / (2 * l2 * dist), -1.0, 1.0))
+    return line - at_ankle, line + at_hip
 
 
 def _two_link_ik(body: Body, hip, knee, goal, r_thigh):

@@ -1,0 +1,528 @@
+"""The batched Animator the crowd drives: step commands in, full-body poses out.
+
+The crowd calls :meth:`Animator.command` when agents start a step (at a heel strike) and
+:meth:`Animator.pose` at every output frame (docs/architecture.md, "crowdwalk.gait").
+
+Per step and agent, :class:`~crowdwalk.gait.elevinterp.ElevInterp` turns the commanded
+step length and height into an elevation-angle dataset for the agent's body (§5), and
+:func:`~crowdwalk.gait.elevwalker.elevwalker_pose` turns the dataset into poses (§4).
+Around the walker the Animator adds what a crowd needs:
+
+- **Seamless footholds.** The data-driven swing ankle is pulled, with IK on the swing leg,
+  from where the foot actually lifted off to where the heel strikes the commanded foothold:
+  offsets measured once per step (walker evaluated at the step's start and end) are
+  blended with a smoothstep over the swing. The landing foot is the next stance foot, so
+  it neither slides nor jumps.
+- **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
+  Bezier swing curve and the data-driven swing foot would come within 5 mm of the ground
+  somewhere along the step (stair nosings, blocks), the swing ankle follows the Bezier
+  instead (blended in and out over 10 % of the swing). Every frame, a swing foot that
+  still dips below the ground is lifted by the depth (IK again).
+- **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
+  the stance hip starts where the previous step left the root and rejoins the data over
+  the first half of the step (sagittal two-link IK of the stance leg).
+- **Robustness (item 10).** An agent whose solve did not converge, or produced a
+  non-finite value, keeps its previous frame's pose and is flagged in
+  :attr:`PoseFrame.fallback`; no NaN reaches the output.
+
+Curved paths turn the sagittal plane ψ smoothly from the previous heading to the
+commanded one over the step (§4.4); a commanded spin turn rotates the stance foot about
+its ball early in the step (§6.1).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from crowdwalk.body import JOINT_NAMES, LEG_JOINTS, PARENTS, Body, matrix_to_quaternion
+from crowdwalk.errors import invalid
+from crowdwalk.gait.datasets import sample
+from crowdwalk.gait.elevinterp import ElevInterp
+from crowdwalk.gait.elevwalker import (
+    GaitStyle,
+    StanceFoot,
+    WarmStart,
+    _stance_foot_pose,
+    elevwalker_pose,
+    foot_points,
+)
+
+__all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
+
+GroundHeight = Callable[[np.ndarray], np.ndarray]
+"""Ground height ``z (n,)`` [m] at points ``xy (n, 2)`` [m], e.g. ``Terrain.height``."""
+
+_CLEARANCE = 0.005  # swing foot closer to the ground than this [m] → follow the Bezier
+_CHECK_TAUS = np.array([0.15, 0.3, 0.45, 0.6, 0.75, 0.9])  # swing samples for the check
+_PHASE_END = 0.5 - 1e-6
+_HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
+
+
+def _smoothstep(x: np.ndarray) -> np.ndarray:
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Cubic Bezier points (k, 3) of control points (k, 4, 3) at parameters tau (k,)."""
+    u = 1.0 - tau
+    w = np.stack([u**3, 3 * u * u * tau, 3 * u * tau * tau, tau**3], axis=1)
+    return np.einsum("kc,kcd->kd", w, ctrl)
+
+
+def _column(values, m: int, owner: str, name: str, constraint: str, dtype=float) -> np.ndarray:
+    arr = np.asarray(values, dtype=dtype)
+    if arr.shape != (m,):
+        raise invalid(owner, name, f"an ({m},) array {constraint}", arr.shape)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class StepCommand:
+    """Steps that m agents start now (at their heel strike).
+
+    Attributes
+    ----------
+    agent : (m,) int, agent index into the Animator's bodies.
+    time : (m,) step start [s].
+    duration : (m,) heel strike to next heel strike [s], > 0.
+    swing_foot : (m,) int, 0 = left foot swings, 1 = right foot swings.
+    start : (m, 3) stance foothold (ground point below the stance ankle) [m].
+    target : (m, 3) foothold where the swing foot lands [m].
+    heading : (m,) walking direction ψ at the end of the step, from +x [rad].
+    step_length, step_height : (m,) [m], requested of ElevInterp (foothold to foothold).
+    swing_bezier : (m, 4, 3), optional
+        Planner's collision-free Bezier control points of the swing ankle, world xyz [m];
+        rows of NaN where an agent has none.
+    toe_out : (m,), optional
+        Toe-out of the swing foot [rad] (MetaGait §6.1); default the style's.
+    spin : (m,), optional
+        Spin turn on the stance foot [rad], positive counter-clockwise (§6.1).
+    """
+
+    agent: np.ndarray
+    time: np.ndarray
+    duration: np.ndarray
+    swing_foot: np.ndarray
+    start: np.ndarray
+    target: np.ndarray
+    heading: np.ndarray
+    step_length: np.ndarray
+    step_height: np.ndarray
+    swing_bezier: np.ndarray | None = None
+    toe_out: np.ndarray | None = None
+    spin: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        owner = "StepCommand"
+        agent = np.atleast_1d(np.asarray(self.agent))
+        if agent.ndim != 1 or not np.issubdtype(agent.dtype, np.integer):
+            raise invalid(owner, "agent", "an (m,) integer array", agent.dtype)
+        m = agent.size
+        object.__setattr__(self, "agent", agent.astype(np.intp))
+        for name in ("time", "duration", "heading", "step_length", "step_height"):
+            arr = _column(np.atleast_1d(getattr(self, name)), m, owner, name, "[finite]")
+            if not np.all(np.isfinite(arr)):
+                raise invalid(owner, name, "finite", arr[~np.isfinite(arr)][:3])
+            object.__setattr__(self, name, arr)
+        if np.any(self.duration <= 0):
+            raise invalid(owner, "duration", "> 0 [s]", self.duration[self.duration <= 0][:3])
+        if np.any(self.step_length <= 0):
+            raise invalid(owner, "step_length", "> 0 [m]", self.step_length.min())
+        foot = _column(np.atleast_1d(self.swing_foot), m, owner, "swing_foot", "of 0/1", int)
+        if np.any((foot != 0) & (foot != 1)):
+            raise invalid(owner, "swing_foot", "0 (left) or 1 (right)", foot[(foot > 1)][:3])
+        object.__setattr__(self, "swing_foot", foot)
+        for name in ("start", "target"):
+            arr = np.asarray(getattr(self, name), dtype=float).reshape(-1, 3)
+            if arr.shape != (m, 3) or not np.all(np.isfinite(arr)):
+                raise invalid(owner, name, f"a finite ({m}, 3) array [m]", arr.shape)
+            object.__setattr__(self, name, arr)
+        if self.swing_bezier is not None:
+            bez = np.asarray(self.swing_bezier, dtype=float)
+            if bez.shape != (m, 4, 3):
+                raise invalid(owner, "swing_bezier", f"an ({m}, 4, 3) array [m]", bez.shape)
+            object.__setattr__(self, "swing_bezier", bez)
+        for name in ("toe_out", "spin"):
+            value = getattr(self, name)
+            if value is not None:
+                arr = _column(np.atleast_1d(value), m, owner, name, "[rad]")
+                if not np.all(np.isfinite(arr) & (np.abs(arr) < np.pi)):
+                    raise invalid(owner, name, "finite and in (-π, π) [rad]", arr)
+                object.__setattr__(self, name, arr)
+
+
+@dataclass(frozen=True, eq=False)
+class PoseFrame:
+    """Poses of k agents at one time.
+
+    Attributes
+    ----------
+    agents : (k,) agent indices.
+    time : float [s].
+    root_position : (k, 3) ``HumanoidRoot`` world position [m].
+    root_quaternion : (k, 4) pelvis world orientation, wxyz.
+    joints : (k, J, 4) local joint rotations, wxyz (joint 0 repeats the root's).
+    positions : (k, J, 3) joint world positions [m].
+    contact : (k, 2) bool, left/right foot on the ground.
+    fallback : (k,) bool, a solve did not converge and the previous pose was kept.
+    """
+
+    agents: np.ndarray
+    time: float
+    root_position: np.ndarray
+    root_quaternion: np.ndarray
+    joints: np.ndarray
+    positions: np.ndarray
+    contact: np.ndarray
+    fallback: np.ndarray
+
+
+class Animator:
+    """Full-body poses for n agents from step commands (Sun & Metaxas 2001).
+
+    Parameters
+    ----------
+    body : Body
+        The n agents' bodies; agent i is row i.
+    ground : callable, optional
+        ``ground(xy (p, 2)) -> z (p,)`` [m], e.g. ``world.terrain.height``; used for the
+        stance-foot slope and swing-foot clearance. Without it the ground is taken as the
+        straight line between the step's two footholds.
+    style : GaitStyle, optional
+    interp : ElevInterp, optional
+        Shared dataset interpolator (default: a new one over the shipped datasets).
+    """
+
+    def __init__(
+        self,
+        body: Body,
+        ground: GroundHeight | None = None,
+        style: GaitStyle | None = None,
+        interp: ElevInterp | None = None,
+    ) -> None:
+        if not isinstance(body, Body):
+            raise invalid("Animator", "body", "a crowdwalk.body.Body", type(body).__name__)
+        self.body = body
+        self.ground = ground
+        self.style = style or GaitStyle()
+        self.interp = interp or ElevInterp()
+        n = len(body)
+        n_samples = self.interp.datasets[0].samples
+        nj = len(JOINT_NAMES)
+        self._commanded = np.zeros(n, bool)
+        self._angles = np.zeros((n, n_samples, 4))
+        self._stance_fraction = np.full(n, 0.6)
+        self._t0 = np.zeros(n)
+        self._duration = np.ones(n)
+        self._stance_left = np.ones(n, bool)
+        self._psi0 = np.zeros(n)
+        self._psi1 = np.zeros(n)
+        self._ball = np.zeros((n, 3))
+        self._yaw = np.zeros(n)
+        self._slope = np.zeros(n)
+        self._spin = np.zeros(n)
+        self._toe_out = np.full(n, self.style.toe_out)
+        self._start = np.zeros((n, 3))
+        self._target = np.zeros((n, 3))
+        self._land_yaw = np.zeros(n)
+        self._land_slope = np.zeros(n)
+        self._d0 = np.zeros((n, 3))
+        self._d1 = np.zeros((n, 3))
+        self._bezier = np.zeros((n, 4, 3))
+        self._use_bezier = np.zeros(n, bool)
+        self._hip_fix = np.zeros((n, 3))
+        self._warm_ankle = np.zeros((n, 2))
+        self._warm_hip = np.zeros((n, 3))
+        self._has_pose = np.zeros(n, bool)
+        self._prev_root = np.zeros((n, 3))
+        self._prev_rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        self._prev_local = np.broadcast_to(np.eye(3), (n, nj, 3, 3)).copy()
+        self._prev_positions = np.zeros((n, nj, 3))
+        self._prev_contact = np.ones((n, 2), bool)
+        self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
+                      "lifted": 0}  # fmt: skip
+
+    # -- public -----------------------------------------------------------------------
+    @property
+    def skeleton(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """Joint names (J,) and parent indices (J,) for ``record.RunWriter``."""
+        return JOINT_NAMES, PARENTS.copy()
+
+    def command(self, cmd: StepCommand) -> None:
+        """Start steps for the agents in ``cmd`` (batched; call at their heel strikes)."""
+        n = len(self.body)
+        a = cmd.agent
+        if a.size == 0:
+            return
+        if np.any((a < 0) | (a >= n)):
+            raise invalid("StepCommand", "agent", f"indices in [0, {n})", a[(a < 0) | (a >= n)])
+        if np.unique(a).size != a.size:
+            raise invalid("StepCommand", "agent", "without repeated agents", a)
+        body = self.body.take(a)
+        first = ~self._commanded[a]
+        swing_left = cmd.swing_foot == 0
+        stance_left = ~swing_left
+        side_sw = np.where(swing_left, 1.0, -1.0)
+
+        # Where the swing foot lifts off and the root is: the previous step at its end.
+        had = ~first
+        liftoff = np.zeros((a.size, 3))
+        root_end = np.zeros((a.size, 3))
+        if had.any():
+            ah = a[had]
+            end = self._walk(ah, np.full(ah.size, _PHASE_END), corrected=True)
+            old_stance = np.where(self._stance_left[ah], LEG_JOINTS[0, 2], LEG_JOINTS[1, 2])
+            liftoff[had] = end.positions[np.arange(ah.size), old_stance]
+            root_end[had] = end.root_position
+
+        # The new stance foot: where the previous swing foot landed (same yaw), or flat.
+        toe_out = cmd.toe_out if cmd.toe_out is not None else np.full(a.size, self.style.toe_out)
+        yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, self._land_yaw[a])
+        slope = self._slope_at(body, cmd.start, yaw)
+        stance = StanceFoot.from_foothold(body, cmd.start, yaw, slope)
+
+        data = self.interp.request(body, cmd.step_length, cmd.step_height)
+        self._angles[a] = data.angles
+        self._stance_fraction[a] = data.stance_fraction
+        self._psi0[a] = np.where(first, cmd.heading, self._psi1[a])
+        self._psi1[a] = cmd.heading
+        self._t0[a] = cmd.time
+        self._duration[a] = cmd.duration
+        self._stance_left[a] = stance_left
+        self._ball[a], self._yaw[a], self._slope[a] = stance.ball, stance.yaw, stance.slope
+        self._spin[a] = 0.0 if cmd.spin is None else cmd.spin
+        self._toe_out[a] = toe_out
+        self._start[a], self._target[a] = cmd.start, cmd.target
+        self._d0[a] = 0.0
+        self._d1[a] = 0.0
+        self._hip_fix[a] = 0.0
+        self._use_bezier[a] = False
+        self._warm_start_swap(a, had)
+        self._commanded[a] = True
+
+        # Root continuity: the stance hip starts where the previous step left the root
+        # and blends to the data over the first half of the step.
+        if had.any():
+            start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
+            self._hip_fix[a[had]] = root_end[had] - start_pose.root_position
+
+        # Data-driven swing ankle at lift-off and landing (no swing corrections yet).
+        ends = np.concatenate([a, a])
+        phases = np.concatenate([np.zeros(a.size), np.full(a.size, _PHASE_END)])
+        pose = self._walk(ends, phases, corrected=True)
+        m = a.size
+        sw_idx = LEG_JOINTS[np.where(swing_left, 0, 1)]
+        tc = sw_idx[:, 2]
+        rows = np.arange(m)
+        ankle0 = pose.positions[rows, tc]
+        ankle1 = pose.positions[m + rows, tc]
+        sub = sw_idx[:, 3]
+        heel_to_ball = pose.rotations[m + rows, sub][:, :, 0]
+        land_yaw = np.arctan2(heel_to_ball[:, 1], heel_to_ball[:, 0])
+        land_slope = self._slope_at(body, cmd.target, land_yaw)
+        land = StanceFoot.from_foothold(body, cmd.target, land_yaw, land_slope)
+        land_phi = sample(data.angles, np.zeros(m))[:, 0]
+        land_pitch = np.arctan(np.tan(land_phi) * np.cos(land_yaw - cmd.heading))
+        ankle_land = _stance_foot_pose(body, land, land_pitch)[1]
+        self._d0[a] = np.where(had[:, None], liftoff - ankle0, 0.0)
+        self._d1[a] = ankle_land - ankle1
+        self._land_yaw[a] = land_yaw
+        self._land_slope[a] = land_slope
+
+        # Swing clearance: would the corrected data-driven foot touch the ground?
+        if cmd.swing_bezier is not None:
+            has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
+            if has.any():
+                ab = a[has]
+                self._bezier[ab] = cmd.swing_bezier[has]
+                k = ab.size
+                idx = np.tile(ab, _CHECK_TAUS.size)
+                ph = np.repeat(0.5 * _CHECK_TAUS, k)
+                check = self._walk(idx, ph, corrected=True)
+                pts = foot_points(self.body.take(idx), check.positions, check.rotations)
+                side = np.where(self._stance_left[idx], 1, 0)
+                feet = pts[np.arange(idx.size), side]  # (p, 3, 3) swing-foot points
+                gap = feet[:, :, 2] - self._ground_at(idx, feet)
+                clearance = gap.min(axis=1).reshape(_CHECK_TAUS.size, k).min(axis=0)
+                self._use_bezier[ab] = clearance < _CLEARANCE
+                self.stats["bezier_steps"] += int(self._use_bezier[ab].sum())
+        self.stats["commands"] += m
+
+    def pose(self, t: float, agents: np.ndarray | None = None) -> PoseFrame:
+        """Poses of ``agents`` (default: all) at time ``t`` [s], one vectorised call."""
+        n = len(self.body)
+        a = np.arange(n) if agents is None else np.atleast_1d(np.asarray(agents))
+        if a.ndim != 1 or not np.issubdtype(a.dtype, np.integer):
+            raise invalid("Animator", "agents", "an (k,) integer array", a.dtype)
+        if np.any((a < 0) | (a >= n)):
+            raise invalid("Animator", "agents", f"indices in [0, {n})", a[(a < 0) | (a >= n)])
+        if not np.all(self._commanded[a]):
+            missing = a[~self._commanded[a]][:5]
+            raise invalid("Animator", "agents", "agents that received a StepCommand", missing)
+        if not np.isfinite(t):
+            raise invalid("Animator", "t", "finite [s]", t)
+        phase = np.clip(0.5 * (t - self._t0[a]) / self._duration[a], 0.0, _PHASE_END)
+        walked = self._walk(a, phase, corrected=True)
+        walked, lifted = self._lift_swing_foot(a, phase, walked)
+        self.stats["lifted"] += int(lifted)
+
+        ok = walked.converged
+        self._warm_ankle[a] = np.where(ok[:, None], walked.warm.ankle, self._warm_ankle[a])
+        self._warm_hip[a] = np.where(ok[:, None], walked.warm.hip, self._warm_hip[a])
+        keep = ~ok & self._has_pose[a]
+        root = np.where(keep[:, None], self._prev_root[a], walked.root_position)
+        rot = np.where(keep[:, None, None], self._prev_rot[a], walked.root_rotation)
+        local = np.where(keep[:, None, None, None], self._prev_local[a], walked.local)
+        positions = np.where(keep[:, None, None], self._prev_positions[a], walked.positions)
+        contact = np.where(keep[:, None], self._prev_contact[a], walked.contact)
+        bad = ~(np.isfinite(positions).all(axis=(1, 2)) & np.isfinite(local).all(axis=(1, 2, 3)))
+        if bad.any():  # never reached in tests; a last guard so no NaN leaves the Animator
+            root[bad], rot[bad], local[bad], positions[bad] = self._standing(a[bad])
+            contact[bad] = True
+        self._prev_root[a], self._prev_rot[a], self._prev_local[a] = root, rot, local
+        self._prev_positions[a], self._prev_contact[a] = positions, contact
+        self._has_pose[a] = True
+        fallback = ~ok
+        self.stats["poses"] += a.size
+        self.stats["fallbacks"] += int(fallback.sum())
+        local = local.copy()
+        local[:, 0] = rot
+        quats = matrix_to_quaternion(local)
+        return PoseFrame(
+            agents=a,
+            time=float(t),
+            root_position=root,
+            root_quaternion=quats[:, 0].copy(),
+            joints=quats,
+            positions=positions,
+            contact=contact,
+            fallback=fallback,
+        )
+
+    # -- internals --------------------------------------------------------------------
+    def _foot_pitch(self, a: np.ndarray, phase: np.ndarray, stance: bool) -> np.ndarray:
+        """Pitch of the stance foot [rad] (exact for the sagittal elevation, §4.1)."""
+        t = phase if stance else phase + 0.5
+        phi = sample(self._angles[a], t)[:, 0]
+        psi = self._heading(a, phase)
+        return np.arctan(np.tan(phi) * np.cos(self._yaw[a] + self._spin[a] - psi))
+
+    def _heading(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
+        s = _smoothstep(2.0 * phase)
+        return self._psi0[a] + _wrap(self._psi1[a] - self._psi0[a]) * s
+
+    def _slope_at(self, body: Body, foothold: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+        """Ground pitch along a foot placed at ``foothold`` with ``yaw`` [rad]."""
+        if self.ground is None:
+            return np.zeros(len(body))
+        d = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+        heel = foothold[:, :2] - body.heel_offset[:, None] * d
+        ball = foothold[:, :2] + body.ball_offset[:, None] * d
+        z = np.asarray(self.ground(np.concatenate([heel, ball])), dtype=float)
+        m = len(body)
+        return np.arctan2(z[m:] - z[:m], body.heel_offset + body.ball_offset)
+
+    def _ground_at(self, a: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Ground height [m] below points (p, q, 3) of agents a (p,)."""
+        p, q = points.shape[:2]
+        xy = points[:, :, :2].reshape(-1, 2)
+        if self.ground is not None:
+            return np.asarray(self.ground(xy), dtype=float).reshape(p, q)
+        start, target = self._start[a], self._target[a]
+        d = target[:, :2] - start[:, :2]
+        dd = np.maximum(np.einsum("ka,ka->k", d, d), 1e-12)
+        s = np.einsum("kqa,ka->kq", points[:, :, :2] - start[:, None, :2], d) / dd[:, None]
+        s = np.clip(s, 0.0, 1.0)
+        return start[:, None, 2] + s * (target[:, 2] - start[:, 2])[:, None]
+
+    def _warm_start_swap(self, a: np.ndarray, had: np.ndarray) -> None:
+        """Warm starts after the legs swap roles: the new swing hip starts from the old
+        stance hip's angles (YXZ Euler); the new stance ankle from zero subtalar."""
+        from scipy.spatial.transform import Rotation
+
+        self._warm_ankle[a] = 0.0
+        self._warm_hip[a] = 0.0
+        ok = had & self._has_pose[a]
+        if not ok.any():
+            return
+        ah = a[ok]
+        new_swing_left = ~self._stance_left[ah]
+        hip = np.where(new_swing_left, LEG_JOINTS[0, 0], LEG_JOINTS[1, 0])
+        local_hip = self._prev_local[ah, hip]
+        self._warm_hip[ah] = Rotation.from_matrix(local_hip).as_euler("YXZ")
+
+    def _walk(self, a: np.ndarray, phase: np.ndarray, corrected: bool,
+              lift: np.ndarray | None = None):  # fmt: skip
+        """ElevWalker for agents a (k,) at stance phases (k,), with the step corrections
+        (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal)."""
+        body = self.body.take(a)
+        angles = self._angles[a]
+        st = sample(angles, phase)
+        sw = sample(angles, phase + 0.5)
+        psi = self._heading(a, phase)
+        tau = 2.0 * phase
+        spin = self._spin[a] * _smoothstep(tau / 0.3)
+        foot = StanceFoot(self._ball[a], self._yaw[a] + spin, self._slope[a])
+        offset = target = blend = None
+        if corrected:
+            s = _smoothstep(tau)[:, None]
+            offset = (1.0 - s) * self._d0[a] + s * self._d1[a]
+            ramp = _smoothstep(tau / 0.1) * _smoothstep((1.0 - tau) / 0.1)
+            blend = np.where(self._use_bezier[a], ramp, 0.0)
+            target = _bezier(self._bezier[a], tau)
+            if lift is not None:
+                offset[:, 2] += lift
+                target[:, 2] += lift
+        hip_fix = None
+        if corrected:
+            hip_fix = self._hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
+        warm = WarmStart(self._warm_ankle[a], self._warm_hip[a])
+        return elevwalker_pose(
+            body, self._stance_left[a], phase, st, sw, psi, foot, self._toe_out[a], warm,
+            self.style, self._stance_fraction[a], swing_offset=offset, swing_target=target,
+            swing_blend=blend, stance_hip_offset=hip_fix,
+        )  # fmt: skip
+
+    def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked):
+        """Re-solve agents whose swing foot dips below the ground, ankle raised by the
+        depth (IK on the swing leg)."""
+        pts = foot_points(self.body.take(a), walked.positions, walked.rotations)
+        side = np.where(self._stance_left[a], 1, 0)
+        feet = pts[np.arange(a.size), side]
+        depth = (self._ground_at(a, feet) - feet[:, :, 2]).max(axis=1)
+        sink = np.flatnonzero(depth > 1e-4)
+        if sink.size == 0:
+            return walked, 0
+        again = self._walk(a[sink], phase[sink], corrected=True, lift=depth[sink] + 1e-3)
+        merged = {}
+        for name in ("root_position", "root_rotation", "local", "positions", "rotations",
+                     "contact", "converged"):  # fmt: skip
+            arr = getattr(walked, name).copy()
+            arr[sink] = getattr(again, name)
+            merged[name] = arr
+        warm = WarmStart(walked.warm.ankle.copy(), walked.warm.hip.copy())
+        warm.ankle[sink], warm.hip[sink] = again.warm.ankle, again.warm.hip
+        return type(walked)(warm=warm, **merged), sink.size
+
+    def _standing(self, a: np.ndarray):
+        """A neutral standing pose above each agent's stance foothold."""
+        body = self.body.take(a)
+        k = a.size
+        nj = len(JOINT_NAMES)
+        root = self._start[a] + np.stack(
+            [np.zeros(k), np.zeros(k), body.hip_height], axis=1
+        )
+        rot = np.broadcast_to(np.eye(3), (k, 3, 3)).copy()
+        local = np.broadcast_to(np.eye(3), (k, nj, 3, 3)).copy()
+        from crowdwalk.body import forward_kinematics
+
+        positions, _ = forward_kinematics(body, root, rot, local)
+        return root, rot, local, positions
