@@ -326,11 +326,21 @@ class SceneView:
         self._add_agents()
         self._add_footprints()
         self._add_legend()
-        self._clock = plotter.add_text("", position="upper_left", font_size=12, color="black")
+        self._clock = plotter.add_text(
+            "", position="upper_left", font_size=self._font(12), color="black"
+        )
         plotter.camera_position = cam.oblique_view(bounds)
         plotter.reset_camera_clipping_range()
 
     # --- building -------------------------------------------------------------------
+
+    @property
+    def _small(self) -> bool:
+        return self.plotter.window_size[1] < 500
+
+    def _font(self, size_at_800: int) -> int:
+        """Font size [pt] scaled with the window height (``size_at_800`` at 800 px)."""
+        return max(6, round(size_at_800 * self.plotter.window_size[1] / 800))
 
     def _add_world(self) -> np.ndarray:
         p, scene = self.plotter, self.scene
@@ -344,7 +354,9 @@ class SceneView:
                 clim=[heights.min() - 1.0, max(heights.max(), heights.min() + 0.5) + 0.5],
                 scalar_bar_args=dict(title="height [m]", vertical=True, position_x=0.9,
                                      position_y=0.3, height=0.4, width=0.05, fmt="%.1f",
-                                     color="black"),
+                                     color="black", n_labels=3,
+                                     title_font_size=self._font(16),
+                                     label_font_size=self._font(14)),
             )
             edges = terrain_edges(ground)
             if edges.n_cells:
@@ -411,7 +423,8 @@ class SceneView:
             return
         style = _COLOR_STYLE[self.color]
         bar = dict(title=style["title"], color="black", position_x=0.3, position_y=0.05,
-                   width=0.4, height=0.06, fmt="%.3g")
+                   width=0.4, height=0.06, fmt="%.3g", n_labels=3 if self._small else 5,
+                   title_font_size=self._font(16), label_font_size=self._font(14))
         kwargs = dict(scalars=self.color, cmap=style["cmap"], name="footprints",
                       scalar_bar_args=bar, show_scalar_bar=True)
         if self.color == "planner":

@@ -25,7 +25,13 @@ def crowd():
     return synthetic_crowd(12, duration=3.0, fps=10.0, area=(8.0, 6.0), seed=1)
 
 
-def write_run(path, poses, steps, fps=10.0):
+@pytest.fixture(scope="session")
+def write_run():
+    """The function that writes a synthetic run folder (see :func:`_write_run`)."""
+    return _write_run
+
+
+def _write_run(path, poses, steps, fps=10.0):
     """Write a run folder (crowdwalk.record layout) holding the given poses and footsteps,
     without ``scenario.yaml`` so the viewer falls back to flat ground."""
     from crowdwalk.record import FOOTSTEP_COLUMNS, RunWriter
