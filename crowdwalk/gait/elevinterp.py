@@ -49,11 +49,23 @@ __all__ = [
     "step_of",
 ]
 
-LEG_FIELDS = ("thigh", "shank", "ankle_height", "heel_offset", "toe_offset")
+LEG_FIELDS = ("thigh", "shank", "ankle_height", "heel_offset", "ball_offset")
+"""Leg dimensions the forward kinematics use; ``ball_offset`` falls back to ``toe_offset``."""
+
+
+def _dimension(leg: LegLike, name: str) -> float | np.ndarray:
+    """A leg dimension [m]; the roll point is the ball if the leg has one, else the toe."""
+    if name == "ball_offset" and getattr(leg, "ball_offset", None) is None:
+        name = "toe_offset"
+    return getattr(leg, name)
 
 
 class LegLike(Protocol):
-    """Anything with sagittal leg dimensions [m], floats or (n,) arrays (e.g. ``body.Body``)."""
+    """Anything with sagittal leg dimensions [m], floats or (n,) arrays (e.g. ``body.Body``).
+
+    An optional ``ball_offset`` (ankle to first metatarsal head) is the forefoot roll
+    point; without it the foot rolls on the toe tip (``toe_offset``).
+    """
 
     thigh: float | np.ndarray
     shank: float | np.ndarray
@@ -67,8 +79,9 @@ class SagittalLeg:
     """Sagittal leg dimensions [m] for :func:`step_of` (floats or (n,) arrays).
 
     ``thigh`` hip→knee, ``shank`` knee→ankle, ``ankle_height`` ankle centre above the
-    sole, ``heel_offset`` / ``toe_offset`` horizontal distance from the ankle to the back
-    of the heel / the toe tip along the sole.
+    sole, ``heel_offset`` / ``ball_offset`` / ``toe_offset`` distance along the sole from
+    the ankle to the back of the heel / the first metatarsal head (forefoot roll point) /
+    the toe tip.
     """
 
     thigh: float | np.ndarray
@@ -76,20 +89,23 @@ class SagittalLeg:
     ankle_height: float | np.ndarray
     heel_offset: float | np.ndarray
     toe_offset: float | np.ndarray
+    ball_offset: float | np.ndarray | None = None
 
     @classmethod
     def from_body_height(cls, height: float | np.ndarray) -> SagittalLeg:
         """Segment lengths from body height [m] with Winter (2009, Fig. 4.1) proportions.
 
         thigh 0.245 H, shank 0.246 H, ankle height 0.039 H, foot length 0.152 H of which
-        a quarter lies behind the ankle (heel) and three quarters ahead (toe).
+        a quarter lies behind the ankle (heel) and three quarters ahead (toe); the ball
+        (first metatarsal head) 0.073 H ahead of the ankle — the proportions of
+        ``crowdwalk.body`` and ``planners.Leg``.
         """
         h = np.asarray(height, dtype=float)
         if not np.all(np.isfinite(h) & (h > 0)):
             raise invalid("SagittalLeg", "height", "finite and > 0 [m]", height)
         if h.ndim == 0:
             h = float(h)
-        return cls(0.245 * h, 0.246 * h, 0.039 * h, 0.038 * h, 0.114 * h)
+        return cls(0.245 * h, 0.246 * h, 0.039 * h, 0.038 * h, 0.114 * h, 0.073 * h)
 
     @property
     def length(self) -> float | np.ndarray:
@@ -109,7 +125,9 @@ def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     and down the swing leg (Sun & Metaxas 2001, Eq. 10, Fig. 11). Deviations from Eq. 10:
     the pelvis terms are dropped (both hips project onto the same sagittal point, so the
     pelvis segment cancels), and the feet follow the foot–floor model of §4.1 — a foot
-    with a negative elevation rolls on its toe, with a positive one on its heel. Step
+    with a negative elevation rolls on its ball (first metatarsal head, the toes flat on
+    the ground; the toe tip if the leg has no ``ball_offset``), with a positive one on
+    its heel — the contact model of ``gait.elevwalker``. Step
     length and height are measured between *footholds* (the ground point below the ankle
     once the foot is flat, the ``planners`` convention): the stance foothold is the
     origin, the swing foothold is where the swing foot lands.
@@ -130,10 +148,9 @@ def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     stance = np.asarray(stance, dtype=float)
     swing = np.asarray(swing, dtype=float)
     thigh, shank, ankle_h, heel, toe = (
-        np.asarray(getattr(leg, k), dtype=float)[..., None]
-        for k in ("thigh", "shank", "ankle_height", "heel_offset", "toe_offset")
-    )
-    # Stance foot: pivot on the toe (foot pitched down) or on the heel, pivot fixed.
+        np.asarray(_dimension(leg, k), dtype=float)[..., None] for k in LEG_FIELDS
+    )  # ``toe`` is the forefoot roll point (ball)
+    # Stance foot: pivot on the ball (foot pitched down) or on the heel, pivot fixed.
     f_st = stance[..., 0:1]
     u_st = np.concatenate([np.cos(f_st), np.sin(f_st)], axis=-1)  # heel→toe
     n_st = np.concatenate([-np.sin(f_st), np.cos(f_st)], axis=-1)  # sole normal, up
@@ -196,6 +213,12 @@ class ElevInterpConfig:
         Inserted datasets kept per body shape; beyond it no more are inserted.
     shape_resolution : float
         Leg proportions (dimension / leg length) are rounded to this to key the cache [1].
+    extrapolation : float
+        Gauss–Newton keeps every blend weight ≥ −extrapolation [1] in the located and the
+        neighbouring triangles ...
+    last_resort_extrapolation : float
+        ... and ≥ −last_resort_extrapolation [1] in a final pass for requests those miss
+        (where Eq. 10 folds between toe-first and heel-first landings).
     """
 
     tolerance: float = 0.002
@@ -203,6 +226,8 @@ class ElevInterpConfig:
     insert_spacing: float = 0.005
     max_inserted: int = 4096
     shape_resolution: float = 0.005
+    extrapolation: float = 0.2
+    last_resort_extrapolation: float = 1.0
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
@@ -210,6 +235,10 @@ class ElevInterpConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise invalid(owner, name, "finite and > 0", value)
+        for name in ("extrapolation", "last_resort_extrapolation"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise invalid(owner, name, "finite and >= 0 [1]", value)
         if self.max_iterations < 1:
             raise invalid(owner, "max_iterations", ">= 1", self.max_iterations)
         if self.max_inserted < 0:
@@ -229,7 +258,10 @@ class StepDatasets:
     target : numpy.ndarray
         (n, 2) the request actually served (after clamping) [m].
     clamped : numpy.ndarray
-        (n,) bool, the request lay outside the legal region and was moved onto it.
+        (n,) bool, the request could not be served exactly: it lay outside the legal
+        region (``target`` is then the nearest point of it), or inside it where no blend
+        reaches it (a fold of Eq. 10; ``converged`` False). Either way the dataset is the
+        nearest blend found and ``step_length``/``step_height`` say what it produces.
     refined : numpy.ndarray
         (n,) bool, Gauss–Newton was needed (the barycentric blend missed).
     converged : numpy.ndarray
@@ -251,7 +283,8 @@ class StepDatasets:
 
 def _leg_of(props: np.ndarray) -> SagittalLeg:
     """SagittalLeg from an (..., 5) array of dimensions in LEG_FIELDS order."""
-    return SagittalLeg(*(props[..., i] for i in range(5)))
+    ball = props[..., 4]
+    return SagittalLeg(*(props[..., i] for i in range(4)), toe_offset=ball, ball_offset=ball)
 
 
 class _ShapeSpace:
@@ -294,7 +327,7 @@ class _ShapeSpace:
         return np.where(outside[:, None], nearest, target), outside
 
     def locate(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Vertex indices (k, 3) of the containing triangles and barycentric weights."""
+        """Indices (k,) of the containing triangles and barycentric weights (k, 3)."""
         simplex = self.tri.find_simplex(target, tol=1e-9)
         lost = simplex < 0
         if np.any(lost):  # round-off on the hull boundary
@@ -305,7 +338,7 @@ class _ShapeSpace:
             d = np.linalg.norm(target[lost, None] - centroids[None], axis=-1)
             simplex[lost] = np.argmin(d, axis=1)
         weights = self.weights_in(simplex, target)
-        return self.tri.simplices[simplex], weights, simplex
+        return simplex, weights
 
     def weights_in(self, simplex: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Barycentric coordinates (k, 3) of targets w.r.t. given triangles (may be < 0)."""
@@ -398,7 +431,8 @@ class ElevInterp:
         ----------
         leg : LegLike
             Leg dimensions [m] (``thigh``, ``shank``, ``ankle_height``, ``heel_offset``,
-            ``toe_offset``), floats or (n,) arrays — e.g. a ``body.Body``.
+            ``toe_offset``, optional ``ball_offset``), floats or (n,) arrays — e.g. a
+            ``body.Body``.
         step_length : float or numpy.ndarray
             (n,) requested step lengths [m], > 0, foothold to foothold.
         step_height : float or numpy.ndarray
@@ -410,7 +444,7 @@ class ElevInterp:
         """
         sl = np.atleast_1d(np.asarray(step_length, dtype=float))
         sh = np.atleast_1d(np.asarray(step_height, dtype=float))
-        dims = [np.atleast_1d(np.asarray(getattr(leg, k), dtype=float)) for k in LEG_FIELDS]
+        dims = [np.atleast_1d(np.asarray(_dimension(leg, k), dtype=float)) for k in LEG_FIELDS]
         try:
             arrays = np.broadcast_arrays(sl, sh, *dims)
         except ValueError:
@@ -460,7 +494,7 @@ class ElevInterp:
 
         The convex hull of the source datasets' steps, counter-clockwise.
         """
-        dims = np.array([float(np.asarray(getattr(leg, k)).ravel()[0]) for k in LEG_FIELDS])
+        dims = np.array([float(np.asarray(_dimension(leg, k)).ravel()[0]) for k in LEG_FIELDS])
         self._validate(np.ones(1), np.zeros(1), [dims[[i]] for i in range(5)])
         length = dims[:3].sum()
         shape = dims / length
@@ -499,73 +533,59 @@ class ElevInterp:
         cfg = self.config
         tol = cfg.tolerance / metres  # in leg lengths, per request
         target, clamped = space.clamp(target)  # extrapolation: nearest legal request
-        verts, w, simplex = space.locate(target)  # steps 1-2
-        keys = space.keys[verts]  # (k, 3, 2, 4): vertex rows at t = 0.5 and t = 0
-        leg = _leg_of(props)
-
-        def produce(weights: np.ndarray, rows: np.ndarray = slice(None)) -> np.ndarray:
-            blend = np.einsum("kv,kvrj->krj", weights, keys[rows])
-            sub = leg if isinstance(rows, slice) else _leg_of(props[rows])
-            return step_of(blend[:, 0], blend[:, 1], sub)
-
-        step = produce(w)  # step 3: Eq. 9 blend, measured by Eq. 10
+        simplex, w = space.locate(target)  # steps 1-2
+        verts = space.tri.simplices[simplex]
+        step = _blend_step(space, simplex, w, props)  # step 3: Eq. 9 blend, Eq. 10 measure
         err = np.linalg.norm(step - target, axis=1)
         refine = err > tol  # step 4
-        if np.any(refine):  # step 5: Gauss–Newton on the barycentric weights
-            sub = np.flatnonzero(refine)
-            w[sub], step[sub], err[sub] = _gauss_newton(
-                lambda ww: produce(ww, sub), w[sub], target[sub], step[sub], err[sub],
-                0.1 * tol[sub], cfg.max_iterations,  # solve tightly: it may be inserted
-            )
-        lost = np.flatnonzero(err > tol)
-        if len(lost):  # folded map: retry in the neighbouring triangles, keep the best
-            verts, w, step, err = self._retry_neighbours(
-                space, target, props, tol, lost, simplex[lost], verts, w, step, err)
+        # Step 5: Gauss–Newton on the barycentric weights, solved tightly (the result may be
+        # inserted). Eq. 10 folds where toe-first and heel-first landings are blended (a
+        # flat landing foot is highest), so a target may be reachable only from a
+        # neighbouring triangle, or only with stronger extrapolation: try the located
+        # triangle, then its neighbours, first with a small then a larger weight margin.
+        for margin in (cfg.extrapolation, cfg.last_resort_extrapolation):
+            tris = [simplex] + [space.tri.neighbors[simplex, j] for j in range(3)]
+            for tri in tris:
+                rows = np.flatnonzero((err > tol) & (tri >= 0))
+                if len(rows) == 0:
+                    continue
+                t_rows = tri[rows]
+                w0 = np.clip(space.weights_in(t_rows, target[rows]), -margin, None)
+                w0 /= w0.sum(axis=1, keepdims=True)
+                s0 = _blend_step(space, t_rows, w0, props[rows])
+                w1, s1, e1 = _gauss_newton(
+                    lambda ww, t=t_rows, r=rows: _blend_step(space, t, ww, props[r]),
+                    w0, target[rows], s0, np.linalg.norm(s0 - target[rows], axis=1),
+                    0.1 * tol[rows], cfg.max_iterations, margin=margin,
+                )
+                better = e1 < err[rows]
+                take = rows[better]
+                verts[take], w[take] = space.tri.simplices[t_rows[better]], w1[better]
+                step[take], err[take] = s1[better], e1[better]
         converged = err <= tol
         curves = np.einsum("kv,kvnj->knj", w, space.angles[verts])
         phases = np.einsum("kv,kvp->kp", w, space.phases[verts])
         good = converged & refine & ~clamped  # step 6: insert what needed the search
         self.stats["inserted"] += space.insert(curves[good], phases[good], cfg.max_inserted)
-        flags = np.stack([clamped, refine, converged], axis=1)
+        flags = np.stack([clamped | ~converged, refine, converged], axis=1)
         return curves, phases, step, target, flags
 
-    def _retry_neighbours(self, space, target, props, tol, lost, simplex, verts, w, step, err):
-        """Gauss–Newton from each neighbouring triangle of the requests in ``lost``.
 
-        Eq. 10 folds where a toe-first and a heel-first landing are blended (a flat
-        landing foot is highest), so a target inside a triangle's image may be reachable
-        only with the weights of a neighbouring triangle.
-        """
-        for j in range(3):
-            other = space.tri.neighbors[simplex, j]
-            ok = other >= 0
-            if not np.any(ok):
-                continue
-            rows, tri = lost[ok], other[ok]
-            keys = space.keys[space.tri.simplices[tri]]
-            leg = _leg_of(props[rows])
-
-            def produce(weights, keys=keys, leg=leg):
-                blend = np.einsum("kv,kvrj->krj", weights, keys)
-                return step_of(blend[:, 0], blend[:, 1], leg)
-
-            w0 = np.clip(space.weights_in(tri, target[rows]), -0.5, 1.5)
-            s0 = produce(w0)
-            e0 = np.linalg.norm(s0 - target[rows], axis=1)
-            w1, s1, e1 = _gauss_newton(produce, w0, target[rows], s0, e0, 0.1 * tol[rows],
-                                       self.config.max_iterations)
-            better = e1 < err[rows]
-            take = rows[better]
-            verts[take], w[take] = space.tri.simplices[tri[better]], w1[better]
-            step[take], err[take] = s1[better], e1[better]
-        return verts, w, step, err
+def _blend_step(space: _ShapeSpace, simplex: np.ndarray, weights: np.ndarray,
+                props: np.ndarray) -> np.ndarray:
+    """Step (k, 2) [leg lengths] of the Eq. 9 blends of the given triangles (Eq. 10)."""
+    keys = space.keys[space.tri.simplices[simplex]]  # (k, 3, 2, 4): rows t = 0.5, t = 0
+    blend = np.einsum("kv,kvrj->krj", weights, keys)
+    return step_of(blend[:, 0], blend[:, 1], _leg_of(props))
 
 
-def _gauss_newton(produce, w, target, step, err, tol, iterations, h=1e-6):
+def _gauss_newton(produce, w, target, step, err, tol, iterations, margin=0.2, h=1e-6):
     """Batched Gauss–Newton on two free barycentric weights (third = 1 − sum).
 
-    Returns the best weights, their steps and errors; a step that does not reduce the
-    error is halved (up to four times).
+    Weights stay ≥ ``-margin`` (a step is shortened to the bound): the blend may leave the
+    triangle a little but never becomes a wild extrapolation, which sliver triangles of
+    near-collinear datasets would otherwise invite. A step that does not reduce the error
+    is halved (up to four times). Returns the best weights, their steps and errors.
     """
     for _ in range(iterations):
         active = err > tol
@@ -583,7 +603,9 @@ def _gauss_newton(produce, w, target, step, err, tol, iterations, h=1e-6):
         jtj = jtj + damp[:, None, None] * np.eye(2)
         delta = -np.linalg.solve(jtj, np.einsum("kij,ki->kj", jac, r)[..., None])[..., 0]
         full = np.concatenate([delta, -delta.sum(axis=1, keepdims=True)], axis=1)
-        scale = np.ones(len(w))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            room = np.where(full < 0, (w + margin) / -full, np.inf)
+        scale = np.clip(np.min(room, axis=1), 0.0, 1.0)
         for _ in range(5):
             trial = w + scale[:, None] * full
             t_step = produce(trial)

@@ -46,17 +46,30 @@ def test_symmetric_scissor_step_has_textbook_length():
 
 
 def test_foot_roll_keeps_contact_points_fixed():
-    # Stance foot rolling on its toe lifts the ankle but the toe stays at toe_offset,
-    # so a vertical stance leg puts the hip above ankle height + rise.
+    # A stance foot pitched down rolls on its ball, which stays at ball_offset, so with a
+    # vertical stance leg the hanging (flat) swing foot is raised by the roll.
     body = leg(1.75)
     phi = np.deg2rad(-30)
     stance = np.array([phi, 0.0, 0.0, 0.0])
-    swing = np.array([0.0, 0.0, 0.0, 0.0])
+    swing = np.zeros(4)
     sl, sh = step_of(stance, swing, body)
-    rise = body.toe_offset * np.sin(-phi) + body.ankle_height * (np.cos(phi) - 1)
-    heel_advance = body.toe_offset * (1 - np.cos(phi)) + body.ankle_height * np.sin(-phi)
-    assert sh == pytest.approx(rise, abs=1e-12)  # swing foot (flat) hangs that much higher
-    assert sl == pytest.approx(heel_advance, abs=1e-12)
+    ball = body.ball_offset
+    rise = ball * np.sin(-phi) + body.ankle_height * (np.cos(phi) - 1)
+    advance = ball * (1 - np.cos(phi)) + body.ankle_height * np.sin(-phi)
+    assert sh == pytest.approx(rise, abs=1e-12)
+    assert sl == pytest.approx(advance, abs=1e-12)
+    # Without a ball the foot rolls on the toe tip (e.g. planners.Leg).
+    tip = SagittalLeg(body.thigh, body.shank, body.ankle_height, body.heel_offset,
+                      body.toe_offset)
+    sl_tip, sh_tip = step_of(stance, swing, tip)
+    assert sh_tip == pytest.approx(body.toe_offset * np.sin(-phi) + rise - ball * np.sin(-phi))
+    # A heel-first landing swing foot lands on the heel: foothold heel_offset ahead of it.
+    up = np.deg2rad(20)
+    sl_up, sh_up = step_of(np.zeros(4), np.array([up, 0.0, 0.0, 0.0]), body)
+    assert sh_up == pytest.approx(
+        -body.ankle_height * np.cos(up) - body.heel_offset * np.sin(up) + body.ankle_height)
+    assert sl_up == pytest.approx(
+        -body.heel_offset * np.cos(up) + body.ankle_height * np.sin(up) + body.heel_offset)
 
 
 def test_dataset_steps_match_measured_strides():
@@ -91,20 +104,21 @@ def test_source_datasets_reproduce_their_own_steps_exactly():
 
 
 def test_interpolation_between_speeds_is_monotonic():
-    # Along the segment from the natural to the fast (L) dataset, the blend shifts
-    # monotonically: thigh excursion grows and stance fraction shrinks.
+    # Between adjacent speeds the blend shifts monotonically: step length and thigh
+    # excursion grow and the stance fraction shrinks (as in the measured series).
     interp = ElevInterp()
     body = leg(1.75)
     steps = interp.source_steps(body)
-    a, b = steps[LEVEL.index("level_natural")], steps[LEVEL.index("level_l")]
-    s = np.linspace(0, 1, 21)
-    req = a + s[:, None] * (b - a)
-    out = interp.request(body, req[:, 0], req[:, 1])
-    assert out.converged.all() and not out.clamped.any()
-    thigh_rom = np.ptp(out.angles[:, :, 2], axis=1)
-    assert np.all(np.diff(thigh_rom) > -1e-9)
-    assert np.all(np.diff(out.stance_fraction) < 1e-9)
-    assert np.all(np.diff(out.step_length) > 0)
+    s = np.linspace(0, 1, 11)
+    for i in range(len(LEVEL) - 1):
+        a, b = steps[i], steps[i + 1]
+        req = a + s[:, None] * (b - a)
+        out = interp.request(body, req[:, 0], req[:, 1])
+        assert out.converged.all() and not out.clamped.any()
+        thigh_rom = np.ptp(out.angles[:, :, 2], axis=1)
+        assert np.all(np.diff(thigh_rom) > 0), LEVEL[i]
+        assert np.all(np.diff(out.stance_fraction) < 0), LEVEL[i]
+        assert np.all(np.diff(out.step_length) > 0), LEVEL[i]
 
 
 def random_requests(interp, body, rng, n):
@@ -118,9 +132,16 @@ def random_requests(interp, body, rng, n):
 @settings(max_examples=30, deadline=None)
 @given(st.floats(1.50, 1.95), st.integers(0, 2**31 - 1))
 def test_refined_step_matches_request_within_1cm(height, seed):
+    # Walking requests: level steps at 0.8-1.6 m/s (WBDS step length, scaled with body
+    # height) and up/down steps of up to 6 cm at shorter lengths.
+    rng = np.random.default_rng(seed)
     interp = ElevInterp(config=ElevInterpConfig(max_inserted=0))  # every request searched
     body = leg(height)
-    req = random_requests(interp, body, np.random.default_rng(seed), 8)
+    scale = height / 1.75
+    speed = rng.uniform(0.8, 1.6, 6)
+    level = np.stack([0.2555 + 0.312 * speed, np.zeros(6)], axis=1) * scale
+    sloped = np.stack([rng.uniform(0.35, 0.55, 6), rng.uniform(-0.03, 0.06, 6)], axis=1) * scale
+    req = np.vstack([level, sloped])
     out = interp.request(body, req[:, 0], req[:, 1])
     assert out.converged.all() and not out.clamped.any()
     assert np.all(np.abs(out.step_length - req[:, 0]) < 1 * CM)
@@ -128,6 +149,26 @@ def test_refined_step_matches_request_within_1cm(height, seed):
     # The produced dataset really has that step (independent re-measurement).
     np.testing.assert_allclose(dataset_step(out.angles, body), req, atol=1 * CM)
     assert np.all(np.isfinite(out.angles))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(1.50, 1.95), st.integers(0, 2**31 - 1))
+def test_every_request_in_the_region_is_served_or_flagged(height, seed):
+    interp = ElevInterp(config=ElevInterpConfig(max_inserted=0))
+    body = leg(height)
+    req = random_requests(interp, body, np.random.default_rng(seed), 16)
+    out = interp.request(body, req[:, 0], req[:, 1])
+    achieved = np.stack([out.step_length, out.step_height], axis=1)
+    err = np.linalg.norm(achieved - req, axis=1)
+    assert np.all(err[out.converged] <= interp.config.tolerance + 1e-12)
+    # Where Eq. 10 folds, no blend reaches the request: flagged, and still close.
+    assert np.all(out.clamped[~out.converged])
+    assert np.all(err < 2 * CM)
+    assert out.converged.mean() >= 0.75
+    # Sane curves even when extrapolating: stance 50-75 %, knee flexion peak 40-110 deg.
+    assert np.all((out.stance_fraction > 0.5) & (out.stance_fraction < 0.75))
+    knee = np.rad2deg(out.angles[:, :, 2] - out.angles[:, :, 1]).max(axis=1)
+    assert np.all((knee > 40) & (knee < 110))
 
 
 def test_mixed_bodies_in_one_batch():
