@@ -558,21 +558,54 @@ Feature = Block | Slope | StairFlight | Heightfield | MeshFeature
 # --- the composed terrain ---------------------------------------------------------------
 
 
-def _segment_hits(a: np.ndarray, b: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """Parameters t ∈ [0, 1] along a→b where it crosses any of ``edges`` (m, 2, 2)."""
-    if len(edges) == 0:
-        return np.zeros(0)
-    d = b - a
+class _EdgeIndex:
+    """Break segments (k, 2, 2) [m] with a bounding-box test, or an STRtree when many."""
+
+    def __init__(self, edges: np.ndarray):
+        self.edges = edges
+        self.lo, self.hi = edges.min(axis=1), edges.max(axis=1)
+        self.tree = shapely.STRtree(shapely.linestrings(edges)) if len(edges) > 256 else None
+
+    def pairs(self, a: np.ndarray, b: np.ndarray):
+        """Candidate (segment, edge) index pairs whose bounding boxes overlap."""
+        if self.tree is not None:
+            boxes = shapely.box(*np.minimum(a, b).T - 1e-9, *np.maximum(a, b).T + 1e-9)
+            i, j = self.tree.query(boxes)
+            yield i, j
+            return
+        chunk = max(1, 200_000 // max(len(self.edges), 1))
+        for c0 in range(0, len(a), chunk):
+            aa, bb = a[c0:c0 + chunk, None, :], b[c0:c0 + chunk, None, :]
+            near = ((np.maximum(aa, bb) >= self.lo - 1e-9).all(-1)
+                    & (np.minimum(aa, bb) <= self.hi + 1e-9).all(-1))
+            i, j = np.nonzero(near)
+            yield i + c0, j
+
+
+def _crossings(a: np.ndarray, b: np.ndarray, index: _EdgeIndex):
+    """Where segments a→b (m, 2) [m] cross the indexed edges: (segment index (h,),
+    parameter t ∈ [0, 1] along it (h,))."""
+    seg_idx, ts = [], []
+    edges = index.edges
     e0, e = edges[:, 0], edges[:, 1] - edges[:, 0]
-    den = d[0] * e[:, 1] - d[1] * e[:, 0]
-    ok = np.abs(den) > 1e-15
-    r = e0 - a
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (r[:, 0] * e[:, 1] - r[:, 1] * e[:, 0]) / den
-        u = (r[:, 0] * d[1] - r[:, 1] * d[0]) / den
     tol = 1e-12
-    ok &= (t >= -tol) & (t <= 1 + tol) & (u >= -tol) & (u <= 1 + tol)
-    return np.clip(t[ok], 0.0, 1.0)
+    for i, j in index.pairs(a, b):
+        if len(i) == 0:
+            continue
+        d = b[i] - a[i]
+        r = e0[j] - a[i]
+        ej = e[j]
+        den = d[:, 0] * ej[:, 1] - d[:, 1] * ej[:, 0]
+        ok = np.abs(den) > 1e-15
+        den = np.where(ok, den, 1.0)
+        t = (r[:, 0] * ej[:, 1] - r[:, 1] * ej[:, 0]) / den
+        u = (r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / den
+        ok &= (t >= -tol) & (t <= 1 + tol) & (u >= -tol) & (u <= 1 + tol)
+        seg_idx.append(i[ok])
+        ts.append(np.clip(t[ok], 0.0, 1.0))
+    if not seg_idx:
+        return np.zeros(0, dtype=np.int64), np.zeros(0)
+    return np.concatenate(seg_idx), np.concatenate(ts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -663,62 +696,81 @@ class Terrain:
     # -- profile --
 
     @functools.cached_property
-    def _breaks(self) -> np.ndarray:
+    def _breaks(self) -> _EdgeIndex:
         parts = [f.breaks() for f in self.features]
-        return np.concatenate(parts) if parts else np.zeros((0, 2, 2))
+        return _EdgeIndex(np.concatenate(parts) if parts else np.zeros((0, 2, 2)))
 
     def profile_arrays(self, polyline) -> tuple[np.ndarray, np.ndarray]:
-        """Ground profile along ``polyline`` (k, 2) [m]: arc length s (m,) [m] and height
-        z (m,) [m], piecewise linear; two rows with equal s are a vertical height change.
-        Exact at every edge (floating-point precision)."""
+        """Ground profile along ``polyline`` (k, 2) [m]: arc length s (m,) [m] from the first
+        point and height z (m,) [m], piecewise linear; two rows with equal s are a vertical
+        height change. Exact at every edge (floating-point precision)."""
         p = _points(polyline, "Terrain", "polyline")
         if len(p) < 2:
             raise invalid("Terrain", "polyline", "at least 2 points [m]", len(p))
-        seg_len = np.linalg.norm(np.diff(p, axis=0), axis=1)
-        keep = np.concatenate([[True], seg_len > 1e-9])  # drop repeated points
-        p, seg_len = p[keep], seg_len[seg_len > 1e-9]
-        if len(p) < 2:
-            s0 = np.zeros(1)
-            return s0, self.height(p[:1])
-        s_start = np.concatenate([[0.0], np.cumsum(seg_len)])
-        edges = self._breaks
-        ts, seg = [], []
-        for j in range(len(p) - 1):
-            a, b = p[j], p[j + 1]
-            lo, hi = np.minimum(a, b), np.maximum(a, b)
-            if len(edges):
-                near = ((np.maximum(edges[:, 0], edges[:, 1]) >= lo - 1e-9).all(1)
-                        & (np.minimum(edges[:, 0], edges[:, 1]) <= hi + 1e-9).all(1))
-                t = _segment_hits(a, b, edges[near])
-            else:
-                t = np.zeros(0)
-            t = np.unique(np.concatenate([[0.0, 1.0], t]))
-            ts.append(t)
-            seg.append(np.full(len(t), j))
-        t, seg = np.concatenate(ts), np.concatenate(seg)
-        pts = p[seg] + t[:, None] * (p[seg + 1] - p[seg])
-        s = s_start[seg] + t * seg_len[seg]
-        # pieces between consecutive cut points of the same segment
-        same = seg[1:] == seg[:-1]
-        i0 = np.flatnonzero(same & (s[1:] - s[:-1] > 1e-12))
-        if len(i0) == 0:
-            return np.zeros(1), self.height(p[:1])
+        return self.profiles([p])[0]
+
+    def profiles(self, polylines) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`profile_arrays` for many polylines in one batched pass (one terrain query
+        for all of them): a list of (s, z) pairs [m]."""
+        lines = [_points(pl, "Terrain", "polyline") for pl in polylines]
+        a_list, b_list, line_of, s0_list, singles = [], [], [], [], {}
+        for li, pl in enumerate(lines):
+            if len(pl) < 2:
+                raise invalid("Terrain", "polyline", "at least 2 points [m]", len(pl))
+            seg = np.linalg.norm(np.diff(pl, axis=0), axis=1)
+            keep = np.concatenate([[True], seg > 1e-9])  # drop repeated points
+            pl, seg = pl[keep], seg[seg > 1e-9]
+            if len(pl) < 2:
+                singles[li] = pl[:1]
+                continue
+            a_list.append(pl[:-1])
+            b_list.append(pl[1:])
+            line_of.append(np.full(len(seg), li))
+            s0_list.append(np.concatenate([[0.0], np.cumsum(seg)[:-1]]))
+        out: list = [None] * len(lines)
+        for li, pt in singles.items():
+            out[li] = (np.zeros(1), self.height(pt))
+        if not a_list:
+            return out
+        a, b = np.concatenate(a_list), np.concatenate(b_list)
+        line_of, s_seg0 = np.concatenate(line_of), np.concatenate(s0_list)
+        seg_len = np.linalg.norm(b - a, axis=1)
+        m = len(a)
+        index = self._breaks
+        hit_seg, hit_t = _crossings(a, b, index) if len(index.edges) else (
+            np.zeros(0, dtype=np.int64), np.zeros(0))
+        seg = np.concatenate([np.arange(m), np.arange(m), hit_seg])
+        t = np.concatenate([np.zeros(m), np.ones(m), hit_t])
+        order = np.lexsort((t, seg))
+        seg, t = seg[order], t[order]
+        s = s_seg0[seg] + t * seg_len[seg]
+        pts = a[seg] + t[:, None] * (b[seg] - a[seg])
+        # pieces between consecutive cut points of the same segment, each on one plane
+        i0 = np.flatnonzero((seg[1:] == seg[:-1]) & (s[1:] - s[:-1] > 1e-12))
         mid = 0.5 * (pts[i0] + pts[i0 + 1])
         own = self.owner(mid)
         za = self._surface(pts[i0], mid, own)
         zb = self._surface(pts[i0 + 1], mid, own)
-        s_rows = np.empty(2 * len(i0))
-        z_rows = np.empty(2 * len(i0))
+        n = len(i0)
+        s_rows = np.empty(2 * n)
+        z_rows = np.empty(2 * n)
         s_rows[0::2], s_rows[1::2] = s[i0], s[i0 + 1]
         z_rows[0::2], z_rows[1::2] = za, zb
+        row_line = np.repeat(line_of[seg[i0]], 2)
         # drop a row that repeats the previous one (continuous ground at a cut)
-        dup = np.concatenate([[False], (np.abs(np.diff(s_rows)) <= 1e-12)
-                              & (np.abs(np.diff(z_rows)) <= 1e-12)])
-        s_rows, z_rows = s_rows[~dup], z_rows[~dup]
-        # snap equal-s rows exactly (vertical steps)
-        step = np.concatenate([[False], np.abs(np.diff(s_rows)) <= 1e-12])
+        same_line = np.concatenate([[False], row_line[1:] == row_line[:-1]])
+        dup = same_line & np.concatenate([[False], (np.abs(np.diff(s_rows)) <= 1e-12)
+                                          & (np.abs(np.diff(z_rows)) <= 1e-12)])
+        s_rows, z_rows, row_line = s_rows[~dup], z_rows[~dup], row_line[~dup]
+        # snap the two rows of a vertical change to exactly the same s
+        same_line = np.concatenate([[False], row_line[1:] == row_line[:-1]])
+        step = same_line & np.concatenate([[False], np.abs(np.diff(s_rows)) <= 1e-12])
         s_rows[step] = s_rows[np.flatnonzero(step) - 1]
-        return s_rows, z_rows
+        bounds = np.searchsorted(row_line, np.arange(len(lines) + 1))
+        for li in range(len(lines)):
+            if out[li] is None:
+                out[li] = (s_rows[bounds[li]:bounds[li + 1]], z_rows[bounds[li]:bounds[li + 1]])
+        return out
 
     def profile(self, polyline):
         """Ground profile along ``polyline`` (k, 2) [m] as a ``planners.GroundProfile``

@@ -239,3 +239,16 @@ def test_bad_input_messages():
         Block([(0, 0), (1, 1), (1, 0), (0, 1)], 0.2)
     with pytest.raises(InputError, match=r"Terrain\.extent must be"):
         Terrain((0, 0, -1, 5))
+
+
+@FAST
+@given(lines=st.lists(st.lists(st.tuples(st.floats(-15, 15), st.floats(-15, 15)), min_size=2,
+                               max_size=4), min_size=1, max_size=6))
+def test_batched_profiles_equal_single_profiles(lines):
+    ter = demo_terrain()
+    batch = ter.profiles([np.array(pl) for pl in lines])
+    for pl, (s, z) in zip(lines, batch, strict=True):
+        s1, z1 = ter.profile_arrays(np.array(pl))
+        assert s.shape == s1.shape
+        np.testing.assert_allclose(s, s1, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(z, z1, rtol=0, atol=1e-12)
