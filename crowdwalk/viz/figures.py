@@ -76,6 +76,8 @@ class StickFigures:
         Head sphere radius [m].
     sides : int
         Facets around each tube.
+    head_detail : int
+        Subdivisions of the head icosphere (0: 20 triangles, 1: 80).
     """
 
     parents: np.ndarray
@@ -83,6 +85,7 @@ class StickFigures:
     radius: float = 0.035
     head_radius: float = 0.11
     sides: int = 6
+    head_detail: int = 1
     mesh: pv.PolyData = field(init=False, repr=False)
     n_agents: int = field(init=False, default=-1)
 
@@ -98,7 +101,7 @@ class StickFigures:
         angles = np.linspace(0.0, 2 * np.pi, self.sides, endpoint=False)
         self._cos = np.cos(angles).astype(np.float32)
         self._sin = np.sin(angles).astype(np.float32)
-        sphere_points, sphere_faces = _unit_sphere()
+        sphere_points, sphere_faces = _unit_sphere(self.head_detail)
         self._sphere_points = sphere_points.astype(np.float32)
         s, b = self.sides, len(self.bones)
         # One bone: ring 0 (child end) points 0..s-1, ring 1 (parent end) s..2s-1; 2 triangles

@@ -33,6 +33,7 @@ from crowdwalk.viz.world_meshes import (
 __all__ = ["Scene", "SceneView", "COLOR_FIELDS", "MOVIE_SUFFIXES"]
 
 MOVIE_SUFFIXES = (".gif", ".mp4")
+LARGE_CROWD = 200  # agents; above this the figures use fewer triangles
 AGENT_HUES = 20  # agents are coloured by id modulo this many categorical colours
 FIGURE_COLOR = "#3b3f4a"
 ROUTE_COLOR = "#d9480f"
@@ -389,9 +390,13 @@ class SceneView:
         if poses is None or not len(poses.times):
             return
         _, first = poses.at(0)
+        # Level of detail: software rendering cost grows with triangles; a large crowd is
+        # seen from afar, a small one close up (bench_render.py).
+        large = poses.n_agents > LARGE_CROWD
         self.figures = StickFigures(
             poses.parents, head_joint=_head_joint(poses.names, first),
             radius=0.035 if len(poses.parents) > 2 else 0.12,
+            sides=5 if large else 8, head_detail=0 if large else 2,
         )
         self._root = int(np.flatnonzero(np.asarray(poses.parents) < 0)[0])
         self._show_frame(0)
@@ -401,7 +406,8 @@ class SceneView:
     def _add_figures_actor(self) -> None:
         if self.figures is None:
             return
-        kwargs = dict(interpolation="gouraud", name="agents", show_scalar_bar=False)
+        kwargs = dict(interpolation="gouraud", name="agents", show_scalar_bar=False,
+                      culling="back")
         if self.color == "agent":
             kwargs.update(scalars="agent", cmap="tab20", clim=[0, AGENT_HUES])
         else:

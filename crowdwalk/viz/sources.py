@@ -1,8 +1,9 @@
 """Where the viewer gets poses from: a run's ``poses.sqlite``, its trajectories (when no
 poses were stored), or arrays in memory. All expose the same small interface:
 
-``names`` (J,), ``parents`` (J,) int, ``times`` (F,) [s] and ``at(i) -> (ids (k,),
-positions (k, J, 3) [m])`` for output frame ``i``.
+``names`` (J,), ``parents`` (J,) int, ``times`` (F,) [s], ``n_agents`` (how many
+distinct agents appear) and ``at(i) -> (ids (k,), positions (k, J, 3) [m])`` for output
+frame ``i``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ class PoseSource(Protocol):
     names: list[str]
     parents: np.ndarray
     times: np.ndarray
+    n_agents: int
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         """Ids (k,) and joint world positions (k, J, 3) [m] of output frame ``index``."""
@@ -68,6 +70,7 @@ class ArrayPoses:
         self.parents = np.asarray(parents, dtype=int)
         self.names = list(names) if names is not None else [f"j{j}" for j in range(len(parents))]
         self._ids = [np.asarray(i, dtype=int) for i in ids]
+        self.n_agents = len(np.unique(np.concatenate(self._ids))) if self._ids else 0
         self._positions = [np.asarray(p, dtype=float) for p in positions]
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
@@ -84,6 +87,7 @@ class RunPoses:
         self.parents = np.asarray(poses.parents, dtype=int)
         self.times = np.asarray(poses.times, dtype=float)
         self._frames = np.asarray(poses.frames, dtype=int)
+        self.n_agents = len(poses.body_heights) or (len(self.at(0)[0]) if len(self.times) else 0)
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         """Ids (k,) and joint positions (k, J, 3) [m] of stored frame ``index``."""
@@ -115,6 +119,7 @@ class TrajectoryPoses:
         ground = np.column_stack([trajectories.x, trajectories.y, trajectories.z])
         self._positions = np.stack([ground, ground + [0.0, 0.0, height]], axis=1)
         self._ids = np.asarray(trajectories.id, dtype=int)
+        self.n_agents = len(np.unique(self._ids))
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         """Ids (k,) and pole end points (k, 2, 3) [m] of frame ``index``."""
