@@ -84,9 +84,10 @@ def main() -> None:
     t_field = best_of(lambda: (r._fields.clear(), r.distances_to("east_exit")), 10)
     t_path = best_of(lambda: (r._paths.clear(), r.path("west_gate", "east_exit")), 10)
     side = 40
-    places = [Place(f"{i},{j}", 2.0 * i + 1, 2.0 * j + 1) for i in range(side) for j in range(side)]
-    cors = [Corridor(f"{i},{j}", f"{i + 1},{j}", 1.0) for i in range(side - 1) for j in range(side)]
-    cors += [Corridor(f"{i},{j}", f"{i},{j + 1}", 1.0) for i in range(side) for j in range(side - 1)]
+    ij = [(i, j) for i in range(side) for j in range(side)]
+    places = [Place(f"{i},{j}", 2.0 * i + 1, 2.0 * j + 1) for i, j in ij]
+    cors = [Corridor(f"{i},{j}", f"{i + 1},{j}", 1.0) for i, j in ij if i + 1 < side]
+    cors += [Corridor(f"{i},{j}", f"{i},{j + 1}", 1.0) for i, j in ij if j + 1 < side]
     ter = Terrain((0, 0, 2.0 * side, 2.0 * side), 0.0,
                   (StairFlight((20.5, 20), 0.0, 30, 0.3, 0.1, 4),))
     t0 = time.perf_counter()

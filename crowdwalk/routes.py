@@ -184,15 +184,23 @@ class RouteGraph:
                 raise invalid(f"RouteGraph.nodes[{p.name!r}]", "xy",
                               f"inside the terrain extent {terrain.bounds} [m]", (p.x, p.y))
         seen = set()
-        for c in self.corridors:
-            self._add_corridor(g, c, seen)
+        lines = [self._corridor_line(c, seen) for c in self.corridors]
+        # one batched terrain pass for the profiles of every corridor, both directions
+        fwd, back = self._edge_costs(lines)
+        for c, line, cf, cb in zip(self.corridors, lines, fwd, back, strict=True):
+            g.add_edge(c.a, c.b, width=c.width, length=line.length, cost=cf, geometry=line,
+                       oneway=c.oneway)
+            if not c.oneway:
+                g.add_edge(c.b, c.a, width=c.width, length=line.length, cost=cb,
+                           geometry=LineString(np.asarray(line.coords)[::-1]), oneway=False)
         self.graph = g
         self._fields: dict[str, tuple[dict, dict]] = {}
         self._paths: dict[tuple, np.ndarray] = {}
 
     # -- construction --
 
-    def _add_corridor(self, g: nx.DiGraph, c: Corridor, seen: set) -> None:
+    def _corridor_line(self, c: Corridor, seen: set) -> LineString:
+        """Checked centre line of corridor ``c`` [m]."""
         name = f"RouteGraph.edges[{c.a!r}->{c.b!r}]"
         for end in (c.a, c.b):
             if end not in self.places:
@@ -202,30 +210,36 @@ class RouteGraph:
             raise invalid(name, "nodes", "joined by one corridor only", f"{c.a!r}, {c.b!r}")
         seen.add(key)
         pa, pb = self.places[c.a], self.places[c.b]
-        pts = np.array([(pa.x, pa.y), *c.via, (pb.x, pb.y)], dtype=float)
-        line = LineString(pts)
+        line = LineString(np.array([(pa.x, pa.y), *c.via, (pb.x, pb.y)], dtype=float))
         if line.length < self.costs.min_length:
             raise invalid(name, "length", f"≥ {self.costs.min_length} m (merge the two places)",
                           round(line.length, 6))
         if self.terrain is not None:
-            band = line.buffer(c.width / 2)
-            if not self.terrain.area.buffer(1e-9).covers(band):
+            # the extent is a rectangle: the buffered band is inside iff its bounds are
+            x0, y0, x1, y1 = np.asarray(line.bounds) + np.array([-1, -1, 1, 1]) * c.width / 2
+            ex0, ey0, ex1, ey1 = self.terrain.bounds
+            if x0 < ex0 - 1e-9 or y0 < ey0 - 1e-9 or x1 > ex1 + 1e-9 or y1 > ey1 + 1e-9:
                 raise invalid(name, "corridor", f"inside the terrain extent {self.terrain.bounds}"
-                              " [m]", f"bounds {tuple(round(v, 2) for v in band.bounds)}")
-        fwd = self._edge_cost(pts, name)
-        g.add_edge(c.a, c.b, width=c.width, length=line.length, cost=fwd, geometry=line,
-                   oneway=c.oneway)
-        if not c.oneway:
-            back = self._edge_cost(pts[::-1], name)
-            g.add_edge(c.b, c.a, width=c.width, length=line.length, cost=back,
-                       geometry=LineString(pts[::-1]), oneway=False)
+                              " [m]", f"bounds {tuple(round(v, 2) for v in (x0, y0, x1, y1))}")
+        return line
 
-    def _edge_cost(self, pts: np.ndarray, name: str) -> float:
-        """Travel cost [m of level walking] along centre line ``pts`` (k, 2) [m]."""
-        length = float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1)))
-        if self.terrain is None:
-            return length
-        s, z = self.terrain.profile_arrays(pts)
+    def _edge_costs(self, lines: list[LineString]) -> tuple[list[float], list[float]]:
+        """Travel costs [m of level walking] of every centre line, forwards and backwards."""
+        lengths = [line.length for line in lines]
+        if self.terrain is None or not lines:
+            return lengths, lengths
+        pts = [np.asarray(line.coords) for line in lines]
+        profiles = self.terrain.profiles(pts + [p[::-1] for p in pts])
+        costs = []
+        for k, (s, z) in enumerate(profiles):
+            c = self.corridors[k % len(lines)]
+            a, b = (c.a, c.b) if k < len(lines) else (c.b, c.a)
+            costs.append(self._profile_cost(s, z, lengths[k % len(lines)],
+                                            f"RouteGraph.edges[{a!r}->{b!r}]"))
+        return costs[:len(lines)], costs[len(lines):]
+
+    def _profile_cost(self, s: np.ndarray, z: np.ndarray, length: float, name: str) -> float:
+        """Travel cost [m] of one ground profile (s, z) [m] of horizontal ``length`` [m]."""
         ds, dz = np.diff(s), np.diff(z)
         jump = ds <= 1e-12
         if jump.any() and np.abs(dz[jump]).max() > self.costs.max_step:
@@ -233,9 +247,8 @@ class RouteGraph:
             raise invalid(name, "corridor", f"free of vertical steps above "
                           f"{self.costs.max_step} m", f"{dz[k]:+.3f} m at s = {s[k]:.3f} m")
         run = ~jump
-        grade = np.zeros_like(ds)
-        grade[run] = dz[run] / ds[run]
-        cost = np.sum(ds[run] * _slope_factor(grade[run], self.costs.tobler))
+        grade = dz[run] / ds[run]
+        cost = np.sum(ds[run] * _slope_factor(grade, self.costs.tobler))
         up = np.clip(dz[jump], 0, None).sum()
         down = np.clip(-dz[jump], 0, None).sum()
         return float(max(cost, length) + self.costs.climb * up + self.costs.descent * down)
