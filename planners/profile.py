@@ -9,7 +9,7 @@ import numpy as np
 
 from planners.errors import invalid
 
-__all__ = ["GroundProfile"]
+__all__ = ["GroundProfile", "HeightRaster"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,16 +88,20 @@ class GroundProfile:
 
     # -- queries -----------------------------------------------------------------------
 
+    @cached_property
+    def _slopes(self) -> np.ndarray:
+        """Slope (m,) of the segment starting at each vertex; 0 for vertical changes."""
+        ds = np.diff(self.s)
+        dz = np.diff(self.z)
+        slope = np.zeros(self.s.size)
+        slope[:-1] = np.divide(dz, ds, out=np.zeros_like(dz), where=ds > 0)
+        return slope
+
     def height(self, s: np.ndarray | float) -> np.ndarray:
         """Ground height [m] at arc lengths ``s`` [m] (any shape), right-continuous."""
-        q = np.asarray(s, dtype=float)
-        i = np.clip(np.searchsorted(self.s, q, side="right") - 1, 0, self.s.size - 2)
-        s0, s1 = self.s[i], self.s[i + 1]
-        z0, z1 = self.z[i], self.z[i + 1]
-        ds = s1 - s0
-        t = np.where(ds > 0, (q - s0) / np.where(ds > 0, ds, 1.0), 1.0)
-        return np.where(q <= self.s[0], self.z[0], np.where(
-            q >= self.s[-1], self.z[-1], z0 + np.clip(t, 0.0, 1.0) * (z1 - z0)))
+        q = np.maximum(np.asarray(s, dtype=float), self.s[0])
+        i = np.searchsorted(self.s, q, side="right") - 1
+        return self.z[i] + self._slopes[i] * (q - self.s[i])
 
     @cached_property
     def jumps(self) -> tuple[np.ndarray, np.ndarray]:
@@ -138,6 +142,17 @@ class GroundProfile:
                            table[k, np.clip(hi - (1 << k), 0, last)])
         return np.where(count > 0, np.maximum(best, inner), best)
 
+    def raster(self, start: float, stop: float, cell: float = 0.01) -> HeightRaster:
+        """A conservative raster of this profile over ``[start, stop]`` [m].
+
+        Each cell of width ``cell`` [m] holds the exact highest ground inside it, so
+        :meth:`HeightRaster.max_height` never underestimates (it may overestimate by up
+        to one cell's rise).
+        """
+        count = max(1, int(np.ceil((stop - start) / cell)))
+        edges = start + cell * np.arange(count + 1)
+        return HeightRaster(start, cell, self.max_height(edges[:-1], edges[1:]))
+
     def __repr__(self) -> str:
         return (f"GroundProfile({self.s.size} vertices, s=[{self.s[0]:g}, {self.s[-1]:g}] m, "
                 f"z=[{self.z.min():g}, {self.z.max():g}] m)")
@@ -155,3 +170,50 @@ def _as_vector(values, field: str) -> np.ndarray:
         i = int(bad[0])
         raise invalid("GroundProfile", field, "finite [m]", f"{field}[{i}]={arr[i]}")
     return arr
+
+
+class HeightRaster:
+    """Cell maxima of a ground profile with O(1) range-maximum queries.
+
+    Parameters
+    ----------
+    start : float
+        Arc length of the first cell's left edge [m].
+    cell : float
+        Cell width [m].
+    heights : ndarray, shape (c,)
+        Highest ground in each cell [m].
+    """
+
+    def __init__(self, start: float, cell: float, heights: np.ndarray):
+        self.start = float(start)
+        self.cell = float(cell)
+        c = heights.size
+        levels = int(np.floor(np.log2(c))) + 1
+        table = np.empty((levels, c))
+        table[0] = heights
+        width = 1
+        for k in range(1, levels):
+            table[k, : c - 2 * width + 1] = np.maximum(
+                table[k - 1, : c - 2 * width + 1], table[k - 1, width: c - width + 1])
+            table[k, c - 2 * width + 1:] = table[k - 1, c - 2 * width + 1:]
+            width *= 2
+        self._table = table
+        self._log2 = np.zeros(c + 1, dtype=np.intp)
+        self._log2[2:] = np.floor(np.log2(np.arange(2, c + 1))).astype(np.intp)
+
+    def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Highest ground [m] over ``[a, b]`` [m] (same shapes), never underestimated.
+
+        Queries outside the raster use its end cells.
+        """
+        c = self._table.shape[1]
+        flat = self._table.ravel()
+        scale = 1.0 / self.cell
+        ia = ((np.asarray(a) - self.start) * scale).astype(np.intp)
+        ib = ((np.asarray(b) - self.start) * scale).astype(np.intp)
+        np.clip(ia, 0, c - 1, out=ia)
+        np.clip(ib, ia, c - 1, out=ib)
+        k = self._log2[ib - ia + 1]
+        row = k * c
+        return np.maximum(flat.take(row + ia), flat.take(row + ib - (1 << k) + 1))

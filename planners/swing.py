@@ -52,6 +52,10 @@ class SwingResult:
     rounds: np.ndarray
 
 
+def _per_curve(value, count: int) -> np.ndarray:
+    return np.broadcast_to(np.asarray(value, dtype=float), (count,)).copy()
+
+
 def sole_clearance(points: np.ndarray, start_s: np.ndarray, end_s: np.ndarray,
                    profile: GroundProfile, leg: Leg, config: PlannerConfig):
     """Clearance deficit of each sampled segment of the swing foot.
@@ -61,7 +65,9 @@ def sole_clearance(points: np.ndarray, start_s: np.ndarray, end_s: np.ndarray,
     away from the footholds the sole of a level foot, heel to toe, stays ``clearance``
     [m] above the ground; within half a foot length of either foothold (lift-off and
     touch-down, where the real foot rotates about its toe or heel) only the ankle's own
-    path must stay above the ground. A finer sampling can only lower the deficit.
+    path must stay above the ground (up to the rise of a legal foot slope over a segment).
+    ``profile`` may be a :class:`GroundProfile` (exact) or a conservative
+    :class:`~planners.profile.HeightRaster`.
 
     Parameters
     ----------
@@ -69,23 +75,31 @@ def sole_clearance(points: np.ndarray, start_s: np.ndarray, end_s: np.ndarray,
         Sampled ankle points [m].
     start_s, end_s : ndarray, shape (C,)
         Arc lengths of lift-off and touch-down footholds [m].
+    leg : Leg
+        Foot geometry [m]; its fields may be arrays of shape (C,).
 
     Returns
     -------
     deficit : ndarray, shape (C, T-1)
         Required minus actual clearance [m]; > 0 is a collision.
     """
+    count = points.shape[0]
+    heel = _per_curve(leg.heel_offset, count)[:, None]
+    toe = _per_curve(leg.toe_offset, count)[:, None]
+    ankle = _per_curve(leg.ankle_height, count)[:, None]
+    zone = 0.5 * _per_curve(leg.foot_length, count)[:, None]
     s, z = points[..., 0], points[..., 1]
     s_lo = np.minimum(s[:, :-1], s[:, 1:])
     s_hi = np.maximum(s[:, :-1], s[:, 1:])
     z_lo = np.minimum(z[:, :-1], z[:, 1:])
-    zone = 0.5 * leg.foot_length
     in_zone = (s_hi <= start_s[:, None] + zone) | (s_lo >= end_s[:, None] - zone)
-    a = np.where(in_zone, s_lo, s_lo - leg.heel_offset)
-    b = np.where(in_zone, s_hi, s_hi + leg.toe_offset)
+    a = np.where(in_zone, s_lo, s_lo - heel)
+    b = np.where(in_zone, s_hi, s_hi + toe)
     ground = profile.max_height(a, b)
-    need = np.where(in_zone, 0.0, config.clearance)
-    return need - (z_lo - leg.ankle_height - ground)
+    # In the lift-off and touch-down zones the ankle may sit below the highest ground of
+    # a segment by the rise a legal foot slope allows over it.
+    need = np.where(in_zone, -config.max_foot_slope * (s_hi - s_lo), config.clearance)
+    return need - (z_lo - ankle - ground)
 
 
 def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: Leg,
@@ -96,6 +110,8 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: L
     ----------
     start_s, start_z, end_s, end_z : ndarray, shape (C,)
         Lift-off and touch-down footholds (ground under the ankle) [m].
+    leg : Leg
+        Foot geometry [m]; its fields may be arrays of shape (C,).
 
     Notes
     -----
@@ -108,72 +124,77 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: L
     kept between the footholds in s (the ankle never moves backward) and the curve is
     illegal once a control point is ``max_swing_lift`` above the higher foothold's ankle.
     """
-    start_s = np.asarray(start_s, dtype=float)
-    end_s = np.asarray(end_s, dtype=float)
-    a = leg.ankle_height
-    p0 = np.stack([start_s, np.asarray(start_z, dtype=float) + a], axis=-1)
-    p3 = np.stack([end_s, np.asarray(end_z, dtype=float) + a], axis=-1)
+    start_s = np.asarray(start_s, dtype=float).reshape(-1)
+    end_s = np.asarray(end_s, dtype=float).reshape(-1)
+    C = start_s.size
+    feet = {name: _per_curve(getattr(leg, name), C)
+            for name in ("heel_offset", "toe_offset", "ankle_height", "foot_length")}
+    a = feet["ankle_height"]
+    p0 = np.stack([start_s, np.asarray(start_z, dtype=float).reshape(-1) + a], axis=-1)
+    p3 = np.stack([end_s, np.asarray(end_z, dtype=float).reshape(-1) + a], axis=-1)
     mid = 0.5 * (p0 + p3)
     p1 = mid + np.array([0.0, config.swing_lift])
-    p2 = p1.copy()
-    controls = np.stack([p0, p1, p2, p3], axis=1)  # (C, 4, 2)
+    controls = np.stack([p0, p1, p1.copy(), p3], axis=1)  # (C, 4, 2)
     top = np.maximum(p0[:, 1], p3[:, 1]) + config.max_swing_lift
     samples = config.bezier_samples
-    basis = bernstein(np.linspace(0.0, 1.0, samples))
+    basis_t = bernstein(np.linspace(0.0, 1.0, samples)).T  # (4, T)
     t_mid = np.linspace(0.0, 1.0, samples)
     t_mid = 0.5 * (t_mid[:-1] + t_mid[1:])
-    w_left = 3 * t_mid * (1 - t_mid) ** 2  # influence of P1 on each segment
-    w_right = 3 * t_mid**2 * (1 - t_mid)  # influence of P2
+    influence = (3 * t_mid * (1 - t_mid) ** 2, 3 * t_mid**2 * (1 - t_mid))  # P1, P2
 
-    C = start_s.size
     ok = np.zeros(C, dtype=bool)
-    failed = np.zeros(C, dtype=bool)
     rounds = np.zeros(C, dtype=int)
     active = np.arange(C)
     for round_ in range(config.max_adjustments + 1):
-        pts = np.einsum("tk,ckd->ctd", basis, controls[active])
-        deficit = sole_clearance(pts, start_s[active], end_s[active], profile, leg, config)
-        colliding = deficit > 1e-9
-        clear = ~colliding.any(axis=1)
+        ctrl = controls[active]
+        pts = np.stack([ctrl[..., 0] @ basis_t, ctrl[..., 1] @ basis_t], axis=-1)
+        view = _FootView({k: v[active] for k, v in feet.items()})
+        deficit = sole_clearance(pts, start_s[active], end_s[active], profile, view, config)
+        clear = ~(deficit > 1e-9).any(axis=1)
         ok[active[clear]] = True
-        active, pts, deficit = active[~clear], pts[~clear], deficit[~clear]
+        keep = ~clear
+        active, pts, deficit = active[keep], pts[keep], deficit[keep]
         if active.size == 0 or round_ == config.max_adjustments:
             break
         rounds[active] += 1
+        rows = np.arange(active.size)
         summit = np.argmax(pts[..., 1], axis=1)
-        seg = np.arange(samples - 1)
-        left_half = seg[None, :] < summit[:, None]
-        moves = np.zeros((active.size, 2, 2))  # (curve, control P1/P2, s/z)
-        lifts = np.zeros((active.size, 2))
-        for side, half, weight in ((0, left_half, w_left), (1, ~left_half, w_right)):
+        left_half = np.arange(samples - 1)[None, :] < summit[:, None]
+        moves = np.zeros((active.size, 2, 2))  # (curve, P1/P2, s/z)
+        for side, half in ((0, left_half), (1, ~left_half)):
             d = np.where(half, deficit, -np.inf)
             worst = np.argmax(d, axis=1)
-            need = d[np.arange(active.size), worst]
+            need = d[rows, worst]
             hit = need > 1e-9
-            seg_pts = 0.5 * (pts[np.arange(active.size), worst] + pts[np.arange(active.size),
-                                                                          worst + 1])
-            target = seg_pts + np.stack([np.zeros(active.size), np.maximum(need, 0)], -1)
+            target = 0.5 * (pts[rows, worst] + pts[rows, worst + 1])
+            target[:, 1] += np.maximum(need, 0.0)
             u = target - mid[active]
             u[:, 1] = np.maximum(u[:, 1], _MIN_UPWARD * np.abs(u[:, 0]) + 1e-9)
             u /= np.linalg.norm(u, axis=1, keepdims=True)
-            dist = np.clip(1.2 * need / np.maximum(weight[worst] * u[:, 1], 1e-3) + 0.002,
-                           0.005, 0.3)
+            weight = influence[side][worst]
+            dist = np.clip(2.0 * need / np.maximum(weight * u[:, 1], 1e-3) + 0.002, 0.005, 0.3)
             moves[:, side] = np.where(hit[:, None], dist[:, None] * u, 0.0)
-            lifts[:, side] = np.where(hit, dist * u[:, 1], 0.0)
         # A half without collision follows the other one upward by the same amount.
-        follow = np.where(lifts[:, 0] > 0, 0.0, lifts[:, 1])
-        moves[:, 0, 1] += follow
-        moves[:, 1, 1] += np.where(lifts[:, 1] > 0, 0.0, lifts[:, 0])
-        new = controls[active].copy()
+        lift = moves[:, :, 1]
+        moves[:, 0, 1] = np.where(lift[:, 0] > 0, lift[:, 0], lift[:, 1])
+        moves[:, 1, 1] = np.where(lift[:, 1] > 0, lift[:, 1], lift[:, 0])
+        new = controls[active]
         new[:, 1:3] += moves
         new[:, 1:3, 0] = np.clip(new[:, 1:3, 0], start_s[active, None], end_s[active, None])
-        out = (new[:, 1:3, 1] > top[active, None]).any(axis=1)
-        failed[active[out]] = True
         controls[active] = new
-        active = active[~out]
+        inside = ~(new[:, 1:3, 1] > top[active, None]).any(axis=1)
+        active = active[inside]
         if active.size == 0:
             break
-    pts = np.einsum("tk,ckd->ctd", basis, controls)
-    best = np.argmax(pts[..., 1], axis=1)
-    summit = pts[np.arange(C), best]
-    return SwingResult(controls, ok & ~failed, summit, rounds)
+    pts_z = controls[..., 1] @ basis_t
+    best = np.argmax(pts_z, axis=1)
+    summit = np.stack([(controls[..., 0] @ basis_t)[np.arange(C), best],
+                       pts_z[np.arange(C), best]], axis=-1)
+    return SwingResult(controls, ok, summit, rounds)
+
+
+class _FootView:
+    """Attribute access to per-curve foot arrays (a Leg with array fields)."""
+
+    def __init__(self, fields: dict[str, np.ndarray]):
+        self.__dict__.update(fields)

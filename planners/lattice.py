@@ -1,0 +1,401 @@
+"""Precomputed step tables on the foothold lattice (one vectorised pass per batch).
+
+After k steps of lengths ``L_min + j*dL`` (j = 0..J-1) every foothold lies on the lattice
+``k*L_min + m*dL`` (m = 0..(J-1)k). Legality and energy of step k depend only on the
+stance foothold f_{k-1} and the step's own length (a *step* entry), except the swing
+curve, which depends on the lift-off foothold f_{k-2} and the touch-down foothold f_k
+(a *swing* entry). Every node, step and swing of the horizon is evaluated once for all
+agents together; the searches then only look tables up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+
+import numpy as np
+
+from planners.config import PlannerConfig
+from planners.energy import joint_energy, total_energy, vertical_energy, walking_energy
+from planners.kinematics import key_frames
+from planners.legality import Reason, foot_support
+from planners.profile import GroundProfile
+from planners.swing import adjust_swings
+
+__all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_profiles",
+           "grid", "neutral_index"]
+
+
+#: Cell of the conservative height raster used for swing collision checks [m].
+RASTER_CELL = 0.005
+
+
+@dataclass(frozen=True, eq=False)
+class Structure:
+    """Index structure of the lattice for horizon ``n`` and ``J`` step lengths.
+
+    Nodes: 0 is the trailing foot, 1 the stance foot, then depth k's footholds
+    ``node_offset[k] + m``. Steps of depth k: ``step_offset[k-1] + m_{k-1}*J + j_k``.
+    Swings of depth k: ``swing_offset[k-1] + m_{k-2}*S_k + stride`` where the stride index
+    is ``j_{k-1} + j_k`` (``j_1`` at depth 1) and ``S_1 = J``, ``S_k = 2J - 1``.
+    """
+
+    n: int
+    J: int
+    node_depth: np.ndarray  # (Nn,) -1 trailing, 0 stance, 1..n
+    node_m: np.ndarray  # (Nn,)
+    node_offset: tuple[int, ...]  # by depth 0..n
+    step_depth: np.ndarray  # (Ns,)
+    step_stance: np.ndarray  # (Ns,) node index
+    step_front: np.ndarray  # (Ns,) node index
+    step_j: np.ndarray  # (Ns,)
+    step_offset: tuple[int, ...]
+    swing_back: np.ndarray  # (Np,) node index
+    swing_front: np.ndarray  # (Np,) node index
+    swing_offset: tuple[int, ...]
+    swing_strides: tuple[int, ...]
+    swing_stride: np.ndarray  # (Np,) stride index j_{k-1} + j_k; -1 at depth 1
+
+    def indices(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Step and swing indices (..., n) of configurations (..., n) of j's."""
+        configs = np.asarray(configs, dtype=np.int64)
+        steps = np.empty(configs.shape, dtype=np.int64)
+        swings = np.empty(configs.shape, dtype=np.int64)
+        m_prev = np.zeros(configs.shape[:-1], dtype=np.int64)  # m_{k-1}
+        m_prev2 = np.zeros(configs.shape[:-1], dtype=np.int64)  # m_{k-2}
+        for k in range(1, self.n + 1):
+            j = configs[..., k - 1]
+            steps[..., k - 1] = self.step_offset[k - 1] + m_prev * self.J + j
+            stride = j if k == 1 else configs[..., k - 2] + j
+            swings[..., k - 1] = (self.swing_offset[k - 1] + m_prev2 * self.swing_strides[k - 1]
+                                  + stride)
+            m_prev2, m_prev = m_prev, m_prev + j
+        return steps, swings
+
+    @cached_property
+    def all_configs(self) -> np.ndarray:
+        """Every configuration (J**n, n) of step-length indices."""
+        grids = np.indices((self.J,) * self.n, dtype=np.int16)
+        return grids.reshape(self.n, -1).T
+
+    @cached_property
+    def all_indices(self) -> tuple[np.ndarray, np.ndarray]:
+        """Step and swing indices (J**n, n) of every configuration."""
+        steps, swings = self.indices(self.all_configs)
+        return steps.astype(np.int32), swings.astype(np.int32)
+
+
+@lru_cache(maxsize=16)
+def structure(n: int, J: int) -> Structure:
+    """The (cached) lattice structure for horizon ``n`` and ``J`` step lengths."""
+    node_depth, node_m, node_offset = [-1, 0], [0, 0], [1]
+    for k in range(1, n + 1):
+        node_offset.append(len(node_depth))
+        count = (J - 1) * k + 1
+        node_depth += [k] * count
+        node_m += list(range(count))
+
+    def node(k, m):
+        return node_offset[k] + m
+
+    step_depth, step_stance, step_front, step_j, step_offset = [], [], [], [], []
+    swing_back, swing_front, swing_offset, swing_strides = [], [], [], []
+    swing_stride = []
+    for k in range(1, n + 1):
+        step_offset.append(len(step_depth))
+        m_prev = np.repeat(np.arange((J - 1) * (k - 1) + 1), J)
+        j = np.tile(np.arange(J), m_prev.size // J)
+        step_depth += [k] * j.size
+        step_stance += list(node(k - 1, m_prev))
+        step_front += list(node(k, m_prev + j))
+        step_j += list(j)
+        swing_offset.append(len(swing_back))
+        if k == 1:
+            swing_strides.append(J)
+            swing_back += [0] * J
+            swing_front += list(node(1, np.arange(J)))
+            swing_stride += [-1] * J
+        else:
+            S = 2 * J - 1
+            swing_strides.append(S)
+            m2 = np.repeat(np.arange((J - 1) * (k - 2) + 1), S)
+            stride = np.tile(np.arange(S), m2.size // S)
+            swing_back += list(node(k - 2, m2))
+            swing_front += list(node(k, m2 + stride))
+            swing_stride += list(stride)
+    a = np.asarray
+    return Structure(n, J, a(node_depth), a(node_m), tuple(node_offset), a(step_depth),
+                     a(step_stance), a(step_front), a(step_j), tuple(step_offset),
+                     a(swing_back), a(swing_front), tuple(swing_offset), tuple(swing_strides),
+                     a(swing_stride))
+
+
+def combine_profiles(profiles, lo: np.ndarray, hi: np.ndarray):
+    """One profile holding every agent's profile side by side.
+
+    Agent a's profile, padded flat to cover ``[lo[a], hi[a]]`` [m], is shifted by
+    ``offset[a]`` so that queries of different agents never meet. Returns the combined
+    :class:`GroundProfile` and the offsets (A,) [m].
+    """
+    if len(profiles) == 1:
+        return profiles[0], np.zeros(1)
+    s_parts, z_parts, offsets = [], [], []
+    cursor = 0.0
+    for p, a, b in zip(profiles, lo, hi, strict=True):
+        start, end = min(p.s[0], a) - 1.0, max(p.s[-1], b) + 1.0
+        offset = cursor - start
+        s_parts.append(np.concatenate([[start], p.s, [end]]) + offset)
+        z_parts.append(np.concatenate([[p.z[0]], p.z, [p.z[-1]]]))
+        offsets.append(offset)
+        cursor = end + offset + 1.0
+    return GroundProfile(np.concatenate(s_parts), np.concatenate(z_parts)), np.array(offsets)
+
+
+class _LegArrays:
+    """Legs as column arrays (A, 1) that broadcast against (A, N) step arrays."""
+
+    names = ("thigh", "shank", "foot_length", "heel_offset", "toe_offset", "ankle_height")
+
+    def __init__(self, legs):
+        for name in self.names:
+            setattr(self, name, np.array([getattr(leg, name) for leg in legs])[:, None])
+        self.length = self.thigh + self.shank
+
+    def take(self, rows: np.ndarray) -> _LegArrays:
+        """Per-row legs (C,) for the agents ``rows`` (C,)."""
+        new = object.__new__(_LegArrays)
+        for name, value in vars(self).items():
+            setattr(new, name, value[:, 0][rows])
+        return new
+
+
+@dataclass(frozen=True, eq=False)
+class StepTables:
+    """Per-agent tables (A agents, Nn nodes, Ns steps, Np swings).
+
+    Attributes
+    ----------
+    struct : Structure
+    step_min, step_delta : ndarray, shape (A,)
+        Shortest grid step and grid increment [m].
+    neutral : ndarray of int, shape (A,)
+        Index of the neutral step length (best flat-ground efficiency, s_init of §4.2).
+    node_s, node_z : ndarray, shape (A, Nn)
+        Foothold arc lengths relative to the stance foot and ground heights [m].
+    length, rise : ndarray, shape (A, Ns)
+        Step length and height change [m].
+    En, Ev, Ej, E : ndarray, shape (A, Ns)
+        Energy terms (Eq. 1 cal/kg, Eq. 2 unit, Eq. 3 J/kg) and the total E [J/kg].
+    step_reason : ndarray of int, shape (A, Ns)
+        :class:`~planners.legality.Reason` flags; 0 is legal.
+    swing_ok : ndarray of bool, shape (A, Np)
+    controls : ndarray, shape (A, Np, 4, 2)
+        Swing-ankle Bezier control points (s relative to the stance foot, z) [m].
+    rounds : ndarray of int, shape (A, Np)
+        §5.2 adjustment rounds (-1 where no curve was computed).
+    """
+
+    struct: Structure
+    step_min: np.ndarray
+    step_delta: np.ndarray
+    neutral: np.ndarray
+    node_s: np.ndarray
+    node_z: np.ndarray
+    length: np.ndarray
+    rise: np.ndarray
+    En: np.ndarray
+    Ev: np.ndarray
+    Ej: np.ndarray
+    E: np.ndarray
+    step_reason: np.ndarray
+    swing_ok: np.ndarray
+    controls: np.ndarray
+    rounds: np.ndarray
+
+    @cached_property
+    def step_legal(self) -> np.ndarray:
+        """Legal steps (A, Ns), bool."""
+        return self.step_reason == 0
+
+    def evaluate(self, agents: np.ndarray, configs: np.ndarray):
+        """Legality and efficiency of configurations.
+
+        Parameters
+        ----------
+        agents : ndarray of int, shape (B,)
+        configs : ndarray of int, shape (B, ..., n)
+
+        Returns
+        -------
+        legal : ndarray of bool, shape (B, ...)
+        efficiency : ndarray, shape (B, ...)
+            Sum of step lengths over sum of energies [m kg/J].
+        """
+        steps, swings = self.struct.indices(configs)
+        rows = agents.reshape((-1,) + (1,) * (configs.ndim - 1))
+        legal = (self.step_legal[rows, steps].all(axis=-1)
+                 & self.swing_ok[rows, swings].all(axis=-1))
+        energy = self.E[rows, steps].sum(axis=-1)
+        length = self.length[rows, steps].sum(axis=-1)
+        return legal, length / energy
+
+
+_FLAT_CACHE: dict = {}
+
+
+def flat_swings(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Swing curves over flat ground for every stride ``2 L_min + s dL`` (s = 0..2J-2).
+
+    Returns control points (A, 2J-1, 4, 2) relative to the lift-off foothold [m] and ok
+    flags (A, 2J-1); reused for every pair whose span is flat. Curves are computed once
+    per distinct (leg, config), all missing legs in one vectorised call.
+    """
+    S = 2 * config.intervals + 1
+    missing = list({leg: None for leg in legs if (leg, config) not in _FLAT_CACHE})
+    if missing:
+        lo, delta = grid(missing, config)
+        strides = (2 * lo[:, None] + delta[:, None] * np.arange(S)).ravel()
+        span = float(strides.max()) + 2 * max(leg.foot_length for leg in missing)
+        flat = GroundProfile.flat(2 * span, 0.0, -span / 2)
+        zero = np.zeros_like(strides)
+        feet = _LegArrays(missing).take(np.repeat(np.arange(len(missing)), S))
+        swing = adjust_swings(zero, zero, strides, zero, flat, feet, config)
+        if len(_FLAT_CACHE) > 4096:
+            _FLAT_CACHE.clear()
+        for i, leg in enumerate(missing):
+            rows = slice(i * S, (i + 1) * S)
+            _FLAT_CACHE[(leg, config)] = (swing.controls[rows], swing.ok[rows])
+    entries = [_FLAT_CACHE[(leg, config)] for leg in legs]
+    return np.stack([e[0] for e in entries]), np.stack([e[1] for e in entries])
+
+
+def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Shortest step and increment (A,) [m] of each leg's step-length grid."""
+    length = np.array([leg.length for leg in legs])
+    lo = config.min_step_ratio * length
+    return lo, (config.max_step_ratio * length - lo) / config.intervals
+
+
+def _step_energy(stance_s, stance_z, front_s, front_z, summit_z, legs, speeds, config):
+    """Energy terms and knee reach of steps (arrays broadcast to (A, N)) [see Eqs. 1-4]."""
+    kf = key_frames(stance_s, stance_z, front_s, front_z, stance_s, summit_z, legs,
+                    config.pelvis_height_ratio, config.knee_max_flexion,
+                    legs.ankle_height + 0.75 * config.swing_lift)
+    w = config.weights
+    length = front_s - stance_s
+    rise = front_z - stance_z
+    En = walking_energy(length, speeds)
+    Ev = vertical_energy(rise, w.down_ratio)
+    Ej = joint_energy(kf.thigh_rotation, kf.calf_rotation, w)
+    return En, Ev, Ej, total_energy(En, Ev, Ej, w), kf.reachable
+
+
+def neutral_index(legs, speeds: np.ndarray, config: PlannerConfig) -> np.ndarray:
+    """Grid index (A,) of the most efficient step on flat ground (s_init of §4.2)."""
+    lo, delta = grid(legs, config)
+    L = lo[:, None] + delta[:, None] * np.arange(config.intervals + 1)
+    leg = _LegArrays(legs)
+    zero = np.zeros_like(L)
+    summit = leg.ankle_height + 0.75 * config.swing_lift + zero
+    _, _, _, E, _ = _step_energy(zero, zero, L, zero, summit, leg, speeds[:, None], config)
+    return np.argmax(L / E, axis=1)
+
+
+def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
+                 origins: np.ndarray, config: PlannerConfig) -> StepTables:
+    """Evaluate legality and energy of every node, step and swing for every agent.
+
+    Parameters
+    ----------
+    profiles : list of GroundProfile, length A
+    legs : list of Leg, length A
+    speeds : ndarray, shape (A,)
+        Target walking speeds [m/s].
+    trailing : ndarray, shape (A,) or None
+        Arc length of the trailing foot (the next swing foot) relative to the stance
+        foot [m], < 0; None puts it one neutral step behind.
+    origins : ndarray, shape (A,)
+        Arc length of the stance foot on each profile [m].
+    config : PlannerConfig
+
+    Notes
+    -----
+    The swing ankle at key frame K1 is lifted ``0.75 * swing_lift`` above the highest
+    ground between the stance and the landing foothold (the summit of the initial §5.2
+    curve), so stepping over a higher obstacle costs more joint rotation.
+    """
+    A = len(profiles)
+    st = structure(config.n_steps, config.intervals + 1)
+    lo, delta = grid(legs, config)
+    neutral = neutral_index(legs, speeds, config)
+    if trailing is None:
+        trailing = -(lo + delta * neutral)
+    reach = config.n_steps * (lo + delta * config.intervals)
+    profile, shift = combine_profiles(profiles, origins + trailing - 1.0, origins + reach + 1.0)
+    base = (origins + shift)[:, None]  # (A, 1) absolute s of each stance foot
+    legs_col = _LegArrays(legs)
+
+    # Nodes: footholds relative to the stance foot, their heights and support.
+    depth = st.node_depth[None, :]
+    node_s = np.where(depth == -1, trailing[:, None],
+                      np.maximum(depth, 0) * lo[:, None] + st.node_m * delta[:, None])
+    node_z = profile.height(base + node_s)
+    support = foot_support(base + node_s, profile, legs_col.heel_offset, legs_col.toe_offset,
+                           config)
+    support[:, :2] = 0  # the feet already standing are where they are
+
+    # Steps: stance node -> front node.
+    stance_s, front_s = node_s[:, st.step_stance], node_s[:, st.step_front]
+    stance_z, front_z = node_z[:, st.step_stance], node_z[:, st.step_front]
+    rise = front_z - stance_z
+    highest = profile.max_height(base + stance_s, base + front_s)
+    summit_z = highest + legs_col.ankle_height + 0.75 * config.swing_lift
+    En, Ev, Ej, E, reachable = _step_energy(stance_s, stance_z, front_s, front_z, summit_z,
+                                            legs_col, speeds[:, None], config)
+    reason = support[:, st.step_front].copy()
+    reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)
+    reason |= np.where(reachable, 0, int(Reason.KNEE_REACH))
+
+    # Swings: lift-off node -> touch-down node, only where the touch-down is supported.
+    back, front = st.swing_back, st.swing_front
+    needed = (support[:, front] == 0) & (
+        np.abs(node_z[:, front] - node_z[:, back]) <= 2 * config.max_step_rise)
+    P = back.size
+    controls = np.zeros((A, P, 4, 2))
+    rounds = np.full((A, P), -1)
+    swing_ok = np.zeros((A, P), dtype=bool)
+    agent_of, which = np.nonzero(needed)
+    if agent_of.size:
+        b_node, f_node = back[which], front[which]
+        start = base[agent_of, 0] + node_s[agent_of, b_node]
+        end = base[agent_of, 0] + node_s[agent_of, f_node]
+        z_start, z_end = node_z[agent_of, b_node], node_z[agent_of, f_node]
+        margin = 2 * float(legs_col.foot_length.max())
+        ground = profile.raster(float(start.min()) - margin, float(end.max()) + margin,
+                                RASTER_CELL)
+        # Spans with nothing above the (equal) foothold heights reuse the flat curve.
+        stride = st.swing_stride[which]
+        flat = (stride >= 0) & (np.abs(z_end - z_start) <= 1e-9) & (ground.max_height(
+            start - legs_col.heel_offset[agent_of, 0], end + legs_col.toe_offset[agent_of, 0])
+            <= z_start + 1e-9)
+        if flat.any():
+            flat_ctrl, flat_ok = flat_swings(legs, config)
+            ag, rows = agent_of[flat], np.flatnonzero(flat)
+            ctrl = flat_ctrl[ag, stride[rows]].copy()
+            ctrl[..., 0] += node_s[ag, b_node[rows], None]
+            ctrl[..., 1] += z_start[rows, None]
+            controls[ag, which[rows]] = ctrl
+            rounds[ag, which[rows]] = 0
+            swing_ok[ag, which[rows]] = flat_ok[ag, stride[rows]]
+        rest = ~flat
+        if rest.any():
+            ag = agent_of[rest]
+            swing = adjust_swings(start[rest], z_start[rest], end[rest], z_end[rest], ground,
+                                  legs_col.take(ag), config)
+            ctrl = swing.controls
+            ctrl[..., 0] -= base[ag]
+            controls[ag, which[rest]] = ctrl
+            rounds[ag, which[rest]] = swing.rounds
+            swing_ok[ag, which[rest]] = swing.ok
+    return StepTables(st, lo, delta, neutral, node_s, node_z, front_s - stance_s, rise,
+                      En, Ev, Ej, E, reason, swing_ok, controls, rounds)
