@@ -1,0 +1,598 @@
+"""The crowd simulation: event-driven footsteps of many agents.
+
+Each agent decides at its heel strikes. Per tick, every agent whose heel strike (or end
+of a wait) falls in the tick decides, all of them in one batch:
+
+1. route ahead — project onto its route polyline, test arrival, pick the route point
+   ``target_distance`` ahead (:mod:`crowdwalk.crowd.navigation`);
+2. local steering with the neighbours from one ``cKDTree`` query per tick
+   (:mod:`crowdwalk.crowd.steering`): a step direction and the longest clear step;
+3. ground profile along the local path and ``planners.plan_batch`` for all deciding
+   agents at once (:mod:`crowdwalk.crowd.footsteps`); the first planned step is taken;
+4. the step's duration from the speed model (below) and the MetaGait/Animator command.
+
+Between heel strikes the body (the midpoint between the two feet's centre-line
+footholds) moves linearly from its position at the heel strike to the midpoint after the
+new foothold. Ticks are aligned with output frames so frames are exact interpolations.
+
+Speed model (deviation from Chen & Li, whose Table 1 shortens the phases equally for up-
+and downhill): the step duration is step length / speed with the agent's free speed
+scaled on stairs by Weidmann's (1993) measured horizontal stair speeds (0.610 m/s up,
+0.694 m/s down against 1.34 m/s level) and on slopes by Tobler's (1993) hiking function;
+a step never takes less than 1/cadence at the free speed (Fukuchi et al. 2018 cadence
+fit), so short steps in a queue are slow steps, not a shuffle at high cadence.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from crowdwalk.crowd.clearance import ClearanceField
+from crowdwalk.crowd.footsteps import FootstepPlanner
+from crowdwalk.crowd.geometry import segment_distance
+from crowdwalk.crowd.navigation import RouteTable
+from crowdwalk.crowd.steering import Neighbours, SteeringParams, choose_steps
+from crowdwalk.errors import invalid
+from crowdwalk.population import Population, cadence_at, step_length_at
+
+__all__ = ["CrowdParams", "CrowdSimulation", "WAITING", "ACTIVE", "ARRIVED"]
+
+WAITING, ACTIVE, ARRIVED = 0, 1, 2
+
+#: Weidmann (1993): horizontal speed on stairs, up and down, over level speed 1.34 m/s.
+STAIR_UP_FACTOR = 0.610 / 1.34
+STAIR_DOWN_FACTOR = 0.694 / 1.34
+
+
+@dataclass(frozen=True)
+class CrowdParams:
+    """Crowd model parameters.
+
+    Attributes
+    ----------
+    radius_ratio : float
+        Body radius over body height [-] (0.115: 0.20 m for a 1.75 m person; shoulder
+        half-breadth 0.13 H (Winter 2009) minus arm compression in crowds).
+    foot_half_width : float
+        Lateral distance of each foot's centre from the walking line [m] (stride width
+        about 0.1 m, normative.json).
+    wait_time : float
+        How long an agent stands before deciding again when it cannot step [s].
+    target_distance : float
+        How far ahead along the route the steering target lies [m].
+    centre_pull : float
+        Fraction of the lateral offset from the route's centre line the target corrects
+        over ``target_distance`` [-].
+    arrive_distance : float
+        An agent has arrived within this distance of its route's end [m].
+    neighbours : int
+        Neighbours considered per deciding agent (nearest first).
+    neighbour_range : float
+        Search radius for neighbours [m].
+    reroute_after : float
+        Standing time after which an agent looks for another route [s].
+    stair_rise : float
+        A step with a larger height change is a stair step (Weidmann speed) [m].
+    steering : SteeringParams
+    """
+
+    radius_ratio: float = 0.115
+    foot_half_width: float = 0.05
+    wait_time: float = 0.25
+    target_distance: float = 2.0
+    centre_pull: float = 0.25
+    arrive_distance: float = 0.6
+    neighbours: int = 16
+    neighbour_range: float = 3.0
+    reroute_after: float = 8.0
+    stair_rise: float = 0.05
+    steering: SteeringParams = field(default_factory=SteeringParams)
+
+
+class AgentState:
+    """Struct-of-arrays state of n agents (one array per field, leading dimension n)."""
+
+    def __init__(self, n: int) -> None:
+        self.status = np.full(n, WAITING, dtype=np.int8)
+        self.pos0 = np.zeros((n, 2))  # body position at the start of the current step [m]
+        self.pos1 = np.zeros((n, 2))  # ... at its end [m]
+        self.z0 = np.zeros(n)
+        self.z1 = np.zeros(n)
+        self.t0 = np.zeros(n)  # start of the current step or wait [s]
+        self.t1 = np.zeros(n)  # its end = next decision [s]
+        self.heading = np.zeros(n)  # [rad]
+        self.stance = np.zeros((n, 2))  # centre-line point of the newest foothold [m]
+        self.stance_z = np.zeros(n)
+        self.trail = np.zeros((n, 2))  # centre-line point of the previous foothold [m]
+        self.trail_z = np.zeros(n)
+        self.foot = np.zeros(n, dtype=np.int8)  # foot that swings next: 0 left, 1 right
+        self.route = np.zeros(n, dtype=np.int64)
+        self.segment = np.zeros(n, dtype=np.int64)
+        self.progress = np.zeros(n)  # global route arc length [m]
+        self.steps = np.zeros(n, dtype=np.int64)
+        self.distance = np.zeros(n)  # walked by the body [m]
+        self.energy = np.zeros(n)  # [J/kg]
+        self.climb = np.zeros(n)  # total rise [m]
+        self.wait = np.zeros(n)  # total standing time [s]
+        self.stuck = np.zeros(n)  # standing time since the last step [s]
+        self.start_time = np.full(n, np.nan)
+        self.arrival_time = np.full(n, np.nan)
+        self.plans = np.zeros(n, dtype=np.int64)
+        self.plan_failures = np.zeros(n, dtype=np.int64)
+        self.shortened = np.zeros(n, dtype=np.int64)
+        self.reroutes = np.zeros(n, dtype=np.int64)
+
+    def position(self, t: float, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Body positions (k, 2) [m] and heights (k,) [m] of agents ``idx`` at time t."""
+        span = self.t1[idx] - self.t0[idx]
+        f = np.clip((t - self.t0[idx]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
+        xy = self.pos0[idx] + f[:, None] * (self.pos1[idx] - self.pos0[idx])
+        return xy, self.z0[idx] + f * (self.z1[idx] - self.z0[idx])
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(n > 1e-12, n, 1.0)
+
+
+def _left(d: np.ndarray) -> np.ndarray:
+    return np.stack([-d[..., 1], d[..., 0]], axis=-1)
+
+
+class CrowdSimulation:
+    """Simulate a population on a world.
+
+    Parameters
+    ----------
+    world : crowdwalk.world.World
+        ``terrain`` and ``routes``.
+    population : Population
+    dt : float
+        Decision tick [s] (rounded down so that output frames fall on ticks).
+    fps : float
+        Output frame rate [1/s].
+    duration : float
+        Simulated time limit [s].
+    params : CrowdParams
+    planner_config : planners.PlannerConfig or None
+    """
+
+    def __init__(self, world, population: Population, *, dt: float = 0.05, fps: float = 10.0,
+                 duration: float = 600.0, params: CrowdParams = CrowdParams(),
+                 planner_config=None, animator=None) -> None:
+        for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
+            if not (np.isfinite(value) and value > 0):
+                raise invalid("CrowdSimulation", name, "> 0", value)
+        from planners import Leg
+
+        self.world = world
+        self.terrain = world.terrain
+        self.routes = world.routes
+        self.pop = population
+        self.params = params
+        self.fps = float(fps)
+        frame_dt = 1.0 / self.fps
+        self.ticks_per_frame = max(1, int(np.ceil(frame_dt / dt - 1e-9)))
+        self.dt = frame_dt / self.ticks_per_frame
+        self.duration = float(duration)
+        n = len(population)
+        self.n = n
+        self.state = AgentState(n)
+        self.radius = params.radius_ratio * population.body_height
+        self.min_step_time = 1.0 / cadence_at(population.free_speed)
+        self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
+        heights, self.leg_index = np.unique(np.round(population.body_height, 2),
+                                            return_inverse=True)
+        self.legs = [Leg.from_body_height(float(h)) for h in heights]
+        self.planner_of = population.planner
+        self.clearance = ClearanceField.from_area(self.routes.walkable_area)
+        self.footsteps = FootstepPlanner(self.terrain, self.legs, config=planner_config)
+        self.table = RouteTable()
+        self._route_nodes: dict[int, list[str]] = {}
+        self._assign_routes()
+        self.animator = animator
+        self.time = 0.0
+        self.tick = 0
+        self.wall_planning = 0.0
+        self.wall_steering = 0.0
+        self.max_overlap = 0.0
+        self._step_rows: list[dict[str, np.ndarray]] = []
+
+    # -- setup ---------------------------------------------------------------------
+
+    def _assign_routes(self) -> None:
+        """One route polyline per distinct (origin, destinations, start): the smoothed
+        graph paths to each destination in turn, concatenated."""
+        keys: dict[tuple, int] = {}
+        route = np.zeros(self.n, dtype=np.int64)
+        starts = self.pop.route_start
+        for i in range(self.n):  # setup only: a dict lookup per agent
+            start = starts[i]
+            key = (str(self.pop.origin[i]), tuple(self.pop.destinations[i]),
+                   None if np.isnan(start).any() else tuple(start))
+            if key not in keys:
+                keys[key] = self._add_route(*key)
+            route[i] = keys[key]
+        self.state.route = route
+        self.state.segment = self.table.start[route].copy()
+        self.state.progress = self.table.s0[route].copy()
+
+    def _add_route(self, origin: str, destinations: tuple, start) -> int:
+        here, parts, nodes = origin, [], [origin]
+        for k, dest in enumerate(destinations):
+            if dest == here:
+                continue
+            kw = {"start": np.asarray(start)} if (k == 0 and start is not None) else {}
+            line = self.routes.path(here, dest, **kw)
+            parts.append(line if not parts else line[1:])
+            nodes += self.routes.route(here, dest)[1:]
+            here = dest
+        if not parts:  # already at the destination
+            p = self.routes.node_xy(origin) if start is None else np.asarray(start)
+            parts = [np.stack([p, p])]
+        rid = self.table.add(np.concatenate(parts))
+        self._remember_nodes(rid, nodes)
+        return rid
+
+    def _remember_nodes(self, rid: int, nodes: list[str]) -> None:
+        """Store a route's node names and their global arc lengths along it [m]."""
+        vs = self.table.xy[self.table.start[rid]:self.table.stop[rid] + 1]
+        ss = self.table.s[self.table.start[rid]:self.table.stop[rid] + 1]
+        at, k0 = [], 0
+        for v in nodes:  # nodes in route order; search forward only
+            d = np.linalg.norm(vs[k0:] - self.routes.node_xy(v), axis=1)
+            k0 += int(np.argmin(d))
+            at.append(ss[k0])
+        self._route_nodes[rid] = (nodes, np.asarray(at))
+
+    # -- main loop ----------------------------------------------------------------
+
+    @property
+    def active(self) -> np.ndarray:
+        """Indices of agents walking now."""
+        return np.flatnonzero(self.state.status == ACTIVE)
+
+    @property
+    def remaining(self) -> int:
+        """Agents not yet arrived (waiting to spawn or walking)."""
+        return int(np.count_nonzero(self.state.status != ARRIVED))
+
+    @property
+    def finished(self) -> bool:
+        """True when every agent has arrived or the time limit is reached."""
+        return self.remaining == 0 or self.time >= self.duration - 1e-9
+
+    def step(self) -> bool:
+        """Advance one tick; returns True when the tick ends on an output frame."""
+        t = (self.tick + 1) * self.dt
+        self._spawn(t)
+        st = self.state
+        deciding = np.flatnonzero((st.status == ACTIVE) & (st.t1 <= t + 1e-9))
+        if deciding.size:
+            self._decide(deciding, t)
+        self.tick += 1
+        self.time = t
+        return self.tick % self.ticks_per_frame == 0
+
+    @property
+    def frame(self) -> int:
+        """Index of the output frame at the current time."""
+        return self.tick // self.ticks_per_frame
+
+    def snapshot(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Active agents now: ids (k,), positions (k, 2) [m], heights (k,) [m] and unit
+        orientations (k, 2)."""
+        idx = self.active
+        xy, z = self.state.position(self.time, idx)
+        h = self.state.heading[idx]
+        return idx, xy, z, np.column_stack([np.cos(h), np.sin(h)])
+
+    def take_footsteps(self) -> dict[str, np.ndarray] | None:
+        """Foot placements decided since the last call (columns of ``footsteps.csv``)."""
+        if not self._step_rows:
+            return None
+        rows = {k: np.concatenate([r[k] for r in self._step_rows]) for k in self._step_rows[0]}
+        self._step_rows = []
+        return rows
+
+    # -- spawning -----------------------------------------------------------------
+
+    def _spawn(self, t: float) -> None:
+        st = self.state
+        due = np.flatnonzero((st.status == WAITING) & (self.pop.spawn_time <= t + 1e-9))
+        if due.size == 0:
+            return
+        xy = self.pop.spawn_xy[due]
+        act = self.active
+        free = np.ones(due.size, bool)
+        if act.size:
+            now, _ = st.position(t, act)
+            d = segment_distance(xy[:, None, :], xy[:, None, :], now[None, :, :],
+                                 st.pos1[act][None, :, :])
+            free = np.all(d >= self.radius[due][:, None] + self.radius[act][None, :], axis=1)
+        # spawn one at a time among the due ones that are close to each other
+        order = np.flatnonzero(free)
+        chosen: list[int] = []
+        for k in order:  # only agents spawning in this tick (few), not the whole crowd
+            if all(np.linalg.norm(xy[k] - xy[j]) >= self.radius[due[k]] + self.radius[due[j]]
+                   for j in chosen):
+                chosen.append(k)
+        if not chosen:
+            return
+        idx = due[np.array(chosen)]
+        p = self.pop.spawn_xy[idx]
+        z = self.terrain.height(p)
+        st.status[idx] = ACTIVE
+        st.pos0[idx] = st.pos1[idx] = p
+        st.z0[idx] = st.z1[idx] = z
+        st.stance[idx] = st.trail[idx] = p
+        st.stance_z[idx] = st.trail_z[idx] = z
+        st.t0[idx] = st.t1[idx] = t
+        st.start_time[idx] = t
+        seg, s, _ = self.table.project(st.route[idx], st.segment[idx], p)
+        st.segment[idx], st.progress[idx] = seg, s
+        ahead = self.table.point_at(st.route[idx], s + 1.0)
+        d = ahead - p
+        st.heading[idx] = np.arctan2(d[:, 1], d[:, 0])
+
+    # -- decisions ----------------------------------------------------------------
+
+    def _neighbours(self, idx: np.ndarray, t: float) -> Neighbours:
+        st = self.state
+        act = self.active
+        k = min(self.params.neighbours + 1, act.size)
+        now, _ = st.position(t, act)
+        tree = cKDTree(now)
+        me, _ = st.position(t, idx)
+        dist, nb = tree.query(me, k=k, distance_upper_bound=self.params.neighbour_range)
+        dist, nb = np.atleast_2d(dist).reshape(len(idx), k), np.atleast_2d(nb).reshape(len(idx), k)
+        valid = nb < act.size
+        nb_safe = np.where(valid, nb, 0)
+        agent = act[nb_safe]
+        valid &= agent != idx[:, None]
+        span = st.t1[agent] - st.t0[agent]
+        moving = (st.t1[agent] > t) & (span > 0)
+        vel = np.where(moving[..., None], (st.pos1[agent] - st.pos0[agent])
+                       / np.where(span > 0, span, 1.0)[..., None], 0.0)
+        return Neighbours(valid=valid, now=now[nb_safe], end=st.pos1[agent], velocity=vel,
+                          radius=self.radius[agent])
+
+    def _decide(self, idx: np.ndarray, t: float) -> None:
+        st, prm = self.state, self.params
+        te = st.t1[idx].copy()  # heel-strike (or wait-end) times, within this tick
+        pos = st.pos1[idx]
+
+        # 1. route ahead and arrival
+        seg, s, _ = self.table.project(st.route[idx], st.segment[idx], pos)
+        st.segment[idx], st.progress[idx] = seg, s
+        end = self.table.xy[self.table.stop[st.route[idx]]]
+        arrived = ((self.table.s1[st.route[idx]] - s <= prm.arrive_distance)
+                   | (np.linalg.norm(end - pos, axis=1) <= prm.arrive_distance))
+        if arrived.any():
+            done = idx[arrived]
+            st.status[done] = ARRIVED
+            st.arrival_time[done] = te[arrived]
+            idx, te, pos, s = idx[~arrived], te[~arrived], pos[~arrived], s[~arrived]
+            if idx.size == 0:
+                return
+        # walk parallel to the route (a lane), pulled gently towards its centre line:
+        # steering at the centre-line point ahead would funnel everybody into one file
+        on_route = self.table.point_at(st.route[idx], s)
+        ahead = self.table.point_at(st.route[idx], s + prm.target_distance)
+        target = pos + (ahead - on_route) + prm.centre_pull * (on_route - pos)
+        # ... unless that lane runs into a wall: then head for the centre line
+        blind = self.clearance(target) < self.radius[idx]
+        blind |= self.clearance(0.5 * (target + pos)) < self.radius[idx]
+        target[blind] = ahead[blind]
+        route_dir = _unit(target - pos)
+        still = np.linalg.norm(target - pos, axis=1) < 1e-9
+        heading_dir = np.column_stack([np.cos(st.heading[idx]), np.sin(st.heading[idx])])
+        route_dir[still] = heading_dir[still]
+
+        # 2. steering
+        w0 = _time.perf_counter()
+        nbs = self._neighbours(idx, t)
+        choice = choose_steps(pos, st.stance[idx], st.heading[idx], self.radius[idx], route_dir,
+                              target, self.nominal_step[idx], nbs, self.clearance, prm.steering)
+        self.wall_steering += _time.perf_counter() - w0
+
+        move = choice.move.copy()
+        mv = np.flatnonzero(move)
+        sl = np.zeros(idx.size)
+        sh = np.zeros(idx.size)
+        energy = np.zeros(idx.size)
+        swing = np.full((idx.size, 4, 2), np.nan)
+        # 3. plan the footsteps of all movers at once
+        if mv.size:
+            w0 = _time.perf_counter()
+            a = idx[mv]
+            planned = self.footsteps.plan(st.stance[a], st.stance_z[a], choice.direction[mv],
+                                          self.leg_index[a], self.pop.free_speed[a],
+                                          self.planner_of[a])
+            self.wall_planning += _time.perf_counter() - w0
+            st.plans[a] += 1
+            st.plan_failures[a] += ~planned.ok
+            sl[mv], sh[mv] = planned.step_length, planned.step_height
+            energy[mv], swing[mv] = planned.energy, planned.swing
+            move[mv] = planned.ok
+            # a neighbour or wall closer than the planned step: a shorter step if the foot
+            # lands on even ground, else wait
+            short = mv[planned.ok & (planned.step_length > choice.free_length[mv] + 1e-9)]
+            if short.size:
+                self._shorten(idx, short, choice, sl, sh, energy, swing, move)
+        # 4. commit
+        self._commit(idx, te, t, move, choice.direction, sl, sh, energy, swing)
+
+    def _shorten(self, idx, short, choice, sl, sh, energy, swing, move) -> None:
+        """Replace planned steps that are longer than the free length by the free length
+        where the whole foot (heel, ankle, toe) rests on even ground; else wait."""
+        st = self.state
+        a = idx[short]
+        new = choice.free_length[short]
+        d = choice.direction[short]
+        foot = np.array([self.legs[k].heel_offset for k in self.leg_index[a]])
+        toe = np.array([self.legs[k].toe_offset for k in self.leg_index[a]])
+        c = st.stance[a] + new[:, None] * d
+        pts = np.concatenate([c - foot[:, None] * d, c, c + toe[:, None] * d])
+        z = self.terrain.height(pts).reshape(3, -1)
+        even = (np.ptp(z, axis=0) <= 0.02) & (new >= self.params.steering.min_step)
+        ratio = np.where(sl[short] > 0, new / np.maximum(sl[short], 1e-9), 0.0)
+        energy[short] = energy[short] * ratio
+        sl[short] = np.where(even, new, 0.0)
+        sh[short] = z[1] - st.stance_z[a]
+        swing[short] = np.nan
+        move[short] = even
+        st.shortened[a[even]] += 1
+
+    def _commit(self, idx, te, t, move, direction, sl, sh, energy, swing) -> None:
+        st, prm = self.state, self.params
+        # resolve conflicts between agents that decided in this same tick: each checked
+        # the others' positions at their heel strike, not their new steps
+        mv = np.flatnonzero(move)
+        if mv.size > 1:
+            a = idx[mv]
+            new_c = st.stance[a] + sl[mv, None] * direction[mv]
+            end = 0.5 * (st.stance[a] + new_c)
+            start = st.pos1[a]
+            mid = 0.5 * (start + end)
+            half = 0.5 * np.linalg.norm(end - start, axis=1)
+            tree = cKDTree(mid)
+            pairs = tree.query_pairs(2 * (half.max() + self.radius[a].max()), output_type="ndarray")
+            if len(pairs):
+                i, j = pairs[:, 0], pairs[:, 1]
+                gap = segment_distance(start[i], end[i], start[j], end[j])
+                bad = gap < self.radius[a[i]] + self.radius[a[j]]
+                if bad.any():
+                    # the later heel strike (then the higher id) yields and waits
+                    later = np.where((te[mv[i]] > te[mv[j]])
+                                     | ((te[mv[i]] == te[mv[j]]) & (a[i] > a[j])), i, j)
+                    move[mv[np.unique(later[bad])]] = False
+
+        wait = idx[~move]
+        if wait.size:
+            st.pos0[wait] = st.pos1[wait]
+            st.z0[wait] = st.z1[wait]
+            st.t0[wait] = st.t1[wait]
+            st.t1[wait] = t + prm.wait_time
+            # standing still brings the feet together under the body (on level footing),
+            # so the next step may go any way
+            apart = wait[np.linalg.norm(st.stance[wait] - st.trail[wait], axis=1) > 1e-6]
+            if apart.size:
+                here = st.pos1[apart]
+                flat = self.terrain.kind(here) != 2  # not on a stair flight
+                level = apart[flat & (np.abs(st.stance_z[apart] - st.trail_z[apart]) <= 0.3)]
+                z = self.terrain.height(st.pos1[level])
+                st.stance[level] = st.trail[level] = st.pos1[level]
+                st.stance_z[level] = st.trail_z[level] = z
+            dur = t + prm.wait_time - st.t0[wait]
+            st.wait[wait] += dur
+            st.stuck[wait] += dur
+            blocked = wait[st.stuck[wait] >= prm.reroute_after]
+            if blocked.size:
+                self._reroute(blocked, t)
+
+        go = np.flatnonzero(move)
+        if go.size == 0:
+            return
+        a = idx[go]
+        d = direction[go]
+        L, H = sl[go], sh[go]
+        new_c = st.stance[a] + L[:, None] * d
+        new_z = st.stance_z[a] + H
+        # speed model: Weidmann stairs, Tobler slopes, cadence floor
+        v0 = self.pop.free_speed[a]
+        grade = H / np.maximum(L, 1e-6)
+        factor = np.where(H > prm.stair_rise, STAIR_UP_FACTOR,
+                          np.where(H < -prm.stair_rise, STAIR_DOWN_FACTOR,
+                                   1.0 / np.maximum(1.0, np.exp(3.5 * (np.abs(grade + 0.05)
+                                                                       - 0.05)))))
+        duration = np.maximum(L / (v0 * factor), self.min_step_time[a])
+        t0 = te[go]
+        end = 0.5 * (st.stance[a] + new_c)
+        st.distance[a] += np.linalg.norm(end - st.pos1[a], axis=1)
+        st.pos0[a] = st.pos1[a]
+        st.z0[a] = st.z1[a]
+        st.pos1[a] = end
+        st.z1[a] = 0.5 * (st.stance_z[a] + new_z)
+        st.t0[a] = t0
+        st.t1[a] = t0 + duration
+        st.heading[a] = np.arctan2(d[:, 1], d[:, 0])
+        foot = st.foot[a].copy()
+        side = np.where(foot == 0, 1.0, -1.0)
+        foothold = new_c + (side * prm.foot_half_width)[:, None] * _left(d)
+        st.trail[a], st.trail_z[a] = st.stance[a], st.stance_z[a]
+        st.stance[a], st.stance_z[a] = new_c, new_z
+        st.foot[a] = 1 - foot
+        st.steps[a] += 1
+        st.energy[a] += energy[go]
+        st.climb[a] += np.maximum(H, 0.0)
+        st.stuck[a] = 0.0
+        kind = self.terrain.kind(foothold)
+        self._step_rows.append({
+            "agent": a, "step": st.steps[a].copy(), "time": t0 + duration,
+            "foot": np.where(foot == 0, "left", "right"),
+            "x": foothold[:, 0], "y": foothold[:, 1], "z": new_z,
+            "step_length": L, "step_height": H, "energy": energy[go],
+            "planner": self.planner_of[a].astype(str),
+            "group": np.asarray(self.pop.group_names, dtype=object)[self.pop.group[a]].astype(str),
+            "heading": st.heading[a].copy(), "kind": kind, "on_obstacle": (kind == 3).astype(int),
+            "duration": duration, "start_time": t0,
+            "from_x": st.trail[a][:, 0], "from_y": st.trail[a][:, 1],
+            "swing": swing[go],
+        })
+
+    # -- re-routing ---------------------------------------------------------------
+
+    def _reroute(self, blocked: np.ndarray, t: float) -> None:
+        """Agents standing for ``reroute_after`` seconds look for a cheaper route from the
+        last route node they passed, with every corridor's cost raised by the time its
+        current occupants need to get through it (queue length over a specific flow of
+        1.3 persons/(s·m), Weidmann 1993; converted to metres at 1.34 m/s). The agent
+        switches only when that route differs from its own (rare: a Python loop over the
+        blocked agents only)."""
+        import networkx as nx
+
+        st = self.state
+        g = self.routes.graph
+        act = self.active
+        now, _ = st.position(t, act)
+        tree = cKDTree(now)
+        extra = {}
+        for u, v, data in g.edges(data=True):
+            line = data["geometry"]
+            k = max(2, int(np.ceil(line.length)) + 1)
+            pts = np.array([line.interpolate(f, normalized=True).coords[0]
+                            for f in np.linspace(0, 1, k)])
+            near = tree.query_ball_point(pts, r=max(0.5 * data["width"], 0.5))
+            count = len(set().union(*near)) if len(near) else 0
+            extra[(u, v)] = count / (1.3 * data["width"]) * 1.34
+
+        def weight(a, b, data):
+            return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)
+
+        for i in blocked:
+            st.stuck[i] = 0.0
+            nodes, at = self._route_nodes.get(int(st.route[i]), ([], np.zeros(0)))
+            if len(nodes) < 2:
+                continue
+            passed = int(np.searchsorted(at, st.progress[i], side="right")) - 1
+            passed = min(max(passed, 0), len(nodes) - 2)
+            rest = nodes[passed:]
+            try:
+                alt = nx.shortest_path(g, rest[0], rest[-1], weight=weight)
+            except (nx.NetworkXNoPath, nx.NodeNotFound):
+                continue
+            if alt == rest or len(alt) < 2:
+                continue
+            # keep any later destinations of the route after the last node
+            line = np.vstack([st.pos1[i][None, :], self.routes.raw_path(alt)])
+            rid = self.table.add(line)
+            self._remember_nodes(rid, alt)
+            st.route[i] = rid
+            st.segment[i] = self.table.start[rid]
+            st.progress[i] = self.table.s0[rid]
+            st.reroutes[i] += 1
