@@ -271,6 +271,42 @@ def derive_all(gait_dir: Path) -> tuple[np.ndarray, dict, dict]:
     return angles, {"header": header, "datasets": meta}, norm
 
 
+def cross_check(gait_dir: Path, angles: np.ndarray, meta: dict, norm: dict) -> dict:
+    """Derived data against independent references (printed, not shipped).
+
+    Knee flexion (thigh − shank elevation) and ankle dorsiflexion (foot − shank) of
+    ``level_natural`` against Winter (1991) natural cadence; level step lengths (half
+    strides) against the WBDS step-length/speed fit.
+    """
+    import pandas as pd
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        winter = pd.read_excel(gait_dir / "winter1991_slow_natural_fast_cadence.xlsx",
+                               sheet_name="Joint Angles Natural Cadence")
+    winter = winter[pd.to_numeric(winter["Percent Stride"], errors="coerce").notna()]
+    t = winter["Percent Stride"].to_numpy(float) / 100
+    names = [m["name"] for m in meta["datasets"]]
+    curve = np.rad2deg(angles[names.index("level_natural")].astype(float))
+    grid = np.arange(N_SAMPLES + 1) / N_SAMPLES
+    ours = {k: np.interp(t, grid, np.append(curve[:, k], curve[0, k])) for k in range(3)}
+    out = {}
+    for joint, mine in (("knee", ours[2] - ours[1]), ("ankle", ours[0] - ours[1])):
+        ref = winter[f"{joint.capitalize()} Mean"].to_numpy(float)
+        out[joint] = {
+            "rms_deg": float(np.sqrt(np.mean((mine - ref) ** 2))),
+            "corr": float(np.corrcoef(mine, ref)[0, 1]),
+            "mean_diff_deg": float(np.mean(mine - ref)),
+        }
+    fit = norm["step_length_vs_speed"]
+    out["step_length_vs_wbds"] = {
+        m["name"]: float(m["stride_length"] * m["body_height"] / 2
+                         - (fit["intercept_m"] + fit["slope_s"] * m["speed"]))
+        for m in meta["datasets"] if m["kind"] == "level"
+    }
+    return out
+
+
 def _fields(meta: dict) -> dict:
     """Metadata in the form the npz stores (ElevationDataset fields only)."""
     keep = ("name", "kind", "speed", "body_height", "stride_length", "step_height",
@@ -313,6 +349,13 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     angles, meta, norm = derive_all(args.gait_dir)
     print_table(angles, meta)
+    check = cross_check(args.gait_dir, angles, meta, norm)
+    for joint in ("knee", "ankle"):
+        c = check[joint]
+        print(f"level_natural {joint} vs Winter 1991 natural cadence: RMS {c['rms_deg']:.1f} deg, "
+              f"r = {c['corr']:.3f}, mean difference {c['mean_diff_deg']:+.1f} deg")
+    diffs = ", ".join(f"{k} {v * 100:+.1f}" for k, v in check["step_length_vs_wbds"].items())
+    print(f"step length minus WBDS fit at the same speed [cm]: {diffs}")
     if args.check:
         with np.load(args.out_dir / "elevation_datasets.npz") as shipped:
             same = np.array_equal(shipped["angles"], angles) and json.loads(

@@ -81,3 +81,15 @@ def test_level_kinematics_reproduce_measured_strides(derived):
     for m in meta["datasets"]:
         if m["kind"] == "level":
             assert m["fk_step_length"] == pytest.approx(m["stride_length"] / 2, rel=0.03)
+
+
+def test_natural_walk_agrees_with_winter_and_wbds(script, derived):
+    angles, meta, norm = derived
+    check = script.cross_check(GAIT_DIR, angles, meta, norm)
+    # Knee from the elevation angles vs Winter (1991) natural cadence: same curve.
+    assert check["knee"]["rms_deg"] < 4 and check["knee"]["corr"] > 0.98
+    # Ankle: same shape; zero differs (Winter's anatomical zero vs our flat foot).
+    assert check["ankle"]["corr"] > 0.9 and abs(check["ankle"]["mean_diff_deg"]) < 8
+    # Bovi's level step lengths lie within ~2.5 residual SDs of the WBDS speed fit.
+    sd = norm["step_length_vs_speed"]["residual_sd_m"]
+    assert all(abs(d) < 2.5 * sd for d in check["step_length_vs_wbds"].values())
