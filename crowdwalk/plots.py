@@ -24,3 +24,244 @@ def _save(fig, out: str | Path) -> Path:
     fig.savefig(out, dpi=120, bbox_inches="tight")
     _pyplot().close(fig)
     return out
+
+
+# --- viewer / report plots (issue 6) ---------------------------------------------------
+
+
+def _as_curves(values, n_points: int, owner: str, field: str):
+    """(c, m) float array from one curve (m,) or several (c, m)."""
+    import numpy as np
+
+    from crowdwalk.errors import invalid
+
+    arr = np.atleast_2d(np.asarray(values, dtype=float))
+    if arr.ndim != 2 or arr.shape[1] != n_points:
+        raise invalid(owner, field, f"shaped ({n_points},) or (curves, {n_points})", arr.shape)
+    return arr
+
+
+def best_step_length(step_length, efficiency):
+    """Step length [m] of the highest efficiency of each curve, shape (c,).
+
+    Parameters
+    ----------
+    step_length : (m,) float
+        Step lengths [m].
+    efficiency : (m,) or (c, m) float
+        Chen & Li's efficiency ``step length / E`` (Eq. 5) of each step length.
+    """
+    import numpy as np
+
+    x = np.asarray(step_length, dtype=float)
+    eff = _as_curves(efficiency, len(x), "plot_efficiency_curve", "efficiency")
+    return x[np.nanargmax(eff, axis=1)]
+
+
+def plot_efficiency_curve(
+    step_length,
+    efficiency,
+    out,
+    *,
+    labels=None,
+    unit: str = "m per J/kg",
+    reference: tuple[float, float] | None = (0.65, 0.78),
+    title: str = "Walking efficiency against step length (Chen & Li, Eq. 5, Fig. 2)",
+):
+    """The planner's efficiency curve: efficiency against step length, optimum marked.
+
+    Parameters
+    ----------
+    step_length : (m,) float
+        Step lengths [m].
+    efficiency : (m,) or (c, m) float
+        Efficiency ``step length / E`` of each step length, one row per curve (e.g. per
+        walking speed or per energy-model variant), in ``unit``.
+    out : path
+        PNG file.
+    labels : sequence of str, optional
+        Curve labels (c,).
+    reference : (float, float), optional
+        Measured preferred step-length range [m] shaded for comparison (default: 0.65-0.78 m
+        at 1.34 m/s, ../shared/DESIGN.md); None for no band.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+
+    from crowdwalk.errors import invalid
+
+    x = np.asarray(step_length, dtype=float)
+    eff = _as_curves(efficiency, len(x), "plot_efficiency_curve", "efficiency")
+    if labels is not None and len(labels) != len(eff):
+        raise invalid("plot_efficiency_curve", "labels", f"{len(eff)} labels", len(labels))
+    best = best_step_length(x, eff)
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    if reference is not None:
+        ax.axvspan(*reference, color="0.88", label="measured preferred step length")
+    for i, curve in enumerate(eff):
+        label = labels[i] if labels is not None else None
+        (line,) = ax.plot(x, curve, lw=2, label=label)
+        ax.plot(best[i], np.nanmax(curve), "o", color=line.get_color())
+        ax.annotate(f"{best[i]:.2f} m", (best[i], np.nanmax(curve)), textcoords="offset points",
+                    xytext=(4, 6), color=line.get_color())
+    ax.set_xlabel("step length [m]")
+    ax.set_ylabel(f"efficiency [{unit}]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    if labels is not None or reference is not None:
+        ax.legend(fontsize=8)
+    return _save(fig, out)
+
+
+def plot_planner_comparison(metrics, out, *, units=None, title="Planned against unplanned walkers"):
+    """Planned vs unplanned (or any planners): one panel per metric, a box per planner with
+    every agent's value on top, the median printed.
+
+    Parameters
+    ----------
+    metrics : mapping of metric name -> mapping of planner -> (n_agents,) float
+        e.g. ``{"energy per metre": {"best_first": e1, "fixed": e2}, "travel time": ...}``
+        from the runs' ``summary.json``.
+    out : path
+        PNG file.
+    units : mapping of metric name -> unit string, optional
+        Shown on each y axis.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+
+    from crowdwalk.errors import invalid
+
+    if not metrics:
+        raise invalid("plot_planner_comparison", "metrics", "a non-empty mapping", metrics)
+    units = units or {}
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(metrics), figsize=(3.2 * len(metrics), 3.6), squeeze=False)
+    rng = np.random.default_rng(0)  # jitter of the dots only
+    for ax, (metric, groups) in zip(axes[0], metrics.items(), strict=True):
+        names = list(groups)
+        data = [np.asarray(groups[n], dtype=float) for n in names]
+        data = [d[np.isfinite(d)] for d in data]
+        if any(d.size == 0 for d in data):
+            raise invalid("plot_planner_comparison", metric, "finite values for every planner",
+                          {n: d.size for n, d in zip(names, data, strict=True)})
+        ax.boxplot(data, widths=0.5, showfliers=False)
+        ax.set_xticks(range(1, len(names) + 1), names)
+        for i, d in enumerate(data, start=1):
+            ax.plot(i + rng.uniform(-0.15, 0.15, d.size), d, ".", alpha=0.5, ms=4)
+            ax.annotate(f"{np.median(d):.3g}", (i, np.median(d)), xytext=(18, 0),
+                        textcoords="offset points", va="center", fontsize=8)
+        unit = units.get(metric)
+        ax.set_ylabel(f"{metric} [{unit}]" if unit else metric)
+        ax.grid(alpha=0.3, axis="y")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, out)
+
+
+def plot_gait_curves(stride, generated, measured, out, *, measured_stride=None,
+                     title="Generated elevation angles against measured data"):
+    """Generated gait curves vs measured data: one panel per segment, elevation angle
+    against the normalised stride, generated curve(s) over the measured mean ± 1 SD band.
+
+    Parameters
+    ----------
+    stride : (F,) float
+        Normalised stride t ∈ [0, 1) of the generated curves (t = 0 at heel strike).
+    generated : mapping of segment -> (F,) or (c, F) float
+        Generated elevation angles [rad] (e.g. ``{"thigh": ..., "shank": ..., "foot": ...}``).
+    measured : mapping of segment -> (mean (M,), sd (M,)) float
+        Measured mean and standard deviation [rad] of the same segments.
+    out : path
+        PNG file.
+    measured_stride : (M,) float, optional
+        Stride samples of the measured curves; ``stride`` when omitted.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+
+    from crowdwalk.errors import invalid
+
+    t = np.asarray(stride, dtype=float)
+    tm = t if measured_stride is None else np.asarray(measured_stride, dtype=float)
+    if not generated:
+        raise invalid("plot_gait_curves", "generated", "a non-empty mapping", generated)
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(generated), figsize=(3.4 * len(generated), 3.2),
+                             squeeze=False)
+    for ax, (segment, curves) in zip(axes[0], generated.items(), strict=True):
+        curves = _as_curves(curves, len(t), "plot_gait_curves", f"generated[{segment!r}]")
+        if segment in measured:
+            mean, sd = (np.asarray(a, dtype=float) for a in measured[segment])
+            if mean.shape != tm.shape or sd.shape != tm.shape:
+                raise invalid("plot_gait_curves", f"measured[{segment!r}]",
+                              f"(mean, sd) each shaped {tm.shape} [rad]", (mean.shape, sd.shape))
+            ax.fill_between(100 * tm, np.degrees(mean - sd), np.degrees(mean + sd),
+                            color="0.85", label="measured ± 1 SD")
+            ax.plot(100 * tm, np.degrees(mean), color="0.4", lw=1, ls="--",
+                    label="measured mean")
+        for i, curve in enumerate(curves):
+            ax.plot(100 * t, np.degrees(curve), lw=1.5, color="C0", alpha=1.0 if i == 0 else 0.5,
+                    label="generated" if i == 0 else None)
+        ax.set_title(segment, fontsize=10)
+        ax.set_xlabel("stride [%]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("elevation angle [deg]")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, out)
+
+
+def plot_footstep_map(x, y, values, out, *, walkable_area=None, label="step energy",
+                      title="Footholds seen from above"):
+    """Every foothold seen from above, coloured by a per-step value (e.g. energy).
+
+    Parameters
+    ----------
+    x, y : (n,) float
+        Foothold positions [m].
+    values : (n,) float
+        Colour value per foothold (unit in ``label``).
+    out : path
+        PNG file.
+    walkable_area : shapely geometry, optional
+        Outline drawn underneath [m].
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+    import shapely
+
+    from crowdwalk.errors import invalid
+
+    x, y, values = (np.asarray(a, dtype=float) for a in (x, y, values))
+    if not (x.shape == y.shape == values.shape) or x.ndim != 1:
+        raise invalid("plot_footstep_map", "x", "1-D and as long as y and values",
+                      (x.shape, y.shape, values.shape))
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 5.0))
+    if walkable_area is not None:
+        for ring in shapely.get_parts(shapely.boundary(walkable_area)):
+            for line in shapely.get_parts(ring):
+                xy = np.asarray(line.coords)
+                ax.plot(xy[:, 0], xy[:, 1], color="#1971c2", lw=1)
+    points = ax.scatter(x, y, c=values, s=4, cmap="plasma")
+    fig.colorbar(points, ax=ax, label=label)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title, fontsize=10)
+    return _save(fig, out)
