@@ -157,6 +157,9 @@ def spawn_points(area, n: int, rng: np.random.Generator, min_spacing: float = 0.
                   f"at min_spacing {min_spacing} m", n)
 
 
+_WALL_HALF_THICKNESS = 5e-4  # [m] walls cut the walkable area as 1 mm wide strips
+
+
 class RouteGraph:
     """Places and corridors as a networkx DiGraph with travel costs from the terrain.
 
@@ -314,11 +317,23 @@ class RouteGraph:
     @functools.cached_property
     def walkable_area(self):
         """Union of the corridors (centre lines buffered by half their width) and the node
-        areas, as one shapely geometry [m]."""
-        parts = [c_line.buffer(d["width"] / 2)
-                 for _, _, d in self.graph.edges(data=True) for c_line in [d["geometry"]]]
+        areas, as one shapely geometry [m]; on a terrain, minus the ground beyond every
+        vertical change higher than ``costs.max_step`` (walls, tall obstacles): the
+        corridors are cut along such edges and only the pieces that carry a corridor centre
+        line or a node are kept."""
+        parts = [d["geometry"].buffer(d["width"] / 2) for *_, d in self.graph.edges(data=True)]
         parts += [self.node_area(n) for n in self.graph.nodes]
         geom = shapely.union_all(parts)
+        if self.terrain is not None:
+            walls = self.terrain.steps(self.costs.max_step)
+            if len(walls):
+                cut = shapely.union_all(shapely.linestrings(walls)).buffer(
+                    _WALL_HALF_THICKNESS, cap_style="flat")
+                pieces = shapely.get_parts(geom.difference(cut))
+                carriers = shapely.union_all(
+                    [d["geometry"] for *_, d in self.graph.edges(data=True)]
+                    + [Point(p.x, p.y) for p in self.places.values()])
+                geom = shapely.union_all(pieces[shapely.intersects(pieces, carriers)])
         shapely.prepare(geom)
         return geom
 

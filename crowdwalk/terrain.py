@@ -782,13 +782,24 @@ class Terrain:
 
     # -- mesh --
 
-    def mesh(self, cell: float | None = None) -> trimesh.Trimesh:
+    @functools.cached_property
+    def _arrangement(self):
+        """All feature outlines and the extent, noded into one line network [m]."""
+        lines = [_ring_segments(self.area)] + [f.outline() for f in self.features]
+        return shapely.union_all(shapely.linestrings(np.concatenate(lines)))
+
+    def steps(self, min_height: float = 0.0) -> np.ndarray:
+        """Edges where the ground changes height by more than ``min_height`` [m] (risers,
+        curbs, block sides, walls) as segments (m, 2, 2) [m]."""
+        a, b, zla, zlb, zra, zrb = self._edge_steps(self._arrangement)
+        big = np.maximum(np.abs(zla - zra), np.abs(zlb - zrb)) > min_height
+        return np.stack([a[big], b[big]], axis=1)
+
+    def mesh(self) -> trimesh.Trimesh:
         """The whole ground as one triangle mesh [m]: treads, tops and slopes as exact
         planar faces, vertical risers and block sides, rough and mesh features by their
         own triangles (clipped to where they are visible)."""
-        lines = [_ring_segments(self.area)] + [f.outline() for f in self.features]
-        segs = np.concatenate(lines)
-        noded = shapely.union_all(shapely.linestrings(segs))
+        noded = self._arrangement
         faces = np.asarray(shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))))
         faces = faces[shapely.area(faces) > 1e-12]
         rep = shapely.get_coordinates(shapely.point_on_surface(faces))
@@ -843,10 +854,12 @@ class Terrain:
         coords = shapely.get_coordinates(parts).reshape(-1, 4, 2)[:, :3]
         return coords, rep[idx]
 
-    def _walls(self, noded) -> np.ndarray:
+    def _edge_steps(self, noded):
+        """Noded edges with different heights on their two sides: end points a, b (m, 2)
+        and the heights at a and b on the left and right side (m,) each [m]."""
         segs = _ring_segments(noded)
         if len(segs) == 0:
-            return np.zeros((0, 3, 3))
+            return (np.zeros((0, 2)),) * 2 + (np.zeros(0),) * 4
         a, b = segs[:, 0], segs[:, 1]
         d = b - a
         length = np.linalg.norm(d, axis=1)
@@ -864,7 +877,11 @@ class Terrain:
         n = len(a)
         zla, zlb, zra, zrb = zl[:n], zl[n:], zr[:n], zr[n:]
         diff = (np.abs(zla - zra) > 1e-9) | (np.abs(zlb - zrb) > 1e-9)
-        a, b, zla, zlb, zra, zrb = (x[diff] for x in (a, b, zla, zlb, zra, zrb))
+        return tuple(x[diff] for x in (a, b, zla, zlb, zra, zrb))
+
+    def _walls(self, noded) -> np.ndarray:
+        """Vertical wall triangles (m, 3, 3) [m] along every height change."""
+        a, b, zla, zlb, zra, zrb = self._edge_steps(noded)
         pa_l = np.column_stack([a, zla])
         pb_l = np.column_stack([b, zlb])
         pa_r = np.column_stack([a, zra])

@@ -187,3 +187,14 @@ def test_error_messages():
         RouteGraph([a, b], [Corridor("a", "b", 1.0)], wall)
     with pytest.raises(InputError, match=r"RouteGraph\.nodes\['out'\]\.xy must be inside"):
         RouteGraph([a, Place("out", 30, 2)], [], ter)
+
+
+def test_walkable_area_excludes_tall_obstacles_but_not_curbs():
+    ter = Terrain(EXTENT, 0.0, (Block.box((5, 1.5), (1, 1), 1.0),
+                                Block.box((8, 1.5), (1, 1), 0.15)))
+    routes = RouteGraph([Place("a", 0, 0), Place("b", 12, 0)], [Corridor("a", "b", 4.0)], ter)
+    w = routes.walkable_area
+    assert not w.intersects(Point(5, 1.5)) and not w.intersects(Point(5, 1.95))
+    assert w.covers(Point(5, -1.5)) and w.covers(Point(8, 1.5)) and w.covers(Point(5.6, 1.5))
+    assert w.area == pytest.approx(routes.graph.edges["a", "b"]["geometry"].buffer(2).area - 1.0,
+                                   abs=0.02)
