@@ -311,14 +311,37 @@ def rotation_z(angle: np.ndarray) -> np.ndarray:
 
 
 def matrix_to_quaternion(matrix: np.ndarray) -> np.ndarray:
-    """Unit quaternions wxyz (..., 4) of rotation matrices (..., 3, 3), w ≥ 0."""
-    from scipy.spatial.transform import Rotation
+    """Unit quaternions wxyz (..., 4) of rotation matrices (..., 3, 3), w ≥ 0.
 
-    shape = matrix.shape[:-2]
-    xyzw = Rotation.from_matrix(matrix.reshape(-1, 3, 3)).as_quat()
-    wxyz = xyzw[:, [3, 0, 1, 2]]
-    wxyz *= np.where(wxyz[:, :1] < 0, -1.0, 1.0)
-    return wxyz.reshape(shape + (4,))
+    Shepperd's method: each row uses the largest of |w|, |x|, |y|, |z| as the pivot, so the
+    conversion is well conditioned for every rotation.
+    """
+    m = np.asarray(matrix, dtype=float)
+    shape = m.shape[:-2]
+    m = m.reshape(-1, 3, 3)
+    m00, m01, m02 = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2]
+    m10, m11, m12 = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2]
+    m20, m21, m22 = m[:, 2, 0], m[:, 2, 1], m[:, 2, 2]
+    squares = 0.25 * np.stack(
+        [1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22],
+        axis=1,
+    )
+    pivot = np.argmax(squares, axis=1)
+    big = np.sqrt(np.maximum(squares[np.arange(len(m)), pivot], 1e-300))
+    f = 0.25 / big
+    candidates = np.stack(
+        [
+            np.stack([big, (m21 - m12) * f, (m02 - m20) * f, (m10 - m01) * f], axis=1),
+            np.stack([(m21 - m12) * f, big, (m01 + m10) * f, (m02 + m20) * f], axis=1),
+            np.stack([(m02 - m20) * f, (m01 + m10) * f, big, (m12 + m21) * f], axis=1),
+            np.stack([(m10 - m01) * f, (m02 + m20) * f, (m12 + m21) * f, big], axis=1),
+        ],
+        axis=1,
+    )
+    q = candidates[np.arange(len(m)), pivot]
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    return q.reshape(shape + (4,))
 
 
 def quaternion_to_matrix(quaternion: np.ndarray) -> np.ndarray:

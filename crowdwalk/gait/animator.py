@@ -230,9 +230,9 @@ class Animator:
         self._slope = np.zeros(n)
         self._spin = np.zeros(n)
         self._toe_out = np.full(n, self.style.toe_out)
+        self._toe_start = np.full(n, self.style.toe_out)
         self._start = np.zeros((n, 3))
         self._target = np.zeros((n, 3))
-        self._land_yaw = np.zeros(n)
         self._land_slope = np.zeros(n)
         self._d0 = np.zeros((n, 3))
         self._d1 = np.zeros((n, 3))
@@ -241,6 +241,8 @@ class Animator:
         self._hip_fix = np.zeros((n, 3))
         self._warm_ankle = np.zeros((n, 2))
         self._warm_hip = np.zeros((n, 3))
+        self._jac_ankle = np.full((n, 2, 2), np.nan)
+        self._jac_hip = np.full((n, 3, 3), np.nan)
         self._has_pose = np.zeros(n, bool)
         self._prev_root = np.zeros((n, 3))
         self._prev_rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
@@ -276,23 +278,43 @@ class Animator:
         had = ~first
         liftoff = np.zeros((a.size, 3))
         root_end = np.zeros((a.size, 3))
+        landed_heel = np.zeros((a.size, 3))
+        landed_yaw = np.zeros(a.size)
+        old_yaw = np.zeros(a.size)
         if had.any():
             ah = a[had]
-            end = self._walk(ah, np.full(ah.size, _PHASE_END), corrected=True)
-            old_stance = np.where(self._stance_left[ah], LEG_JOINTS[0, 2], LEG_JOINTS[1, 2])
-            liftoff[had] = end.positions[np.arange(ah.size), old_stance]
+            k = ah.size
+            end = self._walk(ah, np.full(k, _PHASE_END), corrected=True)
+            old_st = np.where(self._stance_left[ah], 0, 1)
+            liftoff[had] = end.positions[np.arange(k), LEG_JOINTS[old_st, 2]]
             root_end[had] = end.root_position
+            feet = foot_points(self.body.take(ah), end.positions, end.rotations)
+            new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
+            landed_heel[had] = new_st[:, 0]
+            toward = new_st[:, 1] - new_st[:, 0]
+            landed_yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
+            old_yaw[had] = self._yaw[ah] + self._spin[ah]
 
-        # The new stance foot: where the previous swing foot landed (same yaw), or flat.
+        # The new stance foot: exactly where and how the previous swing foot landed (its
+        # heel is the contact point, so nothing slides at the swap), or the commanded
+        # foothold with default toe-out for an agent's first step.
         toe_out = cmd.toe_out if cmd.toe_out is not None else np.full(a.size, self.style.toe_out)
-        yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, self._land_yaw[a])
+        yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, landed_yaw)
         slope = self._slope_at(body, cmd.start, yaw)
         stance = StanceFoot.from_foothold(body, cmd.start, yaw, slope)
+        if had.any():
+            d = np.stack([np.cos(yaw) * np.cos(slope), np.sin(yaw) * np.cos(slope),
+                          np.sin(slope)], axis=1)  # fmt: skip
+            ball = landed_heel + (body.heel_offset + body.ball_offset)[:, None] * d
+            stance = StanceFoot(np.where(had[:, None], ball, stance.ball), yaw, slope)
+        # The swing foot leaves with the yaw it had as stance foot, then turns to toe-out.
+        psi0 = np.where(first, cmd.heading, self._psi1[a])
+        self._toe_start[a] = np.where(had, side_sw * _wrap(old_yaw - psi0), toe_out)
 
         data = self.interp.request(body, cmd.step_length, cmd.step_height)
         self._angles[a] = data.angles
         self._stance_fraction[a] = data.stance_fraction
-        self._psi0[a] = np.where(first, cmd.heading, self._psi1[a])
+        self._psi0[a] = psi0
         self._psi1[a] = cmd.heading
         self._t0[a] = cmd.time
         self._duration[a] = cmd.duration
@@ -334,7 +356,6 @@ class Animator:
         ankle_land = _stance_foot_pose(body, land, land_pitch)[1]
         self._d0[a] = np.where(had[:, None], liftoff - ankle0, 0.0)
         self._d1[a] = ankle_land - ankle1
-        self._land_yaw[a] = land_yaw
         self._land_slope[a] = land_slope
 
         # Swing clearance: would the corrected data-driven foot touch the ground?
@@ -377,6 +398,8 @@ class Animator:
         ok = walked.converged
         self._warm_ankle[a] = np.where(ok[:, None], walked.warm.ankle, self._warm_ankle[a])
         self._warm_hip[a] = np.where(ok[:, None], walked.warm.hip, self._warm_hip[a])
+        self._jac_ankle[a] = np.where(ok[:, None, None], walked.warm.ankle_jacobian, np.nan)
+        self._jac_hip[a] = np.where(ok[:, None, None], walked.warm.hip_jacobian, np.nan)
         keep = ~ok & self._has_pose[a]
         root = np.where(keep[:, None], self._prev_root[a], walked.root_position)
         rot = np.where(keep[:, None, None], self._prev_rot[a], walked.root_rotation)
@@ -450,6 +473,8 @@ class Animator:
 
         self._warm_ankle[a] = 0.0
         self._warm_hip[a] = 0.0
+        self._jac_ankle[a] = np.nan
+        self._jac_hip[a] = np.nan
         ok = had & self._has_pose[a]
         if not ok.any():
             return
@@ -484,9 +509,11 @@ class Animator:
         hip_fix = None
         if corrected:
             hip_fix = self._hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
-        warm = WarmStart(self._warm_ankle[a], self._warm_hip[a])
+        warm = WarmStart(self._warm_ankle[a], self._warm_hip[a], self._jac_ankle[a],
+                         self._jac_hip[a])  # fmt: skip
+        toe_out = self._toe_start[a] + (self._toe_out[a] - self._toe_start[a]) * _smoothstep(tau)
         return elevwalker_pose(
-            body, self._stance_left[a], phase, st, sw, psi, foot, self._toe_out[a], warm,
+            body, self._stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
             self.style, self._stance_fraction[a], swing_offset=offset, swing_target=target,
             swing_blend=blend, stance_hip_offset=hip_fix,
         )  # fmt: skip
@@ -508,8 +535,12 @@ class Animator:
             arr = getattr(walked, name).copy()
             arr[sink] = getattr(again, name)
             merged[name] = arr
-        warm = WarmStart(walked.warm.ankle.copy(), walked.warm.hip.copy())
-        warm.ankle[sink], warm.hip[sink] = again.warm.ankle, again.warm.hip
+        parts = [getattr(walked.warm, f).copy() for f in
+                 ("ankle", "hip", "ankle_jacobian", "hip_jacobian")]  # fmt: skip
+        for part, f in zip(parts, ("ankle", "hip", "ankle_jacobian", "hip_jacobian"),
+                           strict=True):  # fmt: skip
+            part[sink] = getattr(again.warm, f)
+        warm = WarmStart(*parts)
         return type(walked)(warm=warm, **merged), sink.size
 
     def _standing(self, a: np.ndarray):

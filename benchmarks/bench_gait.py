@@ -1,0 +1,79 @@
+"""Gait benchmark: agent-poses per second of one vectorised Animator.pose call.
+
+Drives n agents (bodies 1.50–1.95 m, speeds 1.0–1.6 m/s) along straight paths with
+MetaGait on flat ground, then times ``Animator.pose`` for all of them at once, and the
+per-step ``Animator.command`` (ElevInterp + end-of-step walker evaluations). Prints a table.
+
+Usage: ``python benchmarks/bench_gait.py [n ...]`` (default 100 1000).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from crowdwalk.body import Body
+from crowdwalk.gait.animator import Animator
+from crowdwalk.gait.metagait import MetaGait, level_step_length
+
+
+def _flat(xy: np.ndarray) -> np.ndarray:
+    return np.zeros(len(xy))
+
+
+def bench(n: int, frames: int = 20, fps: float = 25.0) -> dict[str, float]:
+    """Time n agents: command (first steps) and pose (``frames`` calls)."""
+    rng = np.random.default_rng(0)
+    body = Body.from_heights(rng.uniform(1.50, 1.95, n))
+    speed = rng.uniform(1.0, 1.6, n)
+    start = np.column_stack([rng.uniform(0, 50, n), rng.uniform(0, 50, n)])
+    heading = rng.uniform(-np.pi, np.pi, n)
+    ahead = start + 60.0 * np.column_stack([np.cos(heading), np.sin(heading)])
+    paths = np.stack([start, ahead], axis=1)
+    animator = Animator(body, ground=_flat)
+    metagait = MetaGait(n, base_toe_out=animator.style.toe_out)
+    level = level_step_length(body.leg_length, speed)
+    stance = np.column_stack([start, np.zeros(n)])
+    t0 = time.perf_counter()
+    cmd = metagait.next_step(np.arange(n), np.zeros(n), stance, np.ones(n, int), paths, level,
+                             speed, body.height, _flat)
+    animator.command(cmd)
+    t_first = time.perf_counter() - t0
+    second = metagait.next_step(np.arange(n), cmd.time + cmd.duration, cmd.target,
+                                np.zeros(n, int), paths, level, speed, body.height, _flat)
+    t0 = time.perf_counter()
+    animator.command(second)
+    t_command = time.perf_counter() - t0
+    times = []
+    for f in range(frames):
+        t = float(second.time.min()) + f / fps
+        t0 = time.perf_counter()
+        frame = animator.pose(t)
+        times.append(time.perf_counter() - t0)
+        assert np.isfinite(frame.positions).all()
+    per_call = float(np.median(times))
+    return {
+        "n": n,
+        "pose_ms": 1e3 * per_call,
+        "poses_per_s": n / per_call,
+        "command_ms": 1e3 * t_command,
+        "first_command_ms": 1e3 * t_first,
+        "fallbacks": animator.stats["fallbacks"],
+    }
+
+
+def main(argv: list[str]) -> None:
+    sizes = [int(a) for a in argv] or [100, 1000]
+    print(f"{'agents':>7} {'pose call [ms]':>15} {'agent-poses/s':>14} "
+          f"{'step command [ms]':>18} {'first command [ms]':>19} {'fallbacks':>9}")  # fmt: skip
+    for n in sizes:
+        r = bench(n)
+        print(f"{r['n']:>7d} {r['pose_ms']:>15.1f} {r['poses_per_s']:>14,.0f} "
+              f"{r['command_ms']:>18.1f} {r['first_command_ms']:>19.1f} {r['fallbacks']:>9d}")
+    print("target: >= 20,000 agent-poses/s for 1,000 agents in one call (issue 4, item 9)")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
