@@ -554,7 +554,7 @@ class ElevInterp:
                 w0 /= w0.sum(axis=1, keepdims=True)
                 s0 = _blend_step(space, t_rows, w0, props[rows])
                 w1, s1, e1 = _gauss_newton(
-                    lambda ww, t=t_rows, r=rows: _blend_step(space, t, ww, props[r]),
+                    lambda ww, sel, t=t_rows, r=rows: _blend_step(space, t[sel], ww, props[r[sel]]),
                     w0, target[rows], s0, np.linalg.norm(s0 - target[rows], axis=1),
                     0.1 * tol[rows], cfg.max_iterations, margin=margin,
                 )
@@ -582,40 +582,48 @@ def _blend_step(space: _ShapeSpace, simplex: np.ndarray, weights: np.ndarray,
 def _gauss_newton(produce, w, target, step, err, tol, iterations, margin=0.2, h=1e-6):
     """Batched Gauss–Newton on two free barycentric weights (third = 1 − sum).
 
+    ``produce(weights (m, 3), rows (m,))`` gives the steps of the blends for those rows.
     Weights stay ≥ ``-margin`` (a step is shortened to the bound): the blend may leave the
     triangle a little but never becomes a wild extrapolation, which sliver triangles of
     near-collinear datasets would otherwise invite. A step that does not reduce the error
-    is halved (up to four times). Returns the best weights, their steps and errors.
+    is halved (up to four times); a row that cannot improve stops. Returns the best
+    weights, their steps and errors.
     """
+    w, step, err = w.copy(), step.copy(), err.copy()
+    live = err > tol
     for _ in range(iterations):
-        active = err > tol
-        if not np.any(active):
+        rows = np.flatnonzero(live)
+        if len(rows) == 0:
             break
-        r = step - target  # (k, 2)
+        wl, sl_ = w[rows], step[rows]
         cols = []
         for j in range(2):
-            dw = np.zeros_like(w)
+            dw = np.zeros_like(wl)
             dw[:, j], dw[:, 2] = h, -h
-            cols.append((produce(w + dw) - step) / h)
-        jac = np.stack(cols, axis=-1)  # (k, 2, 2)
+            cols.append((produce(wl + dw, rows) - sl_) / h)
+        jac = np.stack(cols, axis=-1)  # (m, 2, 2)
         jtj = np.einsum("kij,kil->kjl", jac, jac)
         damp = 1e-12 + 1e-9 * np.trace(jtj, axis1=1, axis2=2)
         jtj = jtj + damp[:, None, None] * np.eye(2)
-        delta = -np.linalg.solve(jtj, np.einsum("kij,ki->kj", jac, r)[..., None])[..., 0]
+        rhs = np.einsum("kij,ki->kj", jac, sl_ - target[rows])
+        delta = -np.linalg.solve(jtj, rhs[..., None])[..., 0]
         full = np.concatenate([delta, -delta.sum(axis=1, keepdims=True)], axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            room = np.where(full < 0, (w + margin) / -full, np.inf)
+            room = np.where(full < 0, (wl + margin) / -full, np.inf)
         scale = np.clip(np.min(room, axis=1), 0.0, 1.0)
+        pending = np.ones(len(rows), bool)
         for _ in range(5):
-            trial = w + scale[:, None] * full
-            t_step = produce(trial)
-            t_err = np.linalg.norm(t_step - target, axis=1)
-            better = active & (t_err < err)
-            w = np.where(better[:, None], trial, w)
-            step = np.where(better[:, None], t_step, step)
-            err = np.where(better, t_err, err)
-            active = active & ~better
-            if not np.any(active):
+            sub = rows[pending]
+            trial = w[sub] + scale[pending, None] * full[pending]
+            t_step = produce(trial, sub)
+            t_err = np.linalg.norm(t_step - target[sub], axis=1)
+            better = t_err < err[sub]
+            take = sub[better]
+            w[take], step[take], err[take] = trial[better], t_step[better], t_err[better]
+            pending[np.flatnonzero(pending)[better]] = False
+            if not pending.any():
                 break
-            scale = np.where(active, 0.5 * scale, scale)
+            scale = np.where(pending, 0.5 * scale, scale)
+        live[rows[pending]] = False  # no progress: stalled
+        live &= err > tol
     return w, step, err
