@@ -290,8 +290,10 @@ def _leg_of(props: np.ndarray) -> SagittalLeg:
 class _ShapeSpace:
     """Triangulated Height/Length space of one body shape, lengths in leg lengths."""
 
-    def __init__(self, shape: np.ndarray, curves: np.ndarray, phases: np.ndarray):
+    def __init__(self, shape: np.ndarray, curves: np.ndarray, phases: np.ndarray,
+                 spacing: float):
         self.shape = shape
+        self.spacing = spacing  # inserted datasets at least this far apart [leg lengths]
         self.capacity = max(64, 2 * len(curves))
         n, n_samples, _ = curves.shape
         self.angles = np.empty((self.capacity, n_samples, 4))
@@ -510,9 +512,8 @@ class ElevInterp:
         """The triangulated space of a body shape; created with the first exact shape."""
         k = tuple(int(v) for v in key)
         if k not in self._spaces:
-            space = _ShapeSpace(np.asarray(shape, dtype=float), self._curves, self._phases)
-            space.spacing = self.config.insert_spacing
-            self._spaces[k] = space
+            self._spaces[k] = _ShapeSpace(np.asarray(shape, dtype=float), self._curves,
+                                          self._phases, self.config.insert_spacing)
         return self._spaces[k]
 
     def _validate(self, sl: np.ndarray, sh: np.ndarray, dims: list[np.ndarray]) -> None:
