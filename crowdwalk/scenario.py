@@ -530,6 +530,61 @@ def _duplicate_keys(node, path=()):
     return None
 
 
+_CONSTRAINTS = {
+    "greater_than": "> {gt}",
+    "greater_than_equal": "≥ {ge}",
+    "less_than": "< {lt}",
+    "less_than_equal": "≤ {le}",
+    "literal_error": "one of {expected}",
+    "int_parsing": "an integer",
+    "int_from_float": "an integer",
+    "int_type": "an integer",
+    "float_parsing": "a number",
+    "float_type": "a number",
+    "bool_parsing": "true or false",
+    "bool_type": "true or false",
+    "string_type": "a string",
+    "too_short": "at least {min_length} item(s) long",
+    "too_long": "at most {max_length} item(s) long",
+    "list_type": "a list",
+    "tuple_type": "a list",
+    "dict_type": "a mapping",
+    "model_type": "a mapping",
+    "model_attributes_type": "a mapping",
+    "union_tag_invalid": "a known type, one of {expected_tags}",
+    "union_tag_not_found": "a mapping with a 'type' key",
+}
+
+# Units of scenario fields by key (for error messages); mean/sd/min/max take their
+# distribution's unit.
+_UNITS = {
+    "duration": "s", "dt": "s", "start": "s", "interval": "s", "rate": "1/s", "fps": "1/s",
+    "width": "m", "going": "m", "rise": "m", "length": "m", "top": "m", "base": "m",
+    "z0": "m", "z_start": "m", "z_end": "m", "cell": "m", "amplitude": "m",
+    "correlation": "m", "taper": "m", "size": "m", "heading": "deg", "incline": "deg",
+    "rotate": "deg", "body_height": "m", "free_speed": "m/s",
+}
+
+
+def _constraint(error: dict) -> str | None:
+    """The pydantic error as a "must be ..." constraint, or None if it has no such form."""
+    template = _CONSTRAINTS.get(error["type"])
+    if template is None:
+        return None
+    try:
+        return template.format(**(error.get("ctx") or {}))
+    except (KeyError, IndexError):
+        return None
+
+
+def _unit(loc: tuple) -> str:
+    keys = [p for p in loc if isinstance(p, str)]
+    for key in reversed(keys):
+        if key in _UNITS and (key == keys[-1] or key in ("body_height", "free_speed")):
+            return f" [{_UNITS[key]}]"
+    return ""
+
+
 def _fail(source: str, line: int | None, text: str) -> InputError:
     where = f"{source}:{line}" if line else source
     return InputError(f"{where}: {text}")
@@ -570,7 +625,14 @@ def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scen
         if e["type"] == "missing":
             text = f"{_loc_text(loc)} is required{more}."
             raise _fail(source, _line(root, loc[:-1]), text) from None
-        text = f"{_loc_text(loc)}: {msg}; got {_short(e.get('input'))}{more}."
+        constraint = _constraint(e)
+        got = _short(e.get("input"))
+        if e["type"] == "union_tag_invalid":
+            got = repr(e["ctx"]["tag"])
+        if constraint is not None:
+            text = f"{_loc_text(loc)} must be {constraint}{_unit(loc)}; got {got}{more}."
+        else:
+            text = f"{_loc_text(loc)}: {msg}; got {got}{more}."
         raise _fail(source, _line(root, loc), text) from None
     errs = sc.cross_errors()
     if errs:

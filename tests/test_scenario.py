@@ -124,23 +124,28 @@ def line_of(text, needle):
 
 
 @pytest.mark.parametrize("old,new,pattern,needle", [
-    ("count: 3", "count: 0", r"groups\[0\]\.count: Input should be greater than or equal to 1;"
-     r" got 0\.", "count: 0"),
+    ("count: 3", "count: 0", r"groups\[0\]\.count must be ≥ 1; got 0\.", "count: 0"),
+    ("count: 3", "count: 2.5", r"groups\[0\]\.count must be an integer; got 2\.5\.", "count"),
     ("count: 3", "count: 3\n    colour: red", r"groups\[0\]\.colour is not a known key\.",
      "colour"),
     ("destinations: [b]", "destinations: [c]",
      r"groups\[0\]\.destinations\[0\] must be one of the route nodes \['a', 'b'\]; got 'c'\.",
      "destinations"),
     ("spawn: a", "spawn: z", r"groups\[0\]\.spawn must be one of the route nodes", "spawn: z"),
-    ("rise: 0.15", "rise: -0.15", r"terrain\.features\[0\]\.rise: Input should be greater "
-     r"than 0", "rise:"),
-    ("type: stairs", "type: stair", r"terrain\.features\[0\]: Input tag 'stair' found using "
-     r"'type' does not match", "type: stair"),
-    ("duration: 10", "duration: ten", r"simulation\.duration: Input should be a valid number",
+    ("rise: 0.15", "rise: -0.15", r"terrain\.features\[0\]\.rise must be > 0\.0 \[m\]; "
+     r"got -0\.15\.", "rise:"),
+    ("type: stairs", "type: stair", r"terrain\.features\[0\] must be a known type, one of "
+     r"'block', 'stairs', .*; got 'stair'\.", "type: stair"),
+    ("duration: 10", "duration: ten", r"simulation\.duration must be a number \[s\]; got 'ten'",
      "duration"),
+    ("destinations: [b]", "destinations: [b]\n    free_speed: {mean: 1.3, sd: -1}",
+     r"groups\[0\]\.free_speed\.sd must be ≥ 0\.0 \[m/s\]; got -1\.", "free_speed"),
+    ("destinations: [b]", "destinations: [b]\n    planner: smart",
+     r"groups\[0\]\.planner must be one of 'best_first', 'fixed' or 'optimal'; got 'smart'",
+     "planner"),
     ("    count: 3\n", "", r"groups\[0\]\.count is required\.", "- name: g"),
-    ("width: 2}", "width: 2, oneway: maybe}", r"routes\.edges\[0\]\.oneway: Input should be a "
-     r"valid boolean", "oneway"),
+    ("width: 2}", "width: 2, oneway: maybe}", r"routes\.edges\[0\]\.oneway must be true or "
+     r"false; got 'maybe'", "oneway"),
     ("{from: a, to: b, width: 2}", "{from: a, to: q, width: 2}",
      r"routes\.edges\[0\]\.to must be one of the route nodes", "to: q"),
 ])
