@@ -42,4 +42,28 @@ def build_world(scenario: Scenario) -> World:
             if not terrain.area.covers(poly):
                 raise invalid(f"Scenario.groups[{i}]", "spawn",
                               f"inside the terrain extent {terrain.bounds} [m]", g.spawn)
+    _check_reachable(scenario, routes)
     return World(scenario, terrain, routes)
+
+
+def _check_reachable(scenario: Scenario, routes: RouteGraph) -> None:
+    """Every group can walk from its spawn through its destinations, in order."""
+    import numpy as np
+    from shapely.geometry import Polygon
+
+    from crowdwalk.errors import invalid
+
+    names = list(routes.graph.nodes)
+    xy = np.array([routes.node_xy(n) for n in names]).reshape(-1, 2)
+    for i, g in enumerate(scenario.groups):
+        if isinstance(g.spawn, str):
+            here = g.spawn
+        else:  # a spawn polygon joins the graph at the node nearest to it
+            centre = np.asarray(Polygon(g.spawn).representative_point().coords[0])
+            here = names[int(np.argmin(np.linalg.norm(xy - centre, axis=1)))]
+        for j, dest in enumerate(g.destinations):
+            if dest != here and here not in routes.distances_to(dest):
+                raise invalid(f"Scenario.groups[{i}]", f"destinations[{j}]",
+                              f"reachable from {here!r} (check one-way corridors and "
+                              "disconnected parts)", dest)
+            here = dest

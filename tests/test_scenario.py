@@ -179,6 +179,14 @@ def test_world_geometry_errors_are_input_errors():
         build_world(parse_scenario(text))
 
 
+def test_unreachable_destination_is_an_input_error():
+    text = mutate(MINIMAL, "width: 2}", "width: 2, oneway: true}")
+    text = mutate(text, "spawn: a", "spawn: b").replace("destinations: [b]", "destinations: [a]")
+    with pytest.raises(InputError, match=r"groups\[0\]\.destinations\[0\] must be reachable "
+                                         r"from 'b' .*; got 'a'\."):
+        build_world(parse_scenario(text))
+
+
 def test_graphml_routes_relative_to_file(tmp_path):
     sc = build_world(parse_scenario(MINIMAL))
     sc.routes.to_graphml(tmp_path / "routes.graphml")
