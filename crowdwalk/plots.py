@@ -265,3 +265,81 @@ def plot_footstep_map(x, y, values, out, *, walkable_area=None, label="step ener
     ax.set_ylabel("y [m]")
     ax.set_title(title, fontsize=10)
     return _save(fig, out)
+
+
+# --- gait data plots (issue 4: datasets, ElevInterp) ------------------------------------
+
+
+def plot_elevation_datasets(datasets, out, *, title="Sagittal elevation angles"):
+    """Foot, shank, thigh and pelvis elevation angles of datasets over the stride.
+
+    Parameters
+    ----------
+    datasets : sequence of crowdwalk.gait.datasets.ElevationDataset
+        Curves (N, 4) [rad] on t = k / N; drawn in degrees against % stride.
+    out : str or Path
+        PNG file to write.
+    """
+    import numpy as np
+
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
+    for ax, k, name in zip(axes.flat, range(4), ("foot", "shank", "thigh", "pelvis"),
+                           strict=True):
+        for d in datasets:
+            n = d.angles.shape[0]
+            pct = np.arange(n + 1) * 100.0 / n
+            curve = np.rad2deg(np.append(d.angles[:, k], d.angles[0, k]))
+            ax.plot(pct, curve, label=d.name, lw=1.4 if d.kind == "level" else 1.0,
+                    ls="-" if d.kind == "level" else "--")
+        ax.set_title(name)
+        ax.set_ylabel("elevation [deg]")
+        ax.grid(alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("stride [%] (0 = heel strike)")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(title)
+    return _save(fig, out)
+
+
+def plot_elevinterp_region(interp, leg, out, *, requests=None, title=None):
+    """ElevInterp's Height/Length space for one body: legal region, datasets, requests.
+
+    Parameters
+    ----------
+    interp : crowdwalk.gait.elevinterp.ElevInterp
+    leg : LegLike
+        One body's leg dimensions [m] (floats).
+    requests : (k, 2) array, optional
+        Requested (step length, step height) [m]; drawn with the steps produced for them.
+    out : str or Path
+        PNG file to write.
+    """
+    import numpy as np
+
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 5))
+    region = interp.legal_region(leg)
+    closed = np.vstack([region, region[:1]])
+    ax.fill(closed[:, 0], closed[:, 1], alpha=0.15, label="legal region (hull)")
+    steps = interp.source_steps(leg)
+    ax.plot(steps[:, 0], steps[:, 1], "ko")
+    for (x, y), d in zip(steps, interp.datasets, strict=True):
+        ax.annotate(d.name, (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    if requests is not None:
+        req = np.asarray(requests, dtype=float).reshape(-1, 2)
+        dims = {k: np.full(len(req), float(np.ravel(getattr(leg, k))[0]))
+                for k in ("thigh", "shank", "ankle_height", "heel_offset", "toe_offset")}
+        if getattr(leg, "ball_offset", None) is not None:
+            dims["ball_offset"] = np.full(len(req), float(np.ravel(leg.ball_offset)[0]))
+        from crowdwalk.gait.elevinterp import SagittalLeg
+
+        res = interp.request(SagittalLeg(**dims), req[:, 0], req[:, 1])
+        ax.plot(req[:, 0], req[:, 1], "x", color="tab:red", label="requested")
+        ax.plot(res.step_length, res.step_height, ".", color="tab:green", label="produced")
+    ax.set_xlabel("step length [m]")
+    ax.set_ylabel("step height [m]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title or "ElevInterp Height/Length space (Eq. 10)")
+    return _save(fig, out)

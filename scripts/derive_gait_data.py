@@ -346,6 +346,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--gait-dir", type=Path, default=GAIT_DIR)
     parser.add_argument("--out-dir", type=Path, default=OUT_DIR)
     parser.add_argument("--check", action="store_true", help="compare with the shipped files")
+    parser.add_argument("--plots", type=Path, help="also draw the shipped datasets into DIR")
     args = parser.parse_args(argv)
     angles, meta, norm = derive_all(args.gait_dir)
     print_table(angles, meta)
@@ -365,6 +366,15 @@ def main(argv: list[str] | None = None) -> int:
         return 0 if same else 1
     write(args.out_dir, angles, meta, norm)
     print(f"wrote {args.out_dir / 'elevation_datasets.npz'} and normative.json")
+    if args.plots:
+        from crowdwalk.gait.datasets import _load_npz, load_datasets
+        from crowdwalk.gait.elevinterp import ElevInterp, SagittalLeg
+        from crowdwalk.plots import plot_elevation_datasets, plot_elevinterp_region
+
+        _load_npz.cache_clear()
+        print(plot_elevation_datasets(load_datasets(), args.plots / "elevation_datasets.png"))
+        print(plot_elevinterp_region(ElevInterp(), SagittalLeg.from_body_height(1.75),
+                                     args.plots / "elevinterp_region_1.75m.png"))
     return 0
 
 

@@ -161,3 +161,14 @@ def test_normative_references_are_consistent():
             assert entry["source"]
     ref["phases"]["stance_fraction_natural"] = -1  # a fresh copy each call
     assert normative()["phases"]["stance_fraction_natural"] > 0
+
+
+def test_dataset_and_region_plots_are_written(tmp_path):
+    from crowdwalk.gait.elevinterp import ElevInterp, SagittalLeg
+    from crowdwalk.plots import plot_elevation_datasets, plot_elevinterp_region
+
+    a = plot_elevation_datasets(load_datasets(), tmp_path / "datasets.png")
+    b = plot_elevinterp_region(ElevInterp(), SagittalLeg.from_body_height(1.75),
+                               tmp_path / "region.png", requests=[[0.6, 0.0], [1.2, 0.3]])
+    for path in (a, b):
+        assert path.exists() and path.stat().st_size > 10_000
