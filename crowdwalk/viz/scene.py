@@ -46,6 +46,14 @@ _COLOR_STYLE = {
 }
 
 
+def _ground_colormap():
+    """Greens to browns of matplotlib's ``gist_earth`` (no deep-water blue for low ground)."""
+    from matplotlib import colormaps
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap(colormaps["gist_earth"](np.linspace(0.35, 0.8, 256)), "ground")
+
+
 def _head_joint(names: list[str], first_positions: np.ndarray | None) -> int:
     """The joint that carries the head: by H-Anim name, else the highest joint."""
     lower = [n.lower() for n in names]
@@ -349,12 +357,13 @@ class SceneView:
         if scene.terrain is not None:
             ground = terrain_mesh(scene.terrain)
             heights = ground.point_data["height"]
+            lo, hi = float(heights.min()), float(heights.max())
             p.add_mesh(
-                ground, scalars="height", cmap="gist_earth", smooth_shading=False,
-                show_scalar_bar=bool(np.ptp(heights) > 1e-6), name="terrain", ambient=0.25,
-                clim=[heights.min() - 1.0, max(heights.max(), heights.min() + 0.5) + 0.5],
-                scalar_bar_args=dict(title="height [m]", vertical=True, position_x=0.9,
-                                     position_y=0.3, height=0.4, width=0.05, fmt="%.1f",
+                ground, scalars="height", cmap=_ground_colormap(), smooth_shading=False,
+                show_scalar_bar=hi - lo > 1e-6, name="terrain", ambient=0.25,
+                clim=[lo, hi if hi - lo > 1e-6 else lo + 1.0],
+                scalar_bar_args=dict(title="height [m]", vertical=True, position_x=0.92,
+                                     position_y=0.3, height=0.35, width=0.04, fmt="%.2f",
                                      color="black", n_labels=3,
                                      title_font_size=self._font(16),
                                      label_font_size=self._font(14)),
