@@ -1,7 +1,17 @@
-"""Footstep planners on a ground profile (Chen & Li). Depends on numpy/scipy only."""
+"""Footstep planners on a ground profile (Chen & Li 2003). Depends on numpy/scipy only.
 
+``plan(profile, leg, speed, planner)`` plans the next ``n_steps`` footholds of one
+walker; ``plan_batch`` plans for many at once. Planners: ``best_first`` (the paper's
+FIND_INIT + best-first search), ``fixed`` (unplanned neutral steps) and ``optimal`` (the
+exact optimum over the same grid and horizon).
+"""
+
+from planners.config import EnergyWeights, PlannerConfig
 from planners.errors import ProfileError
 from planners.leg import Leg
+from planners.plan import PLANNERS, Plan, plan, plan_batch
 from planners.profile import GroundProfile
+from planners.turning import split_turn
 
-__all__ = ["GroundProfile", "Leg", "ProfileError"]
+__all__ = ["EnergyWeights", "GroundProfile", "Leg", "PLANNERS", "Plan", "PlannerConfig",
+           "ProfileError", "plan", "plan_batch", "split_turn"]

@@ -18,7 +18,7 @@ import numpy as np
 from planners.config import PlannerConfig
 from planners.energy import joint_energy, total_energy, vertical_energy, walking_energy
 from planners.kinematics import key_frames
-from planners.legality import Reason, foot_support
+from planners.legality import Reason, foot_support, snap_to_support
 from planners.profile import GroundProfile
 from planners.swing import adjust_swings
 
@@ -339,6 +339,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     depth = st.node_depth[None, :]
     node_s = np.where(depth == -1, trailing[:, None],
                       np.maximum(depth, 0) * lo[:, None] + st.node_m * delta[:, None])
+    if config.snap:
+        moved = snap_to_support(base + node_s[:, 2:], 0.5 * delta[:, None], profile,
+                                legs_col.heel_offset, legs_col.toe_offset, config) - base
+        node_s = np.concatenate([node_s[:, :2], moved], axis=1)
     node_z = profile.height(base + node_s)
     support = foot_support(base + node_s, profile, legs_col.heel_offset, legs_col.toe_offset,
                            config)

@@ -9,7 +9,7 @@ import numpy as np
 from planners.config import PlannerConfig
 from planners.profile import GroundProfile
 
-__all__ = ["Reason", "foot_support", "describe"]
+__all__ = ["Reason", "foot_support", "describe", "snap_to_support"]
 
 
 class Reason(IntFlag):
@@ -69,3 +69,47 @@ def foot_support(ankle_s: np.ndarray, profile: GroundProfile, heel_offset, toe_o
     slope = np.abs(z_toe - z_heel) / (toe - heel)
     uneven = (bump > config.support_tolerance) | (slope > config.max_foot_slope)
     return np.where(edges > 0, int(Reason.EDGE), 0) | np.where(uneven, int(Reason.SLOPE), 0)
+
+
+def snap_to_support(ankle_s: np.ndarray, window, profile: GroundProfile, heel_offset,
+                    toe_offset, config: PlannerConfig, neighbours: int = 3) -> np.ndarray:
+    """Move each foothold by at most ``window`` [m] to the nearest supported position.
+
+    Candidates are the foothold itself and the positions that put the heel or the toe
+    exactly ``edge_margin`` clear of one of the ``neighbours`` nearest edges on each
+    side. Footholds with no supported candidate inside the window stay where they are.
+
+    Parameters
+    ----------
+    ankle_s : ndarray, shape (A, N)
+        Footholds [m].
+    window : float or ndarray broadcastable to (A, N)
+        Largest move [m].
+    heel_offset, toe_offset : float or ndarray, shape (A, 1)
+        Foot geometry [m].
+
+    Returns
+    -------
+    ndarray, shape (A, N)
+        Snapped footholds [m].
+    """
+    jump_s, jump_dz = profile.jumps
+    edges = jump_s[np.abs(jump_dz) > config.support_tolerance]
+    if edges.size == 0:
+        return ankle_s
+    m = config.edge_margin
+    i = np.searchsorted(edges, ankle_s)
+    picks = np.clip(i[..., None] + np.arange(-neighbours, neighbours)[None, None, :], 0,
+                    edges.size - 1)
+    e = edges[picks]  # (A, N, 2*neighbours)
+    heel = np.broadcast_to(np.asarray(heel_offset, dtype=float), ankle_s.shape)[..., None]
+    toe = np.broadcast_to(np.asarray(toe_offset, dtype=float), ankle_s.shape)[..., None]
+    candidates = np.concatenate([ankle_s[..., None], e + heel + m, e - toe - m], axis=-1)
+    shift = np.abs(candidates - ankle_s[..., None])
+    within = shift <= np.asarray(window)[..., None] if np.ndim(window) else shift <= window
+    reason = foot_support(candidates, profile, heel, toe, config)
+    cost = np.where(within & (reason == 0), shift, np.inf)
+    best = np.argmin(cost, axis=-1)
+    found = np.isfinite(np.take_along_axis(cost, best[..., None], axis=-1)[..., 0])
+    chosen = np.take_along_axis(candidates, best[..., None], axis=-1)[..., 0]
+    return np.where(found, chosen, ankle_s)

@@ -1,0 +1,59 @@
+"""Shared search helpers over the step tables: configurations and their evaluation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planners.lattice import StepTables
+
+__all__ = ["SearchResult", "all_configs_evaluated", "neighbour_deltas"]
+
+#: Largest number of (agent, configuration, step) entries evaluated in one gather.
+GATHER_BUDGET = 1 << 22
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Outcome of a search for A agents.
+
+    Attributes
+    ----------
+    configs : ndarray of int, shape (A, n)
+        Step-length indices of the chosen configuration (meaningless where not found).
+    found : ndarray of bool, shape (A,)
+    expanded : ndarray of int, shape (A,)
+        Nodes expanded (configurations whose neighbours were generated).
+    checks : ndarray of int, shape (A,)
+        Configurations whose legality was looked up.
+    """
+
+    configs: np.ndarray
+    found: np.ndarray
+    expanded: np.ndarray
+    checks: np.ndarray
+
+
+def neighbour_deltas(n: int) -> np.ndarray:
+    """Grid neighbours of a configuration: +-1 in one step length, shape (2n, n)."""
+    eye = np.eye(n, dtype=np.int64)
+    return np.concatenate([-eye, eye])
+
+
+def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
+    """Legality and efficiency (B, J**n) of every configuration, in agent chunks."""
+    st = tables.struct
+    steps, swings = st.all_indices
+    per_agent = steps.size
+    chunk = max(1, GATHER_BUDGET // per_agent)
+    legal = np.empty((agents.size, steps.shape[0]), dtype=bool)
+    eff = np.empty((agents.size, steps.shape[0]))
+    for start in range(0, agents.size, chunk):
+        rows = agents[start:start + chunk, None, None]
+        sl = slice(start, start + chunk)
+        legal[sl] = (tables.step_legal[rows, steps].all(axis=-1)
+                     & tables.swing_ok[rows, swings].all(axis=-1))
+        eff[sl] = (tables.length[rows, steps].sum(axis=-1)
+                   / tables.E[rows, steps].sum(axis=-1))
+    return legal, eff
