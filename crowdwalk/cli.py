@@ -85,6 +85,21 @@ def schema() -> None:
 # --- gait export (issue 4): export-bvh ----------------------------------------------
 
 
+@app.command("export-bvh")
+@friendly_errors
+def export_bvh_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    agent: int = typer.Option(..., "--agent", help="Agent id to export."),
+    out: Path = typer.Option(..., "--out", help="BVH file to write."),
+    scale: float = typer.Option(100.0, "--scale", help="BVH units per metre (100: cm)."),
+) -> None:
+    """Write one agent's full-body motion as a BVH file."""
+    from crowdwalk.export_bvh import export_bvh
+
+    path = export_bvh(run_dir, agent, out, scale=scale)
+    typer.echo(f"wrote {path}")
+
+
 # --- viewer (issue 6): view, render -------------------------------------------------
 
 _COLOR_HELP = "Colour footprints by: energy, planner or agent."
