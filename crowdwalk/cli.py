@@ -82,6 +82,96 @@ def schema() -> None:
 # --- simulation (issue 5): run, compare ---------------------------------------------
 
 
+def _sim_progress(quiet: bool, label: str):
+    """A rich progress bar (simulated time, agents remaining) or a silent stand-in."""
+    import contextlib
+
+    if quiet:
+        return contextlib.nullcontext(None)
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(),
+        TextColumn("t = {task.completed:6.1f} / {task.total:.0f} s"),
+        TextColumn("{task.fields[remaining]} agents remaining"), TimeElapsedColumn(),
+        transient=False,
+    )
+
+
+def _term_as_interrupt() -> None:
+    """Let SIGTERM end a run like Ctrl-C (summary written, files closed)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        def _raise(signum, frame):
+            raise KeyboardInterrupt
+
+        signal.signal(signal.SIGTERM, _raise)
+
+
+@app.command()
+@friendly_errors
+def run(
+    scenario: Path = typer.Argument(..., help="Scenario YAML file."),
+    out: Path = typer.Option(..., "--out", help="Run folder to write."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+    planner: str = typer.Option(None, "--planner", help="Override every group's planner."),
+    duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
+) -> None:
+    """Simulate a scenario and write trajectories, footsteps, poses and a summary."""
+    from crowdwalk.crowd.run import RunOverrides, run_scenario
+
+    _term_as_interrupt()
+    overrides = RunOverrides(planner=planner, duration=duration)
+    with _sim_progress(quiet, scenario.stem) as bar:
+        update = None
+        if bar is not None:
+            task = bar.add_task(scenario.stem, total=1.0, remaining="?")
+
+            def update(t: float, total: float, remaining: int) -> None:
+                bar.update(task, completed=t, total=total, remaining=remaining)
+
+        summary = run_scenario(scenario, out, overrides=overrides, progress=update)
+    if not quiet:
+        tm = summary["timing"]
+        typer.echo(
+            f"{summary['agents_arrived']}/{summary['agents_total']} agents arrived in "
+            f"{summary['simulated_time_s']:.1f} s simulated, {tm['wall_s']:.1f} s wall "
+            f"({tm['simulated_s_per_wall_s']:.2f}× real time); poses {summary['poses']}. "
+            f"Run folder: {out}"
+        )
+
+
+@app.command()
+@friendly_errors
+def compare(
+    scenario: Path = typer.Argument(..., help="Scenario YAML file."),
+    planners: str = typer.Option("best_first,fixed", "--planners",
+                                 help="Comma-separated planners to compare."),
+    out: Path = typer.Option(..., "--out", help="Folder for the runs and report.md."),
+    quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
+    duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
+) -> None:
+    """Run the same scenario, seed and agents with each planner; write report.md."""
+    from crowdwalk.compare import compare_planners
+
+    _term_as_interrupt()
+    names = [p.strip() for p in planners.split(",") if p.strip()]
+    with _sim_progress(quiet, scenario.stem) as bar:
+        update = None
+        if bar is not None:
+            task = bar.add_task(scenario.stem, total=1.0, remaining="?")
+
+            def update(label: str, t: float, total: float, remaining: int) -> None:
+                bar.update(task, description=label, completed=t, total=total,
+                           remaining=remaining)
+
+        report = compare_planners(scenario, names, out, duration=duration, progress=update)
+    if not quiet:
+        typer.echo(f"Report: {report}")
+
+
 # --- gait export (issue 4): export-bvh ----------------------------------------------
 
 

@@ -114,6 +114,7 @@ class FootstepPlanner:
         leg: np.ndarray,
         speed: np.ndarray,
         planner: np.ndarray,
+        trailing: np.ndarray | None = None,
     ) -> PlannedSteps:
         """Plan the first step of m agents.
 
@@ -131,6 +132,8 @@ class FootstepPlanner:
             Walking speed given to the planner [m/s].
         planner : (m,) str
             Planner name per agent (``planners.PLANNERS``).
+        trailing : (m,) float, optional
+            Arc length of the trailing (swing) foot behind the stance foot [m], < 0.
         """
         from planners import plan_batch
 
@@ -141,17 +144,24 @@ class FootstepPlanner:
         swing = np.full((m, 4, 2), np.nan)
         energy = np.zeros(m)
         cached = np.zeros(m, bool)
+        if trailing is None:
+            trailing = np.full(m, -0.6)
+        trailing = np.clip(np.round(np.asarray(trailing, float), 3), -2.9, -0.01)
         keys: list[bytes] = []
         profiles = []
-        for i in range(m):  # one profile per agent: Terrain.profile takes one polyline
-            line = np.stack([stance[i] - _BEHIND * direction[i],
-                             stance[i] + self.lookahead * direction[i]])
-            s, z = self.terrain.profile_arrays(line)
+        lines = np.stack([stance - _BEHIND * direction, stance + self.lookahead * direction],
+                         axis=1)  # (m, 2, 2): one straight local path per agent
+        if hasattr(self.terrain, "profiles"):
+            arrays = self.terrain.profiles(lines)  # one batched terrain pass
+        else:
+            arrays = [self.terrain.profile_arrays(line) for line in lines]
+        for i in range(m):  # cache keys and profile objects are per agent
+            s, z = arrays[i]
             s = s - _BEHIND
             z = z - stance_z[i]
             key = b"|".join([
                 str(planner[i]).encode(), np.int64(leg[i]).tobytes(),
-                np.round(speed[i], 3).tobytes(),
+                np.round(speed[i], 3).tobytes(), trailing[i].tobytes(),
                 np.round(s / _QUANTUM).astype(np.int64).tobytes(),
                 np.round(z / _QUANTUM).astype(np.int64).tobytes(),
             ])
@@ -177,11 +187,13 @@ class FootstepPlanner:
                     [float(speed[i]) for i in first],
                     planner=name,
                     config=self.config,
+                    trailing=[float(trailing[i]) for i in first],
                 )
                 for i, plan in zip(first, plans, strict=True):
                     self._cache[keys[i]] = _first_step(plan)
+        planned_now = set(todo)
         for i in range(m):
             hit = self._cache[keys[i]]
             ok[i], sl[i], sh[i], swing[i], energy[i] = hit
-            cached[i] = i not in todo
+            cached[i] = i not in planned_now
         return PlannedSteps(ok, sl, sh, swing, energy, cached)

@@ -110,6 +110,8 @@ class AgentState:
         self.trail = np.zeros((n, 2))  # centre-line point of the previous foothold [m]
         self.trail_z = np.zeros(n)
         self.foot = np.zeros(n, dtype=np.int8)  # foot that swings next: 0 left, 1 right
+        self.stance_foot = np.zeros((n, 3))  # foothold of the stance foot (with offset) [m]
+        self.animated = np.zeros(n, bool)  # has received a step command
         self.route = np.zeros(n, dtype=np.int64)
         self.segment = np.zeros(n, dtype=np.int64)
         self.progress = np.zeros(n)  # global route arc length [m]
@@ -331,6 +333,7 @@ class CrowdSimulation:
         st.z0[idx] = st.z1[idx] = z
         st.stance[idx] = st.trail[idx] = p
         st.stance_z[idx] = st.trail_z[idx] = z
+        st.foot[idx] = 0  # the left foot swings first; the right one stands
         st.t0[idx] = st.t1[idx] = t
         st.start_time[idx] = t
         seg, s, _ = self.table.project(st.route[idx], st.segment[idx], p)
@@ -338,6 +341,8 @@ class CrowdSimulation:
         ahead = self.table.point_at(st.route[idx], s + 1.0)
         d = ahead - p
         st.heading[idx] = np.arctan2(d[:, 1], d[:, 0])
+        right = -_left(np.column_stack([np.cos(st.heading[idx]), np.sin(st.heading[idx])]))
+        st.stance_foot[idx] = np.column_stack([p + self.params.foot_half_width * right, z])
 
     # -- decisions ----------------------------------------------------------------
 
@@ -410,9 +415,10 @@ class CrowdSimulation:
         if mv.size:
             w0 = _time.perf_counter()
             a = idx[mv]
+            trailing = -np.einsum("ij,ij->i", st.stance[a] - st.trail[a], choice.direction[mv])
             planned = self.footsteps.plan(st.stance[a], st.stance_z[a], choice.direction[mv],
                                           self.leg_index[a], self.pop.free_speed[a],
-                                          self.planner_of[a])
+                                          self.planner_of[a], trailing)
             self.wall_planning += _time.perf_counter() - w0
             st.plans[a] += 1
             st.plan_failures[a] += ~planned.ok
@@ -531,6 +537,11 @@ class CrowdSimulation:
         st.energy[a] += energy[go]
         st.climb[a] += np.maximum(H, 0.0)
         st.stuck[a] = 0.0
+        if self.animator is not None:
+            self._animate(a, t0, duration, foot, st.stance_foot[a].copy(),
+                          np.column_stack([foothold, new_z]), L, H, swing[go], d,
+                          side)
+        st.stance_foot[a] = np.column_stack([foothold, new_z])
         kind = self.terrain.kind(foothold)
         self._step_rows.append({
             "agent": a, "step": st.steps[a].copy(), "time": t0 + duration,
@@ -544,6 +555,43 @@ class CrowdSimulation:
             "from_x": st.trail[a][:, 0], "from_y": st.trail[a][:, 1],
             "swing": swing[go],
         })
+
+    # -- poses ---------------------------------------------------------------------
+
+    def _animate(self, a, t0, duration, foot, start, target, L, H, swing, d, side) -> None:
+        """Send the new steps to the gait Animator (MetaGait step parameters: step length
+        and height, heading, footholds, the planner's swing Bezier in world xyz)."""
+        from crowdwalk.gait.animator import StepCommand
+
+        st = self.state
+        stance_c = st.trail[a]  # centre-line point of the stance ankle (before this step)
+        stance_z = st.trail_z[a]
+        bez = np.full((a.size, 4, 3), np.nan)
+        has = np.all(np.isfinite(swing), axis=(1, 2))
+        if has.any():
+            lat = (side[has] * self.params.foot_half_width)[:, None] * _left(d[has])
+            s_, z_ = swing[has, :, 0], swing[has, :, 1]
+            bez[has, :, :2] = (stance_c[has, None, :] + s_[..., None] * d[has, None, :]
+                               + lat[:, None, :])
+            bez[has, :, 2] = stance_z[has, None] + z_
+        self.animator.command(StepCommand(
+            agent=a, time=t0, duration=duration, swing_foot=foot.astype(int),
+            start=start, target=target, heading=np.arctan2(d[:, 1], d[:, 0]),
+            step_length=np.maximum(L, 0.05),
+            step_height=H, swing_bezier=bez,
+        ))
+        st.animated[a] = True
+
+    def poses(self):
+        """Poses of the walking agents that have taken a step, at the current time
+        (a ``gait.animator.PoseFrame``), or None without an Animator."""
+        if self.animator is None:
+            return None
+        idx = self.active
+        idx = idx[self.state.animated[idx]]
+        if idx.size == 0:
+            return None
+        return self.animator.pose(self.time, idx)
 
     # -- re-routing ---------------------------------------------------------------
 

@@ -1,0 +1,289 @@
+"""Run a scenario end to end: build the world and the population, simulate, write the run
+folder (:mod:`crowdwalk.record`), summarise.
+
+Everything is flushed once per simulated second, so a run that is interrupted stays
+readable; Ctrl-C (and SIGTERM at the CLI) still writes ``summary.json`` with
+``"interrupted": true`` before the process ends.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from crowdwalk.crowd.simulation import ARRIVED, WAITING, CrowdParams, CrowdSimulation
+from crowdwalk.errors import invalid
+
+__all__ = ["RunOverrides", "run_scenario", "prepare", "summarise"]
+
+
+@dataclass(frozen=True)
+class RunOverrides:
+    """Changes to a scenario for one run (tests, benchmarks, comparisons).
+
+    Attributes
+    ----------
+    planner : str or None
+        Every group uses this planner.
+    max_agents : int or None
+        Keep only the first agents of the population (in spawn order) [-].
+    duration : float or None
+        Simulated time limit [s].
+    poses : bool or None
+        Write poses or not.
+    fps : float or None
+        Output frame rate [1/s].
+    """
+
+    planner: str | None = None
+    max_agents: int | None = None
+    duration: float | None = None
+    poses: bool | None = None
+    fps: float | None = None
+
+
+ProgressCallback = Callable[[float, float, int], None]
+
+
+def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams | None = None):
+    """World, population and simulation of a scenario (a path or a loaded Scenario).
+
+    Returns
+    -------
+    (scenario, world, simulation, want_poses, scenario_text)
+    """
+    import yaml
+
+    overrides = overrides or RunOverrides()
+    params = params or CrowdParams()
+    from crowdwalk.population import Population
+    from crowdwalk.scenario import Scenario, load_scenario
+    from crowdwalk.world import build_world
+
+    if isinstance(scenario, Scenario):
+        sc = scenario
+        text = yaml.safe_dump(sc.model_dump(mode="json", by_alias=True), sort_keys=False)
+    else:
+        path = Path(scenario)
+        sc = load_scenario(path)
+        text = path.read_text()
+    world = build_world(sc)
+    rng = np.random.default_rng(sc.simulation.seed)
+    pop = Population.from_scenario(sc, world.routes, rng)
+    if overrides.planner is not None:
+        from crowdwalk.scenario import Group
+
+        allowed = Group.model_fields["planner"].annotation.__args__
+        if overrides.planner not in allowed:
+            raise invalid("RunOverrides", "planner", f"one of {list(allowed)}", overrides.planner)
+        pop = pop.with_planner(overrides.planner)
+    if overrides.max_agents is not None:
+        if overrides.max_agents < 1:
+            raise invalid("RunOverrides", "max_agents", ">= 1", overrides.max_agents)
+        order = np.argsort(pop.spawn_time, kind="stable")[: overrides.max_agents]
+        pop = pop.take(np.sort(order))
+    duration = overrides.duration if overrides.duration is not None else sc.simulation.duration
+    fps = overrides.fps if overrides.fps is not None else sc.simulation.fps
+    want_poses = sc.outputs.poses if overrides.poses is None else overrides.poses
+    animator = None
+    if want_poses:
+        animator = _make_animator(pop.body_height, world.terrain)
+    sim = CrowdSimulation(world, pop, dt=sc.simulation.dt, fps=fps, duration=duration,
+                          params=params, animator=animator)
+    return sc, world, sim, want_poses, text
+
+
+def _make_animator(heights: np.ndarray, terrain):
+    from crowdwalk.body import Body
+    from crowdwalk.gait.animator import Animator
+
+    return Animator(Body.from_heights(heights), ground=terrain.height)
+
+
+def run_scenario(
+    scenario,
+    out: str | Path,
+    *,
+    overrides: RunOverrides | None = None,
+    progress: ProgressCallback | None = None,
+    params: CrowdParams | None = None,
+) -> dict:
+    """Simulate ``scenario`` and write the run folder ``out``.
+
+    Parameters
+    ----------
+    scenario : path or Scenario
+    out : path
+        Run folder (created; run files in it are replaced).
+    overrides : RunOverrides
+    progress : callable, optional
+        ``progress(simulated_time [s], duration [s], agents_remaining)`` once per frame.
+    params : CrowdParams
+
+    Returns
+    -------
+    dict
+        The summary also written to ``summary.json``.
+    """
+    from crowdwalk.record import RunWriter
+
+    wall0 = time.perf_counter()
+    sc, world, sim, want_poses, text = prepare(scenario, overrides, params)
+    pose_note = "written" if want_poses else "disabled (outputs.poses is false)"
+    skeleton = sim.animator.skeleton if sim.animator is not None else None
+    writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
+                       fps=sim.fps, skeleton=skeleton)
+    pop = sim.pop
+    groups = np.asarray(pop.group_names, dtype=object)[pop.group]
+    if skeleton is not None:
+        writer.write_agents(np.arange(sim.n), pop.body_height, list(groups),
+                            list(pop.planner.astype(str)))
+    setup = time.perf_counter() - wall0
+    timing = {"setup_s": setup, "poses_s": 0.0, "writing_s": 0.0}
+    frames_per_flush = max(1, int(round(sim.fps)))
+    max_overlap = 0.0
+    interrupted = False
+    frames = 0
+    r_max = float(sim.radius.max()) if sim.n else 0.0
+    try:
+        _write_frame(writer, sim, 0)
+        while not sim.finished:
+            if not sim.step():
+                continue
+            frames += 1
+            w0 = time.perf_counter()
+            ids, xy, z, ori = sim.snapshot()
+            writer.write_frame(sim.frame, ids, xy, z, ori)
+            if ids.size > 1:
+                pairs = cKDTree(xy).query_pairs(2 * r_max, output_type="ndarray")
+                if len(pairs):
+                    i, j = pairs[:, 0], pairs[:, 1]
+                    gap = np.linalg.norm(xy[i] - xy[j], axis=1)
+                    over = sim.radius[ids[i]] + sim.radius[ids[j]] - gap
+                    max_overlap = max(max_overlap, float(over.max()))
+            steps = sim.take_footsteps()
+            if steps is not None:
+                writer.write_footsteps(steps)
+            timing["writing_s"] += time.perf_counter() - w0
+            if want_poses:
+                w0 = time.perf_counter()
+                frame = sim.poses()
+                if frame is not None:
+                    writer.write_pose(sim.frame, sim.time, frame.agents, frame.root_position,
+                                      frame.root_quaternion, frame.joints, frame.positions,
+                                      frame.contact, frame.fallback)
+                timing["poses_s"] += time.perf_counter() - w0
+            if frames % frames_per_flush == 0:
+                w0 = time.perf_counter()
+                writer.flush()
+                timing["writing_s"] += time.perf_counter() - w0
+            if progress is not None:
+                progress(sim.time, sim.duration, sim.remaining)
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
+    finally:
+        steps = sim.take_footsteps()
+        if steps is not None:
+            writer.write_footsteps(steps)
+        wall = time.perf_counter() - wall0
+        timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering)
+        summary = summarise(sim, sc, timing, max_overlap=max_overlap,
+                            interrupted=interrupted, poses=pose_note)
+        writer.write_summary(summary)
+        writer.close()
+    return summary
+
+
+def _write_frame(writer, sim, frame: int) -> None:
+    ids, xy, z, ori = sim.snapshot()
+    writer.write_frame(frame, ids, xy, z, ori)
+
+
+def _stats(values: np.ndarray) -> dict:
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return {"mean": None, "sd": None, "min": None, "max": None}
+    return {"mean": float(values.mean()), "sd": float(values.std()),
+            "min": float(values.min()), "max": float(values.max())}
+
+
+def summarise(sim: CrowdSimulation, scenario, timing: dict, *, max_overlap: float,
+              interrupted: bool, poses: str) -> dict:
+    """Per-agent and per-group statistics of a simulation (units in the key names)."""
+    st, pop = sim.state, sim.pop
+    arrived = st.status == ARRIVED
+    spawned = st.status != WAITING
+    travel = np.where(arrived, st.arrival_time - st.start_time, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_m = np.where(st.distance > 0, st.energy / st.distance, np.nan)
+        walk_time = np.where(arrived, travel, sim.time - st.start_time) - st.wait
+        cadence = np.where(walk_time > 0, st.steps / walk_time, np.nan)
+        mean_sl = np.where(st.steps > 0, st.distance / st.steps, np.nan)
+    groups = np.asarray(pop.group_names, dtype=object)[pop.group]
+    planner = pop.planner.astype(str)
+
+    def opt(x: float):
+        return None if not np.isfinite(x) else float(x)
+
+    agents = [
+        {
+            "id": i, "group": str(groups[i]), "planner": str(planner[i]),
+            "body_height_m": float(pop.body_height[i]), "free_speed_m_s": float(pop.free_speed[i]),
+            "spawned": bool(spawned[i]), "arrived": bool(arrived[i]),
+            "start_time_s": opt(st.start_time[i]), "travel_time_s": opt(travel[i]),
+            "distance_m": float(st.distance[i]), "steps": int(st.steps[i]),
+            "energy_J_per_kg": float(st.energy[i]), "energy_per_metre_J_per_kg_m": opt(per_m[i]),
+            "climb_m": float(st.climb[i]), "waiting_s": float(st.wait[i]),
+            "mean_step_length_m": opt(mean_sl[i]), "cadence_steps_per_s": opt(cadence[i]),
+            "plans": int(st.plans[i]), "plan_failures": int(st.plan_failures[i]),
+            "shortened_steps": int(st.shortened[i]), "reroutes": int(st.reroutes[i]),
+        }
+        for i in range(sim.n)
+    ]
+    by_group = {}
+    for gi, name in enumerate(pop.group_names):
+        m = pop.group == gi
+        if not m.any():
+            continue
+        dist = float(st.distance[m].sum())
+        by_group[name] = {
+            "planner": pop.planner_names[gi], "agents": int(m.sum()),
+            "arrived": int(arrived[m].sum()),
+            "travel_time_s": _stats(travel[m]), "distance_m": _stats(st.distance[m]),
+            "steps": _stats(st.steps[m].astype(float)),
+            "energy_J_per_kg": _stats(st.energy[m]),
+            "energy_per_metre_J_per_kg_m": float(st.energy[m].sum() / dist) if dist > 0
+            else None,
+            "waiting_s": _stats(st.wait[m]),
+            "planning": {"plans": int(st.plans[m].sum()),
+                         "failures": int(st.plan_failures[m].sum()),
+                         "shortened_steps": int(st.shortened[m].sum()),
+                         "reroutes": int(st.reroutes[m].sum())},
+        }
+    wall = float(timing.get("wall_s", float("nan")))
+    return {
+        "scenario": scenario.name, "seed": scenario.simulation.seed,
+        "complete": bool(sim.remaining == 0 or sim.time >= sim.duration - 1e-9),
+        "interrupted": interrupted,
+        "simulated_time_s": float(sim.time), "duration_s": sim.duration,
+        "dt_s": sim.dt, "fps": sim.fps,
+        "agents_total": sim.n, "agents_arrived": int(arrived.sum()),
+        "agents_remaining": sim.remaining,
+        "max_overlap_m": float(max_overlap),
+        "poses": poses,
+        "planning": {"requests": sim.footsteps.calls, "cache_hits": sim.footsteps.hits,
+                     "planner_runs": sim.footsteps.calls - sim.footsteps.hits,
+                     "failures": int(st.plan_failures.sum()),
+                     "shortened_steps": int(st.shortened.sum()),
+                     "reroutes": int(st.reroutes.sum())},
+        "timing": {**{k: float(v) for k, v in timing.items()},
+                   "simulated_s_per_wall_s": float(sim.time / wall) if wall > 0 else None},
+        "groups": by_group,
+        "agents": agents,
+    }
