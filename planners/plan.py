@@ -35,7 +35,10 @@ NO_FOOTHOLD = "no legal foothold"
 
 @dataclass(frozen=True, eq=False)
 class Plan:
-    """A footstep plan for the next ``k`` steps (k = n_steps, or 0 without a legal one).
+    """A footstep plan for the next ``k`` steps.
+
+    ``k = n_steps`` when ok; without a legal configuration the plan holds the longest
+    legal prefix (``k < n_steps``, possibly 0) and the status says where and why.
 
     Attributes
     ----------
@@ -253,7 +256,23 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
     used_rounds = np.clip(tables.rounds, 0, None).sum(axis=1)
     curves = (tables.rounds >= 0).sum(axis=1)
     failed = np.flatnonzero(~result.found)
-    messages = dict(zip(failed.tolist(), _diagnose(tables, failed, origins), strict=True))
+    messages = {}
+    for a, (message, prefix, depth) in zip(failed.tolist(),
+                                           _diagnose(tables, failed, origins), strict=True):
+        messages[a] = message, depth
+        result.configs[a] = prefix
+    if failed.size:  # re-gather the longest legal prefixes of failed agents
+        steps, swings = st.indices(result.configs)
+        front = st.step_front[steps]
+        foot_nodes = np.concatenate([np.ones((A, 1), dtype=np.int64), front], axis=1)
+        foot_s = tables.node_s[rows, foot_nodes] + origins[:, None]
+        foot_z = tables.node_z[rows, foot_nodes]
+        lengths = tables.length[rows, steps]
+        rises = tables.rise[rows, steps]
+        controls = tables.controls[rows, swings].copy()
+        controls[..., 0] += origins[:, None, None]
+        durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
+        terms = {name: getattr(tables, name)[rows, steps] for name in ("En", "Ev", "Ej", "E")}
     plans = []
     for a in range(A):
         stats = {
@@ -269,10 +288,14 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
         }
         trailing_s = float(tables.node_s[a, 0] + origins[a])
         if a in messages:
-            empty = np.zeros(0)
-            plans.append(Plan(NO_FOOTHOLD, messages[a], planner, foot_s[a, :1], foot_z[a, :1],
-                              empty, empty, np.zeros((0, 4, 2)), np.zeros((0, 3)), empty,
-                              empty, empty, empty, 0.0, stats, float(speeds[a]), trailing_s))
+            message, k = messages[a]
+            e = terms["E"][a, :k]
+            eff = float(lengths[a, :k].sum() / e.sum()) if k else 0.0
+            plans.append(Plan(NO_FOOTHOLD, message, planner, foot_s[a, :k + 1],
+                              foot_z[a, :k + 1], lengths[a, :k], rises[a, :k],
+                              controls[a, :k], durations[a, :k], terms["En"][a, :k],
+                              terms["Ev"][a, :k], terms["Ej"][a, :k], e, eff, stats,
+                              float(speeds[a]), trailing_s))
             continue
         plans.append(Plan(OK, "", planner, foot_s[a], foot_z[a], lengths[a], rises[a],
                           controls[a], durations[a], terms["En"][a], terms["Ev"][a],
@@ -281,8 +304,13 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
     return plans
 
 
-def _diagnose(tables: StepTables, agents: np.ndarray, origins: np.ndarray) -> list[str]:
-    """Where and why no legal configuration exists, for each agent in ``agents``."""
+def _diagnose(tables: StepTables, agents: np.ndarray, origins: np.ndarray) -> list:
+    """Where and why no legal configuration exists, for each agent in ``agents``.
+
+    Returns (message, configuration, depth) per agent: the configuration nearest to the
+    neutral one among those whose first ``depth`` steps are legal, ``depth`` being the
+    most steps any configuration can make.
+    """
     if agents.size == 0:
         return []
     st = tables.struct
@@ -306,8 +334,8 @@ def _diagnose(tables: StepTables, agents: np.ndarray, origins: np.ndarray) -> li
         hi = lo + tables.step_delta[a] * (st.J - 1)
         rise = float(tables.rise[a, s_idx])
         detail = f", rise {rise:+.2f} m" if reason & Reason.STEP_HEIGHT else ""
-        messages.append(
+        messages.append((
             f"no legal foothold for step {depth + 1} from s = {stance:.2f} m (landings "
             f"s = {lo:.2f}..{hi:.2f} m tried): {describe(reason)} (e.g. landing at "
-            f"s = {landing:.2f} m{detail})")
+            f"s = {landing:.2f} m{detail})", grid[pick], depth))
     return messages
