@@ -38,6 +38,9 @@ def terrains() -> dict[str, Terrain]:
     blocks = tuple(Block.box((20 + 6 * i, 10 + 4 * (i % 3)), (3, 1.5), 0.15 + 0.1 * i, 0.3 * i)
                    for i in range(5))
     curb = Block([(40, 30), (55, 30), (55, 30.3), (40, 30.3)], 0.15)
+    rng = np.random.default_rng(1)
+    obstacles = tuple(Block.box(rng.uniform((2, 2), (58, 38)), (0.5, 0.5), rng.uniform(0.1, 1))
+                      for _ in range(200))
     ramp = Slope.ramp((5, 5), 0.0, 8, 2.5, 0.0, 0.7)
     rough = Heightfield.noise((45, 2), (12, 10), 0.25, 0.04, 1.0, seed=1)
     box = trimesh.creation.box(extents=(4, 4, 1.0))
@@ -48,6 +51,7 @@ def terrains() -> dict[str, Terrain]:
         "+ramp+rough": Terrain(ext, 0.0, (ramp, stairs, *blocks, curb, rough)),
         "+mesh (embree rays)": Terrain(ext, 0.0, (ramp, stairs, *blocks, curb, rough,
                                                    MeshFeature(box))),
+        "stairs + 200 obstacles": Terrain(ext, 0.0, (stairs, *obstacles)),
     }
 
 

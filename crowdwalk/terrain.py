@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import enum
 import functools
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -608,6 +609,56 @@ def _crossings(a: np.ndarray, b: np.ndarray, index: _EdgeIndex):
     return np.concatenate(seg_idx), np.concatenate(ts)
 
 
+class _FeatureGrid:
+    """A uniform grid over the extent listing the features whose bounding box touches each
+    cell, so that a query tests each feature only on the points near it (many obstacles).
+    Features spanning many cells are tested on all points (their bounding-box test is
+    cheaper than gathering)."""
+
+    MAX_CELLS = 64
+
+    def __init__(self, extent, features):
+        x0, y0, x1, y1 = extent
+        bb = np.array([f.bbox for f in features])
+        size = np.maximum(bb[:, 2] - bb[:, 0], bb[:, 3] - bb[:, 1])
+        self.cell = max(float(np.median(size)), math.sqrt((x1 - x0) * (y1 - y0) / 65536))
+        self.origin = np.array([x0, y0])
+        self.shape = (max(1, math.ceil((x1 - x0) / self.cell)),
+                      max(1, math.ceil((y1 - y0) / self.cell)))
+        lo = self._cell_xy(bb[:, :2])
+        hi = self._cell_xy(bb[:, 2:])
+        self.cells: list[np.ndarray | None] = []
+        for (i0, j0), (i1, j1) in zip(lo, hi, strict=True):
+            if (i1 - i0 + 1) * (j1 - j0 + 1) > self.MAX_CELLS:
+                self.cells.append(None)
+                continue
+            ii, jj = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1))
+            self.cells.append((ii + self.shape[0] * jj).ravel())
+
+    def _cell_xy(self, xy: np.ndarray) -> np.ndarray:
+        ij = np.floor((xy - self.origin) / self.cell).astype(np.int64)
+        return np.clip(ij, 0, np.array(self.shape) - 1)
+
+    def candidates(self, xy: np.ndarray):
+        """A function: feature index → indices of the points in its cells (or None)."""
+        ij = self._cell_xy(xy)
+        cid = ij[:, 0] + self.shape[0] * ij[:, 1]
+        order = np.argsort(cid, kind="stable")
+        sorted_cid = cid[order]
+
+        def points_of(i: int):
+            cells = self.cells[i]
+            if cells is None:
+                return None
+            start = np.searchsorted(sorted_cid, cells, "left")
+            stop = np.searchsorted(sorted_cid, cells, "right")
+            if len(cells) == 1:
+                return order[start[0]:stop[0]]
+            return np.concatenate([order[a:b] for a, b in zip(start, stop, strict=True)])
+
+        return points_of
+
+
 @dataclass(frozen=True, eq=False)
 class Terrain:
     """A flat base plane over ``extent`` plus features composed in override order.
@@ -655,19 +706,43 @@ class Terrain:
 
     # -- point queries --
 
+    @functools.cached_property
+    def _grid(self) -> _FeatureGrid | None:
+        return _FeatureGrid(self.extent, self.features) if len(self.features) > 16 else None
+
     def owner(self, xy) -> np.ndarray:
         """Index of the feature that decides each point's height, −1 for the base; (n,)."""
         xy = _points(xy)
         own = np.full(len(xy), -1, dtype=np.int64)
-        for i, f in enumerate(self.features):
-            own[f.covers(xy)] = i
+        if self._grid is None or len(xy) < 64:
+            for i, f in enumerate(self.features):
+                own[f.covers(xy)] = i
+            return own
+        candidates = self._grid.candidates(xy)
+        for i, f in enumerate(self.features):  # in order: later features override
+            idx = candidates(i)
+            if idx is None:
+                own[f.covers(xy)] = i
+            elif len(idx):
+                own[idx[f.covers(xy[idx])]] = i
         return own
+
+    @staticmethod
+    def _by_owner(own: np.ndarray):
+        """(feature index, point indices) for every feature that owns points."""
+        idx = np.flatnonzero(own >= 0)
+        if len(idx) == 0:
+            return
+        order = idx[np.argsort(own[idx], kind="stable")]
+        feats, starts = np.unique(own[order], return_index=True)
+        stops = np.append(starts[1:], len(order))
+        for f, a, b in zip(feats, starts, stops, strict=True):
+            yield int(f), order[a:b]
 
     def _surface(self, xy: np.ndarray, ref: np.ndarray, own: np.ndarray) -> np.ndarray:
         z = np.full(len(xy), float(self.base))
-        for i in np.unique(own[own >= 0]):
-            m = own == i
-            z[m] = self.features[i].surface(xy[m], ref[m])
+        for i, k in self._by_owner(own):
+            z[k] = self.features[i].surface(xy[k], ref[k])
         return z
 
     def height(self, xy) -> np.ndarray:
@@ -681,9 +756,8 @@ class Terrain:
         xy = _points(xy)
         own = self.owner(xy)
         g = np.zeros((len(xy), 2))
-        for i in np.unique(own[own >= 0]):
-            m = own == i
-            g[m] = self.features[i].gradient(xy[m])
+        for i, k in self._by_owner(own):
+            g[k] = self.features[i].gradient(xy[k])
         n = np.column_stack([-g, np.ones(len(xy))])
         return n / np.linalg.norm(n, axis=1, keepdims=True)
 

@@ -252,3 +252,41 @@ def test_batched_profiles_equal_single_profiles(lines):
         assert s.shape == s1.shape
         np.testing.assert_allclose(s, s1, rtol=0, atol=1e-12)
         np.testing.assert_allclose(z, z1, rtol=0, atol=1e-12)
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), n_blocks=st.integers(17, 60))
+def test_many_features_grid_index_matches_plain_override(seed, n_blocks):
+    """With many features a grid index picks candidates; the result must not change."""
+    rng = np.random.default_rng(seed)
+    feats = [Block.box(rng.uniform(-15, 15, 2), rng.uniform(0.2, 3, 2), rng.uniform(0, 1),
+                       rng.uniform(-3, 3)) for _ in range(n_blocks)]
+    feats.insert(int(rng.integers(0, n_blocks)), StairFlight((-5, -5), 0.3, 6, 0.3, 0.1, 20))
+    ter = Terrain(EXTENT, 0.0, tuple(feats))
+    xy = rng.uniform(-21, 21, (500, 2))
+    plain = np.full(len(xy), -1)
+    for i, f in enumerate(ter.features):
+        plain[f.covers(xy)] = i
+    np.testing.assert_array_equal(ter.owner(xy), plain)
+
+
+@FAST
+@given(pts=st.lists(st.tuples(st.floats(-15, 15), st.floats(-15, 15)), min_size=1, max_size=50))
+def test_normals_match_finite_differences_of_height(pts):
+    ter = demo_terrain()
+    xy = np.array(pts)
+    h = 1e-5
+    offsets = np.array([[h, 0], [-h, 0], [0, h], [0, -h]])
+    stencil = xy[:, None, :] + offsets[None]
+    own = ter.owner(stencil.reshape(-1, 2)).reshape(-1, 4)
+    z = ter.height(stencil.reshape(-1, 2)).reshape(-1, 4)
+    # only where all four stencil points lie on the same planar piece as the centre
+    centre = ter.owner(xy)
+    same = (own == centre[:, None]).all(1)
+    gx = (z[:, 0] - z[:, 1]) / (2 * h)
+    gy = (z[:, 2] - z[:, 3]) / (2 * h)
+    expect = np.column_stack([-gx, -gy, np.ones(len(xy))])
+    expect /= np.linalg.norm(expect, axis=1, keepdims=True)
+    n = ter.normal(xy)
+    smooth = same & (np.abs(z - ter.height(xy)[:, None]).max(1) < 0.01)
+    np.testing.assert_allclose(n[smooth], expect[smooth], atol=1e-4)
