@@ -7,6 +7,7 @@ exact optimum over the same grid and horizon).
 """
 
 from planners.config import EnergyWeights, PlannerConfig
+from planners.energy import flat_efficiency
 from planners.errors import ProfileError
 from planners.leg import Leg
 from planners.plan import PLANNERS, Plan, plan, plan_batch
@@ -14,4 +15,4 @@ from planners.profile import GroundProfile
 from planners.turning import split_turn
 
 __all__ = ["EnergyWeights", "GroundProfile", "Leg", "PLANNERS", "Plan", "PlannerConfig",
-           "ProfileError", "plan", "plan_batch", "split_turn"]
+           "ProfileError", "flat_efficiency", "plan", "plan_batch", "split_turn"]

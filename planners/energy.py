@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.config import EnergyWeights
+from planners.config import EnergyWeights, PlannerConfig
+from planners.kinematics import key_frames
+from planners.leg import Leg
 
 __all__ = ["walking_energy", "vertical_energy", "joint_energy", "total_energy",
-           "EV_PEAK_CM"]
+           "step_energy", "flat_efficiency", "EV_PEAK_CM"]
 
 #: Height [cm] where the printed quadratic of Eq. (2) peaks: 7.14 / (2 * 0.18).
 EV_PEAK_CM = 7.14 / 0.36
@@ -81,3 +83,50 @@ def total_energy(En: np.ndarray, Ev: np.ndarray, Ej: np.ndarray,
                  weights: EnergyWeights) -> np.ndarray:
     """Eq. (4): E = alpha En + beta Ev + gamma Ej [J/kg per step]."""
     return weights.alpha * En + weights.beta * Ev + weights.gamma * Ej
+
+
+def step_energy(stance_s, stance_z, front_s, front_z, summit_z, leg, speed,
+                config: PlannerConfig):
+    """Energy terms of steps from the stance to the front foothold (Eqs. 1-4).
+
+    Parameters
+    ----------
+    stance_s, stance_z, front_s, front_z : ndarray
+        Footholds [m] (broadcast together).
+    summit_z : ndarray
+        Swing-ankle height at mid-swing, key frame K1 [m].
+    leg : Leg
+        Leg geometry [m]; fields may be arrays broadcasting with the steps.
+    speed : float or ndarray
+        Target speed [m/s].
+    config : PlannerConfig
+
+    Returns
+    -------
+    En, Ev, Ej, E : ndarray
+        Eq. 1 [cal/kg], Eq. 2 [its unit], Eq. 3 [J/kg], Eq. 4 [J/kg] per step.
+    reachable : ndarray of bool
+        Knee reachable at every key frame.
+    """
+    kf = key_frames(stance_s, stance_z, front_s, front_z, stance_s, summit_z, leg,
+                    config.pelvis_height_ratio, config.knee_max_flexion,
+                    leg.ankle_height + 0.75 * config.swing_lift)
+    w = config.weights
+    En = walking_energy(front_s - stance_s, speed)
+    Ev = vertical_energy(front_z - stance_z, w.down_ratio)
+    Ej = joint_energy(kf.thigh_rotation, kf.calf_rotation, w)
+    return En, Ev, Ej, total_energy(En, Ev, Ej, w), kf.reachable
+
+
+def flat_efficiency(leg: Leg, speed: float, step_lengths,
+                    config: PlannerConfig | None = None) -> np.ndarray:
+    """Eq. 5 on flat ground: step length / E [m kg/J] for each step length [m] (Fig. 2).
+
+    The swing ankle at mid-swing is at the summit of the initial §5.2 curve.
+    """
+    config = PlannerConfig() if config is None else config
+    L = np.asarray(step_lengths, dtype=float)
+    zero = np.zeros_like(L)
+    summit = zero + leg.ankle_height + 0.75 * config.swing_lift
+    _, _, _, E, _ = step_energy(zero, zero, L, zero, summit, leg, speed, config)
+    return L / E

@@ -16,8 +16,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from planners.config import PlannerConfig
-from planners.energy import joint_energy, total_energy, vertical_energy, walking_energy
-from planners.kinematics import key_frames
+from planners.energy import step_energy
 from planners.legality import Reason, foot_support, snap_to_support
 from planners.profile import GroundProfile
 from planners.swing import adjust_swings
@@ -276,29 +275,29 @@ def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
     return lo, (config.max_step_ratio * length - lo) / config.intervals
 
 
-def _step_energy(stance_s, stance_z, front_s, front_z, summit_z, legs, speeds, config):
-    """Energy terms and knee reach of steps (arrays broadcast to (A, N)) [see Eqs. 1-4]."""
-    kf = key_frames(stance_s, stance_z, front_s, front_z, stance_s, summit_z, legs,
-                    config.pelvis_height_ratio, config.knee_max_flexion,
-                    legs.ankle_height + 0.75 * config.swing_lift)
-    w = config.weights
-    length = front_s - stance_s
-    rise = front_z - stance_z
-    En = walking_energy(length, speeds)
-    Ev = vertical_energy(rise, w.down_ratio)
-    Ej = joint_energy(kf.thigh_rotation, kf.calf_rotation, w)
-    return En, Ev, Ej, total_energy(En, Ev, Ej, w), kf.reachable
+_NEUTRAL_CACHE: dict = {}
 
 
 def neutral_index(legs, speeds: np.ndarray, config: PlannerConfig) -> np.ndarray:
-    """Grid index (A,) of the most efficient step on flat ground (s_init of §4.2)."""
-    lo, delta = grid(legs, config)
-    L = lo[:, None] + delta[:, None] * np.arange(config.intervals + 1)
-    leg = _LegArrays(legs)
-    zero = np.zeros_like(L)
-    summit = leg.ankle_height + 0.75 * config.swing_lift + zero
-    _, _, _, E, _ = _step_energy(zero, zero, L, zero, summit, leg, speeds[:, None], config)
-    return np.argmax(L / E, axis=1)
+    """Grid index (A,) of the most efficient step on flat ground (s_init of §4.2).
+
+    With En proportional to the step length at a given speed (Eq. 1 with cadence
+    v / L), the best flat step minimises Ej / L and does not depend on the speed; it is
+    cached per (leg, config). ``speeds`` is accepted for clarity of the interface.
+    """
+    missing = list({leg: None for leg in legs if (leg, config) not in _NEUTRAL_CACHE})
+    if missing:
+        lo, delta = grid(missing, config)
+        L = lo[:, None] + delta[:, None] * np.arange(config.intervals + 1)
+        leg = _LegArrays(missing)
+        zero = np.zeros_like(L)
+        summit = leg.ankle_height + 0.75 * config.swing_lift + zero
+        _, _, _, E, _ = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
+        if len(_NEUTRAL_CACHE) > 4096:
+            _NEUTRAL_CACHE.clear()
+        for i, best in enumerate(np.argmax(L / E, axis=1)):
+            _NEUTRAL_CACHE[(missing[i], config)] = int(best)
+    return np.array([_NEUTRAL_CACHE[(leg, config)] for leg in legs])
 
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
@@ -354,8 +353,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     rise = front_z - stance_z
     highest = profile.max_height(base + stance_s, base + front_s)
     summit_z = highest + legs_col.ankle_height + 0.75 * config.swing_lift
-    En, Ev, Ej, E, reachable = _step_energy(stance_s, stance_z, front_s, front_z, summit_z,
-                                            legs_col, speeds[:, None], config)
+    En, Ev, Ej, E, reachable = step_energy(stance_s, stance_z, front_s, front_z, summit_z,
+                                           legs_col, speeds[:, None], config)
     reason = support[:, st.step_front].copy()
     reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)
     reason |= np.where(reachable, 0, int(Reason.KNEE_REACH))
@@ -374,12 +373,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         start = base[agent_of, 0] + node_s[agent_of, b_node]
         end = base[agent_of, 0] + node_s[agent_of, f_node]
         z_start, z_end = node_z[agent_of, b_node], node_z[agent_of, f_node]
-        margin = 2 * float(legs_col.foot_length.max())
-        ground = profile.raster(float(start.min()) - margin, float(end.max()) + margin,
-                                RASTER_CELL)
         # Spans with nothing above the (equal) foothold heights reuse the flat curve.
         stride = st.swing_stride[which]
-        flat = (stride >= 0) & (np.abs(z_end - z_start) <= 1e-9) & (ground.max_height(
+        flat = (stride >= 0) & (np.abs(z_end - z_start) <= 1e-9) & (profile.max_height(
             start - legs_col.heel_offset[agent_of, 0], end + legs_col.toe_offset[agent_of, 0])
             <= z_start + 1e-9)
         if flat.any():
@@ -393,6 +389,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             swing_ok[ag, which[rows]] = flat_ok[ag, stride[rows]]
         rest = ~flat
         if rest.any():
+            margin = 2 * float(legs_col.foot_length.max())
+            ground = profile.raster(float(start[rest].min()) - margin,
+                                    float(end[rest].max()) + margin, RASTER_CELL)
             ag = agent_of[rest]
             swing = adjust_swings(start[rest], z_start[rest], end[rest], z_end[rest], ground,
                                   legs_col.take(ag), config)
