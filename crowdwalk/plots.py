@@ -343,3 +343,48 @@ def plot_elevinterp_region(interp, leg, out, *, requests=None, title=None):
     ax.legend(fontsize=8)
     ax.set_title(title or "ElevInterp Height/Length space (Eq. 10)")
     return _save(fig, out)
+
+
+def plot_gait_validation(generated, reference, metrics, out,
+                         *, title="Generated joint flexion against Winter (1991), natural cadence"):
+    """Generated hip, knee and ankle flexion over a level stride against measured means
+    (issue 4 validation, as Sun & Metaxas 2001 Fig. 15).
+
+    Parameters
+    ----------
+    generated : mapping
+        ``t`` (F,) stride fraction [1] and ``Hip``/``Knee``/``Ankle`` (F,) flexion [deg].
+    reference : mapping
+        ``t`` (M,) and per joint the mean (M,) and ``<joint> sd`` (M,) [deg].
+    metrics : mapping of joint -> {"rms", "correlation", ...}
+        Shown in the panel titles (RMS [deg], Pearson r).
+    out : path
+        PNG file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+
+    plt = _pyplot()
+    joints = ("Hip", "Knee", "Ankle")
+    fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.2))
+    for ax, joint in zip(axes, joints, strict=True):
+        t_ref = 100 * np.asarray(reference["t"], dtype=float)
+        mean = np.asarray(reference[joint], dtype=float)
+        sd = np.asarray(reference[f"{joint} sd"], dtype=float)
+        ax.fill_between(t_ref, mean - sd, mean + sd, color="0.85", label="Winter ± 1 SD")
+        ax.plot(t_ref, mean, color="0.4", lw=1, ls="--", label="Winter mean")
+        ax.plot(100 * np.asarray(generated["t"]), generated[joint], color="C0", lw=1.5,
+                label="generated")
+        m = metrics.get(joint, {})
+        ax.set_title(f"{joint}: RMS {m.get('rms', np.nan):.1f}°, r = "
+                     f"{m.get('correlation', np.nan):.3f}", fontsize=9)
+        ax.set_xlabel("stride [%]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("flexion (+) [deg]")
+    axes[0].legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, out)

@@ -61,6 +61,8 @@ __all__ = [
     "solve_single_dof",
     "leg_elevations",
     "foot_points",
+    "joint_flexion",
+    "walk_cycle",
 ]
 
 _EY = np.array([0.0, 1.0, 0.0])
@@ -696,3 +698,56 @@ def leg_elevations(
         # the pelvis's up axis leaning forward = anterior tilt
         out[:, s, 3] = -sagittal_elevation(-rotations[:, 0, :, 2], heading)
     return out
+
+
+def joint_flexion(elevations: np.ndarray) -> np.ndarray:
+    """Sagittal hip, knee and ankle flexion [rad] from elevation angles (..., 4).
+
+    hip = thigh + pelvic anterior tilt (flexion +), knee = thigh − shank (flexion +),
+    ankle = foot − shank (dorsiflexion +; 0 with a vertical shank and a flat foot) — the
+    sign conventions of Winter (1991). Returns shape (..., 3).
+    """
+    e = np.asarray(elevations, dtype=float)
+    foot, shank, thigh, pelvis = e[..., 0], e[..., 1], e[..., 2], e[..., 3]
+    return np.stack([thigh + pelvis, thigh - shank, foot - shank], axis=-1)
+
+
+def walk_cycle(
+    angles: np.ndarray, height: float, samples: int = 100, style: GaitStyle | None = None,
+    heading: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One stride of ElevWalker on level ground, measured on the posed skeleton.
+
+    The left leg is the stance leg for t ∈ [0, 0.5) and the swing leg after, so the
+    returned curves cover the left leg's whole cycle from its heel strike.
+
+    Parameters
+    ----------
+    angles : (N, 4) elevation-angle dataset [rad].
+    height : body height [m].
+    samples : number of stride times t = i / samples.
+    style : GaitStyle, optional.
+    heading : sagittal-plane orientation ψ [rad].
+
+    Returns
+    -------
+    elevations : (samples, 4) left-leg elevation angles measured on the poses [rad].
+    converged : (samples,) bool.
+    """
+    from crowdwalk.gait.datasets import sample
+
+    t = np.arange(samples) / samples
+    body = Body.from_heights(np.full(samples, height))
+    left_stance = t < 0.5
+    phase = np.where(left_stance, t, t - 0.5)
+    psi = np.full(samples, heading)
+    stance = sample(angles, phase)
+    swing = sample(angles, phase + 0.5)
+    foot = StanceFoot.from_foothold(body, np.zeros((samples, 3)), psi, np.zeros(samples))
+    toe = np.full(samples, (style or GaitStyle()).toe_out)
+    pose = elevwalker_pose(
+        body, left_stance, phase, stance, swing, psi, foot, toe, WarmStart.neutral(samples),
+        style,
+    )  # fmt: skip
+    measured = leg_elevations(body, pose.positions, pose.rotations, psi)
+    return measured[:, 0], pose.converged
