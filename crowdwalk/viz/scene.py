@@ -40,7 +40,7 @@ ROUTE_COLOR = "#d9480f"
 WALKABLE_COLOR = "#1971c2"
 _HEAD_NAMES = ("skullbase", "skull_tip", "skull", "head", "vc4", "vc7")
 _COLOR_STYLE = {
-    "energy": dict(cmap="plasma", title="step energy"),
+    "energy": dict(cmap="plasma", title="step energy [J/kg]"),
     "planner": dict(cmap="Set1", title="planner"),
     "agent": dict(cmap="tab20", title="agent (id mod 20)"),
 }

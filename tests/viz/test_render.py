@@ -202,3 +202,26 @@ def test_movies_have_one_frame_per_tick_and_show_motion(offscreen, crowd, tmp_pa
         assert reader.count_frames() == 11
         first = reader.get_data(0)
     assert first.shape[:2] == (96, 160)
+
+
+def test_show_wires_slider_keys_and_timer_into_the_window(offscreen, crowd, monkeypatch):
+    import pyvista as pv
+
+    import crowdwalk.viz.scene as scene_module
+
+    shown = {}
+
+    class Window(pv.Plotter):  # the interactive window, off-screen, never blocking
+        def __init__(self, **kwargs):
+            super().__init__(off_screen=True, **kwargs)
+
+        def show(self, *args, **kwargs):
+            shown["plotter"] = self
+            shown["keys"] = set(self.iren._key_press_event_callbacks)
+
+    monkeypatch.setattr(scene_module.pv, "Plotter", Window)
+    poses, steps = crowd
+    Scene(poses=poses, footsteps=steps, walkable_area=AREA).show(time=0.5, size=(320, 200))
+    assert {"space", "Right", "Left", "Up", "Down", "c", "f"} <= shown["keys"]
+    assert shown["plotter"].widgets.slider_widgets
+    shown["plotter"].close()
