@@ -247,6 +247,10 @@ def render(
     if suffix not in (".png", *MOVIE_SUFFIXES):
         raise invalid("render", "out", "a .png, .gif or .mp4 file", str(out))
     width_height = parse_size(size)
+    if suffix == ".png" and (start is not None or end is not None):
+        raise invalid("render", "start", "unset for a .png (use --time) [s]", (start, end))
+    if suffix != ".png" and time is not None:
+        raise invalid("render", "time", "unset for a movie (use --start/--end) [s]", time)
     from crowdwalk.viz.headless import gl_available
 
     if not gl_available():

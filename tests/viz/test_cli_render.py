@@ -66,6 +66,8 @@ def test_render_png_and_gif(offscreen, run_dir, tmp_path):
         (["--out", "x.png", "--size", "big"], "render.size must be WIDTHxHEIGHT"),
         (["--out", "x.png", "--color", "mood"], "Scene.color must be one of energy"),
         (["--out", "x.gif", "--start", "2", "--end", "1"], "render.end must be >= start"),
+        (["--out", "x.gif", "--time", "1"], "render.time must be unset for a movie"),
+        (["--out", "x.png", "--start", "1"], "render.start must be unset for a .png"),
     ],
 )
 def test_bad_options_exit_2_with_one_line(offscreen, run_dir, tmp_path, args, message):
