@@ -300,7 +300,7 @@ def solve_single_dof(
         better = g > score
         best = np.where(better, cand, best)
         score = np.where(better, g, score)
-    return _wrap(best), ok & (score > 0)
+    return _wrap(best), ok & (score > 1e-6)  # a vanishing projection has no elevation
 
 
 def _gauss_newton(residual, x0: np.ndarray, tol: float, max_iter: int,
