@@ -119,6 +119,30 @@ def make_periodic(curve: np.ndarray) -> np.ndarray:
     return closed[:N_SAMPLES]
 
 
+def warp_to_half(curve: np.ndarray, cfs: float) -> tuple[np.ndarray, callable]:
+    """Resample a periodic (N, 4) curve so contralateral foot strike falls at t = 0.5.
+
+    ElevWalker pairs the legs as c(t) and c(t + 0.5) (Sun & Metaxas 2001, §4), i.e. it
+    assumes the other foot strikes at half the stride; the measured mean curves put it at
+    ``cfs`` (50.4–51 % level, 53 % up and 56 % down the stairs). The smooth periodic warp
+    s(t) = t + (cfs − 0.5) sin²(π t) maps t = 0.5 to s = cfs, keeps t = 0 and t = 1, and
+    has s'(0) = s'(1) = 1, so the resampled curve stays C¹ and periodic. Returns the
+    warped curve and the inverse map (measured cycle fraction → dataset t).
+    """
+    from crowdwalk.gait.datasets import sample
+
+    b = cfs - 0.5
+    t = np.arange(N_SAMPLES) / N_SAMPLES
+    warped = sample(curve, t + b * np.sin(np.pi * t) ** 2)
+    fine = np.linspace(0.0, 1.0, 2001)
+    forward = fine + b * np.sin(np.pi * fine) ** 2
+
+    def inverse(fraction: float) -> float:
+        return float(np.interp(fraction, forward, fine))
+
+    return warped, inverse
+
+
 def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
     """Elevation-angle datasets: angles (7, 100, 4) [rad] and per-dataset metadata."""
     sys.path.insert(0, str(REPO))
@@ -145,7 +169,12 @@ def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
         thigh = c["Thigh Flex/Extension"]
         pelvis = -c[PELVIS] - pelvis_neutral
         deg = np.stack([make_periodic(x) for x in (foot, shank, thigh, pelvis)], axis=-1)
+        deg, to_t = warp_to_half(deg, cfs)
         angles.append(np.deg2rad(deg))
+        # Phase events in dataset time t: foot-off of this leg; double support is the two
+        # intervals [0, contralateral foot-off] and [contralateral strike, foot-off].
+        fo = to_t(p["Ipsilateral Foot Off [% cycle]"] / 100)
+        double = to_t(cfo) + (fo - 0.5)
         stride_m = p["Stride length [m]"]
         stride_bh = p["Stride length / BH [%BH]"] / 100
         height = stride_m / stride_bh
@@ -156,8 +185,8 @@ def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
                 "speed": round(p["Gait speed / BH [%BH / s]"] / 100 * height, 4),
                 "body_height": round(height, 4),
                 "stride_length": round(stride_bh, 4),
-                "stance_fraction": round(p["Ipsilateral Foot Off [% cycle]"] / 100, 4),
-                "double_support": round(p["Double support [% cycle]"] / 100, 4),
+                "stance_fraction": round(fo, 4),
+                "double_support": round(double, 4),
                 "stride_time": round(p["Stride time [s]"], 4),
                 "source": f"{BOVI} Task {task!r}.",
             }
@@ -258,9 +287,11 @@ def derive_all(gait_dir: Path) -> tuple[np.ndarray, dict, dict]:
     """Everything the package ships: angles, dataset metadata, normative references."""
     angles, meta = derive_datasets(gait_dir)
     norm = derive_normative(gait_dir)
-    natural = next(m for m in meta if m["name"] == "level_natural")
-    norm["phases"]["stance_fraction_natural"] = natural["stance_fraction"]
-    norm["phases"]["double_support_fraction_natural"] = natural["double_support"]
+    bovi = read_bovi_parameters(gait_dir / BOVI_FILE)["Natural"]
+    norm["phases"]["stance_fraction_natural"] = round(
+        bovi["Ipsilateral Foot Off [% cycle]"] / 100, 4)
+    norm["phases"]["double_support_fraction_natural"] = round(
+        bovi["Double support [% cycle]"] / 100, 4)
     header = {
         "angle_columns": ["foot", "shank", "thigh", "pelvis"],
         "angle_unit": "rad",

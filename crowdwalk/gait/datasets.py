@@ -3,7 +3,8 @@
 A dataset is one mean gait cycle of one leg in the representation of Sun & Metaxas
 (2001, §4): the sagittal elevation angles of foot, shank, thigh and pelvis over a
 normalised stride ``t ∈ [0, 1)``, ``t = 0`` at heel strike of the leg it describes (the
-other leg uses ``t + 0.5``). Angle conventions are those of ``docs/architecture.md``
+other leg uses ``t + 0.5``; the measured curves are time-warped so that the other foot's
+measured heel strike falls at ``t = 0.5``). Angle conventions are those of ``docs/architecture.md``
 ("crowdwalk.gait"):
 
 - shank, thigh: angle of the proximal→distal vector (hip→knee, knee→ankle) from the
@@ -73,9 +74,9 @@ class ElevationDataset:
         Height gained per step normalised by body height [1] (0 on level ground; positive
         up the stairs), measured from the angles by sagittal forward kinematics.
     stance_fraction : float
-        Ipsilateral foot-off as a fraction of the stride [1].
+        Foot-off of this leg in dataset time t [1].
     double_support : float
-        Fraction of the stride with both feet on the ground [1].
+        Part of the stride (in t) with both feet on the ground [1].
     stride_time : float
         Duration of one stride [s].
     angles : numpy.ndarray

@@ -73,11 +73,12 @@ def test_foot_roll_keeps_contact_points_fixed():
 
 
 def test_dataset_steps_match_measured_strides():
-    # Eq. 10 on the measured curves reproduces half of Bovi's measured stride (±3 %).
+    # Eq. 10 on the measured curves reproduces half of Bovi's measured stride (±4 %, with
+    # generic Winter segment proportions for the group's mean height).
     for name in LEVEL:
         d = dataset_by_name(name)
         sl, sh = dataset_step(d, leg(d.body_height)) / d.body_height
-        assert sl == pytest.approx(d.stride_length / 2, rel=0.03), name
+        assert sl == pytest.approx(d.stride_length / 2, rel=0.04), name
         assert abs(sh) < 0.02, name
 
 
@@ -190,10 +191,19 @@ def test_same_dataset_for_every_body_size_at_the_same_normalised_step():
     # Size invariance: a step scaled with leg length gets the same angle curves.
     sizes = np.array([1.5, 1.7, 1.95])
     body = leg(sizes)
-    req = np.array([0.42, 0.02]) * body.length[:, None]
-    out = ElevInterp().request(body, req[:, 0], req[:, 1])
-    np.testing.assert_allclose(out.angles[0], out.angles[2], atol=1e-9)
-    np.testing.assert_allclose(out.step_length / body.length, 0.42, atol=1e-3)
+    interp = ElevInterp(config=ElevInterpConfig(max_inserted=0))
+    unit = interp.source_steps(leg(1.0)) / leg(1.0).length  # per leg length
+    for normalised, exact in [
+        (0.5 * (unit[2] + unit[3]), True),  # between natural and M: no search needed
+        (np.array([0.42, 0.02]), False),  # searched: equal up to the solver tolerance
+    ]:
+        req = normalised * body.length[:, None]
+        out = interp.request(body, req[:, 0], req[:, 1])
+        assert out.refined.any() != exact
+        atol = 1e-9 if exact else 2e-3
+        np.testing.assert_allclose(out.angles[0], out.angles[2], atol=atol)
+        np.testing.assert_allclose(out.angles[1], out.angles[2], atol=atol)
+        np.testing.assert_allclose(out.step_length / body.length, normalised[0], atol=3e-3)
 
 
 def test_solved_datasets_are_inserted_and_reused():
