@@ -2,74 +2,86 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
+from planners.dp import cheapest
 from planners.lattice import StepTables
-from planners.search import SearchResult, all_configs_evaluated, neighbour_deltas
+from planners.search import SearchResult, neighbour_deltas
 
-__all__ = ["find_init", "best_first"]
+__all__ = ["find_init", "greedy", "hill_climb", "best_first"]
 
 
-def find_init(tables: StepTables) -> SearchResult:
+@lru_cache(maxsize=64)
+def _rings(n: int, J: int, centre: int):
+    """Configurations ordered by grid (L1) distance from (centre, ..., centre).
+
+    Returns the ordered configurations (J**n, n) and, per distance d, the end of ring d.
+    """
+    grid = np.indices((J,) * n).reshape(n, -1).T
+    dist = np.abs(grid - centre).sum(axis=1)
+    order = np.argsort(dist, kind="stable")
+    ends = np.searchsorted(dist[order], np.arange(dist.max() + 1), side="right")
+    return grid[order], ends
+
+
+def find_init(tables: StepTables, centres: np.ndarray | None = None) -> SearchResult:
     """FIND_INIT (Fig. 3): the legal configuration nearest to (s_init, ..., s_init).
 
     Breadth-first search on the grid from ``q_init`` expands illegal configurations until
     it meets a legal one, i.e. it returns a legal configuration at the smallest grid
-    (L1) distance from ``q_init``. Vectorised: ``q_init`` is looked up for every agent;
-    only agents where it is illegal evaluate the whole grid, and among the nearest legal
-    configurations the most efficient is taken (Fig. 3 leaves the order within one
-    breadth-first ring open). ``checks`` counts the configurations breadth-first search
-    would have examined (all closer ones, plus one).
+    (L1) distance from ``q_init``. Where ``q_init`` itself is illegal that nearest legal
+    configuration is found exactly by dynamic programming over the lattice (distance is
+    a sum over steps; ties go to the lower energy, an order Fig. 3 leaves open).
+    ``checks`` and ``expanded`` count the configurations breadth-first search would
+    examine (all closer ones, plus one) and expand (all closer ones).
+
+    Parameters
+    ----------
+    tables : StepTables
+    centres : ndarray of int, shape (A,), optional
+        Step-length index of ``q_init`` per agent; default the neutral step.
     """
     A = tables.neutral.size
-    n, J = tables.struct.n, tables.struct.J
-    q_init = np.repeat(tables.neutral[:, None], n, axis=1).astype(np.int64)
-    agents = np.arange(A)
-    legal, _ = tables.evaluate(agents, q_init)
-    configs = q_init.copy()
+    st = tables.struct
+    n, J = st.n, st.J
+    centres = tables.neutral if centres is None else centres
+    configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
+    legal, _ = tables.evaluate(np.arange(A), configs)
     found = legal.copy()
     checks = np.ones(A, dtype=np.int64)
     blocked = np.flatnonzero(~legal)
     if blocked.size:
-        all_legal, all_eff = all_configs_evaluated(tables, blocked)
-        grid = tables.struct.all_configs.astype(np.int64)
-        dist = np.abs(grid[None, :, :] - tables.neutral[blocked, None, None]).sum(axis=-1)
-        score = np.where(all_legal, dist * 1e6 - all_eff, np.inf)
-        best = np.argmin(score, axis=1)
-        ok = np.isfinite(score[np.arange(blocked.size), best])
-        configs[blocked] = grid[best]
+        dist = np.abs(st.step_j[None, :] - centres[blocked, None])
+        cost = dist + 1e-7 * tables.E[blocked]
+        best, ok = cheapest(tables, cost, blocked)
+        configs[blocked[ok]] = best[ok]
         found[blocked] = ok
-        d_best = dist[np.arange(blocked.size), best]
-        checks[blocked] = np.where(ok, (dist < d_best[:, None]).sum(axis=1) + 1, J**n)
-    return SearchResult(configs, found, checks.copy(), checks)
+        d = np.abs(best - centres[blocked, None]).sum(axis=1)
+        closer = np.array([_rings(n, J, int(c))[1][max(int(k) - 1, 0)] if k > 0 else 0
+                           for c, k in zip(centres[blocked], d, strict=True)])
+        checks[blocked] = np.where(ok, closer + 1, J**n)
+    return SearchResult(configs, found, np.maximum(checks - 1, 1), checks)
 
 
-def best_first(tables: StepTables) -> SearchResult:
-    """Best-first planning (Fig. 4) from the FIND_INIT configuration, all agents at once.
+def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
+    """BFP (Fig. 4) from ``configs`` (B, n) for table rows ``agents`` (B,), vectorised.
 
-    Fig. 4 pops the most efficient open configuration, opens its better unvisited legal
-    neighbours and stops at a configuration none of whose legal neighbours is better.
-    Since every opened neighbour is better than the node that opened it and the best
-    open node is always expanded next, this is steepest-ascent hill climbing on
-    efficiency over the grid neighbourhood (+-1 interval in one step), which is how it
-    is run here: one vectorised neighbour evaluation per expansion for every agent.
+    Returns the local optima (B, n), their efficiencies (B,), expansions and checks (B,).
     """
-    init = find_init(tables)
     J = tables.struct.J
     deltas = neighbour_deltas(tables.struct.n)
-    configs = init.configs.copy()
-    expanded = init.expanded.copy()
-    checks = init.checks.copy()
-    agents = np.flatnonzero(init.found)
-    if agents.size:
-        _, eff = tables.evaluate(agents, configs[agents])
-        current = np.full(configs.shape[0], -np.inf)
-        current[agents] = eff
-    active = agents
+    configs = configs.copy()
+    B = agents.size
+    expanded = np.zeros(B, dtype=np.int64)
+    checks = np.zeros(B, dtype=np.int64)
+    _, current = tables.evaluate(agents, configs)
+    active = np.arange(B)
     while active.size:
         neighbours = configs[active, None, :] + deltas[None, :, :]
         inside = ((neighbours >= 0) & (neighbours < J)).all(axis=-1)
-        legal, eff = tables.evaluate(active, np.clip(neighbours, 0, J - 1))
+        legal, eff = tables.evaluate(agents[active], np.clip(neighbours, 0, J - 1))
         eff = np.where(inside & legal, eff, -np.inf)
         expanded[active] += 1
         checks[active] += inside.sum(axis=1)
@@ -80,4 +92,69 @@ def best_first(tables: StepTables) -> SearchResult:
         configs[movers] = neighbours[better, best[better]]
         current[movers] = best_eff[better]
         active = movers
-    return SearchResult(configs, init.found, expanded, checks)
+    return configs, current, expanded, checks
+
+
+def greedy(tables: StepTables) -> SearchResult:
+    """Step by step, the legal step of highest own efficiency (length / E); no lookahead."""
+    st = tables.struct
+    A, n, J = tables.neutral.size, st.n, st.J
+    configs = np.zeros((A, n), dtype=np.int64)
+    found = np.ones(A, dtype=bool)
+    rows = np.arange(A)[:, None]
+    for k in range(n):
+        trial = np.repeat(configs[:, None, :], J, axis=1)
+        trial[:, :, k] = np.arange(J)
+        steps, swings = st.indices(trial)
+        s, w = steps[:, :, k], swings[:, :, k]
+        score = np.where(tables.step_legal[rows, s] & tables.swing_ok[rows, w],
+                         tables.length[rows, s] / tables.E[rows, s], -np.inf)
+        best = np.argmax(score, axis=1)
+        found &= np.isfinite(score[rows[:, 0], best])
+        configs[:, k] = best
+    checks = np.full(A, n * J, dtype=np.int64)
+    return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
+
+
+def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
+    """Best-first planning (Fig. 4) after FIND_INIT, all agents at once.
+
+    Fig. 4 pops the most efficient open configuration, opens its better unvisited legal
+    neighbours and stops at a configuration none of whose legal neighbours is better.
+    Since every opened neighbour is better than the node that opened it and the best
+    open node is always expanded next, this is steepest-ascent hill climbing on
+    efficiency over the grid neighbourhood, run here with one vectorised neighbour
+    evaluation per expansion for every agent.
+
+    Deviations (measured in ``benchmarks/bench_planners.py``): the neighbourhood also
+    moves single footholds (see :func:`~planners.search.neighbour_deltas`), and the
+    search runs from ``starts`` initial configurations (``PlannerConfig.search_starts``)
+    -- FIND_INIT from the neutral step, then the step-by-step greedy configuration, then
+    FIND_INIT from constant steps spread over the grid -- keeping the best local optimum;
+    ``starts = 1`` is the paper's single search.
+    """
+    A = tables.neutral.size
+    J = tables.struct.J
+    starts = tables.config.search_starts if starts is None else starts
+    results = [find_init(tables)]
+    if starts >= 2:
+        results.append(greedy(tables))
+    spread = np.linspace(0, J - 1, max(starts - 2, 0) + 2)[1:-1].round().astype(np.int64)
+    results += [find_init(tables, np.full(A, c)) for c in spread]
+    rows = np.concatenate([np.flatnonzero(r.found) for r in results])
+    start_configs = np.concatenate([r.configs[r.found] for r in results])
+    expanded = sum(r.expanded for r in results)
+    checks = sum(r.checks for r in results)
+    found = results[0].found.copy()
+    for r in results[1:]:
+        found |= r.found
+    configs = results[0].configs.copy()
+    if rows.size:
+        local, eff, exp, chk = hill_climb(tables, rows, start_configs)
+        np.add.at(expanded, rows, exp)
+        np.add.at(checks, rows, chk)
+        order = np.lexsort((-eff, rows))  # per agent, best first
+        first = np.ones(order.size, dtype=bool)
+        first[1:] = rows[order][1:] != rows[order][:-1]
+        configs[rows[order][first]] = local[order][first]
+    return SearchResult(configs, found, expanded, checks)

@@ -90,6 +90,9 @@ class PlannerConfig:
         Pelvis above the stance ankle at mid-stance, fraction of the leg length [-].
     turn_threshold : float
         Largest foot rotation per step on curved paths (§5.4) [rad].
+    search_starts : int
+        Initial configurations of ``best_first`` (1 is the paper's single FIND_INIT +
+        BFP; more add the greedy configuration and constant-step starts).
     snap : bool
         Let each lattice foothold slide by up to half a grid increment to the nearest
         position where the whole foot is supported (deviation from the fixed grid of
@@ -115,12 +118,13 @@ class PlannerConfig:
     knee_max_flexion: float = math.radians(130.0)
     pelvis_height_ratio: float = 0.96
     turn_threshold: float = math.radians(45.0)
+    search_starts: int = 4
     snap: bool = True
     weights: EnergyWeights = field(default_factory=EnergyWeights)
 
     def __post_init__(self) -> None:
         ints = {"n_steps": (1, 5), "intervals": (2, 40), "bezier_samples": (4, 200),
-                "max_adjustments": (0, 1000)}
+                "max_adjustments": (0, 1000), "search_starts": (1, 41)}
         for name, (lo, hi) in ints.items():
             value = getattr(self, name)
             if not (isinstance(value, int) and lo <= value <= hi):

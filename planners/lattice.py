@@ -210,6 +210,7 @@ class StepTables:
     swing_ok: np.ndarray
     controls: np.ndarray
     rounds: np.ndarray
+    config: PlannerConfig
 
     @cached_property
     def step_legal(self) -> np.ndarray:
@@ -401,4 +402,4 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             rounds[ag, which[rest]] = swing.rounds
             swing_ok[ag, which[rest]] = swing.ok
     return StepTables(st, lo, delta, neutral, node_s, node_z, front_s - stance_s, rise,
-                      En, Ev, Ej, E, reason, swing_ok, controls, rounds)
+                      En, Ev, Ej, E, reason, swing_ok, controls, rounds, config)

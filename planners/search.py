@@ -35,10 +35,21 @@ class SearchResult:
     checks: np.ndarray
 
 
-def neighbour_deltas(n: int) -> np.ndarray:
-    """Grid neighbours of a configuration: +-1 in one step length, shape (2n, n)."""
+def neighbour_deltas(n: int, shifts: bool = True) -> np.ndarray:
+    """Grid neighbours of a configuration, shape (2n [+ 2(n-1)], n).
+
+    The grid neighbours of Fig. 4 change one step length by one interval, which moves
+    every later foothold too. With ``shifts`` the neighbourhood also holds the moves of a
+    single foothold by one interval (step i one longer and step i+1 one shorter, or the
+    reverse), which lets the search slide one foot off an obstacle without disturbing
+    the others.
+    """
     eye = np.eye(n, dtype=np.int64)
-    return np.concatenate([-eye, eye])
+    moves = [-eye, eye]
+    if shifts and n > 1:
+        shift = eye[:-1] - eye[1:]
+        moves += [shift, -shift]
+    return np.concatenate(moves)
 
 
 def all_configs_evaluated(tables: StepTables, agents: np.ndarray):

@@ -1,0 +1,90 @@
+"""Dynamic programming over the foothold lattice: the cheapest legal configuration.
+
+The state before step k is (m_{k-1}, j_{k-1}): the lattice index of the stance foothold
+and the previous step (the swing curve of step k depends on f_{k-2} = m_{k-1} - j_{k-1}).
+Step costs are additive, so one pass per depth over (state, j_k) gives the exact minimum
+for all agents at once.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from planners.lattice import StepTables, Structure
+
+__all__ = ["cheapest"]
+
+
+@lru_cache(maxsize=16)
+def _depth_indices(struct: Structure):
+    """Per depth: step and swing indices (M, P, J) over (m_{k-1}, j_{k-1}, j_k), validity."""
+    J, out = struct.J, []
+    for k in range(1, struct.n + 1):
+        M = (J - 1) * (k - 1) + 1
+        P = 1 if k == 1 else J
+        m, jp, j = np.meshgrid(np.arange(M), np.arange(P), np.arange(J), indexing="ij")
+        step = struct.step_offset[k - 1] + m * J + j
+        if k == 1:
+            swing = struct.swing_offset[0] + j
+            valid = np.ones(m.shape, dtype=bool)
+        else:
+            m2 = m - jp  # lattice index of f_{k-2}; states outside its range are impossible
+            valid = (m2 >= 0) & (m2 <= (J - 1) * (k - 2))
+            m2 = np.clip(m2, 0, (J - 1) * (k - 2))
+            swing = struct.swing_offset[k - 1] + m2 * struct.swing_strides[k - 1] + jp + j
+        out.append((step, swing, valid))
+    return out
+
+
+def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | None = None):
+    """The legal configuration of least total ``step_cost`` for each agent.
+
+    Parameters
+    ----------
+    tables : StepTables
+    step_cost : ndarray, shape (B, Ns)
+        Additive cost of every step entry, for the agents ``agents``.
+    agents : ndarray of int, shape (B,), optional
+        Rows of ``tables`` (default: all).
+
+    Returns
+    -------
+    configs : ndarray of int, shape (B, n)
+    found : ndarray of bool, shape (B,)
+    """
+    st = tables.struct
+    J, n = st.J, st.n
+    agents = np.arange(tables.neutral.size) if agents is None else agents
+    B = agents.size
+    rows = agents[:, None, None, None]
+    value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
+    choices = []
+    for k, (step, swing, valid) in enumerate(_depth_indices(st), start=1):
+        legal = valid & tables.step_legal[rows, step] & tables.swing_ok[rows, swing]
+        total = np.where(legal, value[..., None] + step_cost[np.arange(B)[:, None, None, None],
+                                                             step], np.inf)
+        best_prev = np.argmin(total, axis=2)  # over j_{k-1}: (B, M, J)
+        best = np.take_along_axis(total, best_prev[:, :, None, :], axis=2)[:, :, 0, :]
+        M = step.shape[0]
+        new = np.full((B, M + J - 1, J), np.inf)
+        m, j = np.meshgrid(np.arange(M), np.arange(J), indexing="ij")
+        new[:, m + j, j] = best
+        arg = np.zeros((B, M + J - 1, J), dtype=np.int64)
+        arg[:, m + j, j] = best_prev
+        choices.append(arg)
+        value = new
+        if k == n:
+            break
+    flat = value.reshape(B, -1)
+    last = np.argmin(flat, axis=1)
+    found = np.isfinite(flat[np.arange(B), last])
+    m_end, j_end = np.divmod(last, J)
+    configs = np.zeros((B, n), dtype=np.int64)
+    m_cur, j_cur = m_end, j_end
+    for k in range(n, 0, -1):
+        configs[:, k - 1] = j_cur
+        jp = choices[k - 1][np.arange(B), m_cur, j_cur]
+        m_cur, j_cur = m_cur - j_cur, jp
+    return configs, found
