@@ -102,10 +102,11 @@ class ElevationDataset:
         owner = "ElevationDataset"
         if self.kind not in DATASET_KINDS:
             raise invalid(owner, "kind", f"one of {DATASET_KINDS}", self.kind)
-        for name in ("speed", "body_height", "stride_length", "stride_time"):
+        units = {"speed": "m/s", "body_height": "m", "stride_length": "1", "stride_time": "s"}
+        for name, unit in units.items():
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
-                raise invalid(owner, name, "finite and > 0", value)
+                raise invalid(owner, name, f"finite and > 0 [{unit}]", value)
         for name in ("stance_fraction", "double_support"):
             value = getattr(self, name)
             if not (np.isfinite(value) and 0 < value < 1):

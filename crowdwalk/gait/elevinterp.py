@@ -231,18 +231,19 @@ class ElevInterpConfig:
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
-        for name in ("tolerance", "insert_spacing", "shape_resolution"):
+        units = {"tolerance": "m", "insert_spacing": "1", "shape_resolution": "1"}
+        for name, unit in units.items():
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
-                raise invalid(owner, name, "finite and > 0", value)
+                raise invalid(owner, name, f"finite and > 0 [{unit}]", value)
         for name in ("extrapolation", "last_resort_extrapolation"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise invalid(owner, name, "finite and >= 0 [1]", value)
         if self.max_iterations < 1:
-            raise invalid(owner, "max_iterations", ">= 1", self.max_iterations)
+            raise invalid(owner, "max_iterations", ">= 1 [1]", self.max_iterations)
         if self.max_inserted < 0:
-            raise invalid(owner, "max_inserted", ">= 0", self.max_inserted)
+            raise invalid(owner, "max_inserted", ">= 0 [1]", self.max_inserted)
 
 
 @dataclass(frozen=True, eq=False)
