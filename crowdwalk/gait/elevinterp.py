@@ -18,13 +18,21 @@ Implementation notes (deviations and choices, each measured in the tests/benchma
   bodies made by ``Body.from_heights`` share one, whatever their height, and the cache
   (triangulation plus inserted datasets) is keyed by the shape rounded to 0.5 %.
 - Slopes. There are no measured slope datasets. Step height is reached by interpolating
-  between the level datasets (SH ≈ 0) and the stair datasets (SH ≈ ±0.04…0.08 H); the
-  hull of the measured points is the legal region. Requests outside it are clamped to
-  the nearest point of the hull and flagged (``clamped``).
-- Gauss–Newton runs on the two free barycentric weights of the located triangle (the
-  blend stays an affine combination of three measured curves) with finite-difference
-  Jacobians, batched over all requests; a request that does not converge keeps its best
-  iterate and is flagged (``converged`` False).
+  between the level datasets (SH ≈ −0.01 H) and the stair datasets (SH ≈ +0.08 H up,
+  −0.06 H down); the hull of the measured points is the legal region (for a 1.75 m body
+  a triangle with corners about (0.87, −0.02), (0.26, +0.14), (0.37, −0.11) m). Level
+  steps up to ~0.8 m and moderate up/down steps are served; slopes' long steps with
+  large rises are clamped to the nearest point of the hull and flagged (``clamped``).
+- Eq. 10 is extended with the §4.1 foot–floor model (a pitched-down foot rolls on its
+  ball, a pitched-up one on its heel) and measured between footholds; the pelvis terms
+  cancel in the sagittal projection and are dropped.
+- Gauss–Newton runs on the two free barycentric weights of a triangle (the blend stays
+  an affine combination of three measured curves, every weight ≥ −0.2) with
+  finite-difference Jacobians, batched over all requests. Eq. 10 folds where toe-first
+  and heel-first landings are blended, so a request that the located triangle cannot
+  reach is retried in the neighbouring triangles, then with weights ≥ −1. What still
+  misses (a few % of the hull area, errors ≤ 1.5 cm) keeps its best blend and is
+  flagged (``clamped``, ``converged`` False).
 """
 
 from __future__ import annotations
