@@ -173,6 +173,8 @@ class PoseFrame:
     positions : (k, J, 3) joint world positions [m].
     contact : (k, 2) bool, left/right foot on the ground.
     fallback : (k,) bool, a solve did not converge and the previous pose was kept.
+    stance_left : (k,) bool, the left foot is the stance foot (the one the root is
+        computed from, §4.1); in double support both feet are in ``contact``.
     """
 
     agents: np.ndarray
@@ -183,6 +185,7 @@ class PoseFrame:
     positions: np.ndarray
     contact: np.ndarray
     fallback: np.ndarray
+    stance_left: np.ndarray
 
 
 class Animator:
@@ -428,7 +431,18 @@ class Animator:
             positions=positions,
             contact=contact,
             fallback=fallback,
+            stance_left=self._stance_left[a].copy(),
         )
+
+    def followed_angles(self, t: float, agents: np.ndarray):
+        """The elevation angles the walker follows at time ``t`` [s] for ``agents`` (k,):
+        stance leg (k, 4) and swing leg (k, 4) [rad], stance side (k,) bool (True = left)
+        and the stance phase (k,) [1] — for diagnostics and validation."""
+        a = np.atleast_1d(np.asarray(agents))
+        phase = np.clip(0.5 * (t - self._t0[a]) / self._duration[a], 0.0, _PHASE_END)
+        angles = self._angles[a]
+        return (sample(angles, phase), sample(angles, phase + 0.5), self._stance_left[a].copy(),
+                phase)  # fmt: skip
 
     # -- internals --------------------------------------------------------------------
     def _foot_pitch(self, a: np.ndarray, phase: np.ndarray, stance: bool) -> np.ndarray:

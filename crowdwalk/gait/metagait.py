@@ -332,6 +332,7 @@ def animate_paths(
     fps: float,
     animator=None,
     metagait: MetaGait | None = None,
+    on_frame: Callable | None = None,
 ) -> list:
     """Walk n agents along paths: MetaGait decides each step, the Animator poses them.
 
@@ -349,6 +350,8 @@ def animate_paths(
     fps : float, output frames per second [1/s].
     animator : Animator, optional (default: a new one for ``body`` and ``ground``).
     metagait : MetaGait, optional.
+    on_frame : callable, optional
+        Called as ``on_frame(frame, animator)`` after every frame (diagnostics).
 
     Returns
     -------
@@ -392,4 +395,6 @@ def animate_paths(
             stance[due] = cmd.target
             swing_foot[due] = 1 - swing_foot[due]
         frames.append(animator.pose(t))
+        if on_frame is not None:
+            on_frame(frames[-1], animator)
     return frames
