@@ -79,6 +79,27 @@ def schema() -> None:
 # --- planning (issue 3): plan -------------------------------------------------------
 
 
+@app.command("plan")
+@friendly_errors
+def plan_command(
+    profile: Path = typer.Option(..., "--profile", help="CSV with columns s,z [m]; a vertical "
+                                 "height change is two rows with the same s."),
+    planner: str = typer.Option("best_first", "--planner",
+                                help="best_first (Chen & Li), fixed (unplanned) or optimal."),
+    body_height: float = typer.Option(1.75, "--body-height", help="Body height [m]."),
+    speed: float = typer.Option(1.34, "--speed", help="Walking speed [m/s]."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write a plot of the plan (PNG)."),
+) -> None:
+    """Plan the next footsteps on a ground profile (exit 1 when no legal foothold)."""
+    from crowdwalk.planning import format_plan, plan_profile
+
+    result = plan_profile(profile, planner, body_height, speed, plot)
+    typer.echo(format_plan(result, as_json))
+    if not result.ok:
+        raise typer.Exit(1)
+
+
 # --- simulation (issue 5): run, compare ---------------------------------------------
 
 

@@ -388,3 +388,70 @@ def plot_gait_validation(generated, reference, metrics, out,
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return _save(fig, out)
+
+
+# --- planning plots (issue 3) -----------------------------------------------------------
+
+
+def plot_plan(profile, plans, out, *, labels=None, title: str | None = None):
+    """A footstep plan on its ground profile: profile, footholds and swing-ankle curves.
+
+    Parameters
+    ----------
+    profile : planners.GroundProfile
+        Ground along the path [m].
+    plans : planners.Plan or sequence of Plan
+        One plan, or several to compare on the same profile (e.g. Fig. 11: ``fixed``
+        against ``best_first``), drawn with vertical offsets so they do not overlap.
+    out : path
+        PNG file.
+    labels : sequence of str, optional
+        One label per plan (default: the planner names and energy per metre).
+    title : str, optional
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+
+    from planners import Plan
+    from planners.swing import bezier_points
+
+    plans = [plans] if isinstance(plans, Plan) else list(plans)
+    plt = _pyplot()
+    fig, axes = plt.subplots(len(plans), 1, figsize=(8, 2.6 * len(plans)), squeeze=False,
+                             sharex=True)
+    lo = min(min(p.footholds_s.min(), p.trailing_s) for p in plans) - 0.4
+    hi = max(p.footholds_s.max() for p in plans) + 0.5
+    s = np.concatenate([[lo], profile.s[(profile.s > lo) & (profile.s < hi)], [hi]])
+    z = profile.height(s)
+    inside = (profile.s > lo) & (profile.s < hi)
+    s, z = np.concatenate([[lo], profile.s[inside], [hi]]), np.concatenate(
+        [[profile.height(lo)], profile.z[inside], [profile.height(hi)]])
+    for i, (ax, p) in enumerate(zip(axes[:, 0], plans, strict=True)):
+        ax.fill_between(s, z, z.min() - 0.1, color="0.85", step=None)
+        ax.plot(s, z, color="0.3", lw=1.2)
+        for k, ctrl in enumerate(p.swing_controls):
+            pts = bezier_points(ctrl, 40)
+            ax.plot(pts[:, 0], pts[:, 1], color="tab:blue", lw=1.0, alpha=0.8,
+                    label="swing ankle" if k == 0 else None)
+            ax.plot(ctrl[:, 0], ctrl[:, 1], ":", color="tab:blue", lw=0.6, alpha=0.5)
+        ax.plot(p.footholds_s, p.footholds_z, "v", color="tab:red", ms=7, label="footholds")
+        ax.plot([p.trailing_s], [profile.height(p.trailing_s)], "v", color="0.5", ms=6,
+                label="trailing foot")
+        for k, (fs, fz) in enumerate(zip(p.footholds_s[1:], p.footholds_z[1:], strict=True)):
+            ax.annotate(f"{p.step_lengths[k]:.2f}", (fs, fz), textcoords="offset points",
+                        xytext=(0, -14), ha="center", fontsize=7, color="tab:red")
+        label = labels[i] if labels is not None else (
+            f"{p.planner}: {p.energy_per_metre:.2f} J/(kg m)" if p.ok
+            else f"{p.planner}: {p.status}")
+        ax.set_title(label, fontsize=9, loc="left")
+        ax.set_ylabel("z [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7, loc="upper left")
+    axes[-1, 0].set_xlabel("s along the path [m]")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return _save(fig, out)

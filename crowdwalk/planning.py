@@ -1,0 +1,116 @@
+"""The ``crowdwalk plan`` command: read an ``s,z`` profile CSV and plan footsteps on it."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from crowdwalk.errors import invalid
+
+__all__ = ["read_profile_csv", "plan_profile", "format_plan"]
+
+
+def read_profile_csv(path: str | Path):
+    """Read a ground profile from a CSV file with columns ``s,z`` [m].
+
+    A header row naming the columns ``s`` and ``z`` is optional (other columns are
+    ignored when there is a header). Rows are piecewise-linear vertices; a vertical
+    height change is two rows with the same ``s``. Blank lines and lines starting with
+    ``#`` are skipped.
+
+    Returns
+    -------
+    planners.GroundProfile
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    ValueError
+        A row is not two numbers, or the profile is invalid (empty, NaN, unsorted).
+    """
+    from planners import GroundProfile
+
+    path = Path(path)
+    with path.open(newline="", encoding="utf-8") as handle:
+        rows = [(i + 1, row) for i, row in enumerate(csv.reader(handle))
+                if row and any(cell.strip() for cell in row)
+                and not row[0].strip().startswith("#")]
+    cols = (0, 1)
+    if rows:
+        header = [cell.strip().lower() for cell in rows[0][1]]
+        if not _is_number(header[0]):
+            if "s" not in header or "z" not in header:
+                raise invalid("ProfileCSV", "header", "columns named s and z", ",".join(header))
+            cols = (header.index("s"), header.index("z"))
+            rows = rows[1:]
+    if not rows:
+        raise invalid("ProfileCSV", "rows", f"at least one s,z row in {path}", 0)
+    s, z = [], []
+    for line, row in rows:
+        try:
+            s.append(float(row[cols[0]]))
+            z.append(float(row[cols[1]]))
+        except (IndexError, ValueError):
+            raise invalid("ProfileCSV", f"line {line}", "two numbers s,z [m]",
+                          ",".join(row)) from None
+    return GroundProfile(np.array(s), np.array(z))
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def plan_profile(profile_path: str | Path, planner: str = "best_first",
+                 body_height: float = 1.75, speed: float = 1.34, plot: str | Path | None = None):
+    """Plan footsteps on the profile in ``profile_path`` for a body ``body_height`` [m].
+
+    Returns the :class:`planners.Plan`; with ``plot`` also writes the plan plot (PNG).
+    """
+    from planners import PLANNERS, Leg, plan
+
+    if planner not in PLANNERS:
+        raise invalid("plan", "planner", f"one of {', '.join(sorted(PLANNERS))}", planner)
+    if not (math.isfinite(body_height) and 0.5 <= body_height <= 2.5):
+        raise invalid("plan", "body_height", "in [0.5, 2.5] [m]", body_height)
+    if not (math.isfinite(speed) and 0 < speed <= 3):
+        raise invalid("plan", "speed", "in (0, 3] [m/s]", speed)
+    profile = read_profile_csv(profile_path)
+    result = plan(profile, Leg.from_body_height(body_height), speed, planner)
+    if plot is not None:
+        from crowdwalk.plots import plot_plan
+
+        plot_plan(profile, result, plot, title=f"{Path(profile_path).name}: {planner}")
+    return result
+
+
+def format_plan(result, as_json: bool = False) -> str:
+    """The plan as one JSON object or as a short human-readable table."""
+    if as_json:
+        return json.dumps(result.to_dict())
+    lines = [f"status: {result.status}" + (f" - {result.message}" if result.message else "")]
+    lines.append(f"{'step':>4} {'s [m]':>8} {'z [m]':>7} {'length':>7} {'rise':>6} "
+                 f"{'E [J/kg]':>9} {'time [s]':>8}")
+    lines.append(f"{0:>4} {result.footholds_s[0]:>8.3f} {result.footholds_z[0]:>7.3f}")
+    for i in range(result.step_lengths.size):
+        lines.append(
+            f"{i + 1:>4} {result.footholds_s[i + 1]:>8.3f} {result.footholds_z[i + 1]:>7.3f} "
+            f"{result.step_lengths[i]:>7.3f} {result.step_heights[i]:>+6.3f} "
+            f"{result.E[i]:>9.3f} {result.phase_durations[i].sum():>8.3f}")
+    if result.step_lengths.size:
+        lines.append(f"energy {result.energy_total:.3f} J/kg over {result.distance:.3f} m = "
+                     f"{result.energy_per_metre:.3f} J/(kg m); efficiency "
+                     f"{result.efficiency:.4f} m kg/J")
+    st = result.stats
+    lines.append(f"search: {st['nodes_expanded']} nodes expanded, {st['legality_checks']} "
+                 f"legality checks, {st['swing_curves']} swing curves "
+                 f"({st['swing_adjustments']} adjustments), {1e3 * st['time_s']:.1f} ms")
+    return "\n".join(lines)
