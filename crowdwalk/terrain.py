@@ -865,7 +865,7 @@ class Terrain:
     def steps(self, min_height: float = 0.0) -> np.ndarray:
         """Edges where the ground changes height by more than ``min_height`` [m] (risers,
         curbs, block sides, walls) as segments (m, 2, 2) [m]."""
-        a, b, zla, zlb, zra, zrb = self._edge_steps(self._arrangement)
+        a, b, zla, zlb, zra, zrb, _, _ = self._edge_steps(self._arrangement)
         big = np.maximum(np.abs(zla - zra), np.abs(zlb - zrb)) > min_height
         return np.stack([a[big], b[big]], axis=1)
 
@@ -878,34 +878,40 @@ class Terrain:
         faces = faces[shapely.area(faces) > 1e-12]
         rep = shapely.get_coordinates(shapely.point_on_surface(faces))
         own = self.owner(rep)
-        tris, refs = [], []
+        tris, refs, owners = [], [], []
         planar = np.array([o < 0 or not hasattr(self.features[o], "triangles") for o in own])
         if planar.any():
-            t, ref = self._triangulate(faces[planar], rep[planar])
+            t, ref, k = self._triangulate(faces[planar], rep[planar])
             tris.append(t)
             refs.append(ref)
+            owners.append(own[planar][k])
+        as_is = []  # meshes: their own faces, where visible
         for o in np.unique(own[~planar]):
-            src = self.features[o].triangles()
-            polys = shapely.polygons(np.concatenate([src, src[:, :1]], axis=1))
             region = shapely.union_all(faces[own == o])
-            tree = shapely.STRtree(polys)
-            idx = tree.query(region, predicate="intersects")
+            feat = self.features[o]
+            if isinstance(feat, MeshFeature):
+                tri3 = feat.mesh.triangles
+                c = tri3.mean(axis=1)
+                seen = shapely.intersects_xy(region.buffer(1e-6), c[:, 0], c[:, 1])
+                as_is.append(tri3[seen])
+                continue
+            # rough ground: its planar triangles, clipped to the visible region, each
+            # lifted onto the plane of its source triangle (via the triangle's centroid)
+            src = feat.triangles()
+            polys = shapely.polygons(np.concatenate([src, src[:, :1]], axis=1))
+            idx = shapely.STRtree(polys).query(region, predicate="intersects")
             clipped = shapely.intersection(polys[idx], region)
             ok = shapely.area(clipped) > 1e-12
-            cref = shapely.get_coordinates(shapely.centroid(polys[idx]))
-            inner = shapely.get_coordinates(shapely.point_on_surface(clipped[ok]))
-            # reference point: the source triangle's centroid if it is visible, else a point
-            # of the clipped piece (both lie on the same planar triangle)
-            t, ref = self._triangulate(clipped[ok], np.where(
-                (self.owner(cref[ok]) == o)[:, None], cref[ok], inner))
+            centroid = src[idx[ok]].mean(axis=1)
+            t, ref, _ = self._triangulate(clipped[ok], centroid)
             tris.append(t)
             refs.append(ref)
+            owners.append(np.full(len(t), o))
         tri2 = np.concatenate(tris)
-        ref = np.concatenate(refs)
         flat = tri2.reshape(-1, 2)
-        rref = np.repeat(ref, 3, axis=0)
-        z = self._surface(flat, rref, self.owner(rref))
-        verts = [np.column_stack([flat, z])]
+        rref = np.repeat(np.concatenate(refs), 3, axis=0)
+        z = self._surface(flat, rref, np.repeat(np.concatenate(owners), 3))
+        verts = [np.column_stack([flat, z])] + [t.reshape(-1, 3) for t in as_is]
         # vertical walls along every noded edge where the two sides differ in height
         walls = self._walls(noded)
         if len(walls):
@@ -922,18 +928,21 @@ class Terrain:
         return mesh
 
     @staticmethod
-    def _triangulate(polys, rep) -> tuple[np.ndarray, np.ndarray]:
+    def _triangulate(polys, rep):
+        """Triangles (t, 3, 2) [m] of polygons, each polygon's reference point (t, 2) and
+        the polygon index (t,)."""
         cdt = shapely.constrained_delaunay_triangles(polys)
         parts, idx = shapely.get_parts(cdt, return_index=True)
         coords = shapely.get_coordinates(parts).reshape(-1, 4, 2)[:, :3]
-        return coords, rep[idx]
+        return coords, rep[idx], idx
 
     def _edge_steps(self, noded):
         """Noded edges with different heights on their two sides: end points a, b (m, 2)
-        and the heights at a and b on the left and right side (m,) each [m]."""
+        and the heights at a and b on the left and right side (m,) each [m], and the
+        owners of the left and right side (m,) each."""
         segs = _ring_segments(noded)
         if len(segs) == 0:
-            return (np.zeros((0, 2)),) * 2 + (np.zeros(0),) * 4
+            return (np.zeros((0, 2)),) * 2 + (np.zeros(0),) * 4 + (np.zeros(0, int),) * 2
         a, b = segs[:, 0], segs[:, 1]
         d = b - a
         length = np.linalg.norm(d, axis=1)
@@ -951,11 +960,16 @@ class Terrain:
         n = len(a)
         zla, zlb, zra, zrb = zl[:n], zl[n:], zr[:n], zr[n:]
         diff = (np.abs(zla - zra) > 1e-9) | (np.abs(zlb - zrb) > 1e-9)
-        return tuple(x[diff] for x in (a, b, zla, zlb, zra, zrb))
+        return tuple(x[diff] for x in (a, b, zla, zlb, zra, zrb, ol, orr))
 
     def _walls(self, noded) -> np.ndarray:
         """Vertical wall triangles (m, 3, 3) [m] along every height change."""
-        a, b, zla, zlb, zra, zrb = self._edge_steps(noded)
+        a, b, zla, zlb, zra, zrb, ol, orr = self._edge_steps(noded)
+        # a closed mesh brings its own sides
+        closed = np.array([isinstance(f, MeshFeature) and f.mesh.is_watertight
+                           for f in self.features] + [False])
+        keep = ~(closed[ol] | closed[orr])
+        a, b, zla, zlb, zra, zrb = (x[keep] for x in (a, b, zla, zlb, zra, zrb))
         pa_l = np.column_stack([a, zla])
         pb_l = np.column_stack([b, zlb])
         pa_r = np.column_stack([a, zra])

@@ -203,6 +203,11 @@ def test_mesh_feature_from_file(tmp_path):
     s, zp = ter.profile_arrays([[0.0, 3.0], [8.0, 3.0]])
     jumps = s[1:][np.diff(s) == 0]
     np.testing.assert_allclose(jumps, [3.0, 5.0], atol=1e-9)
+    mesh = ter.mesh()
+    up = mesh.face_normals[:, 2] > 0.99
+    c = mesh.triangles_center[up]
+    np.testing.assert_allclose(ter.height(c[:, :2]), c[:, 2], atol=1e-9)
+    assert mesh.bounds[1, 2] == pytest.approx(0.5)
     with pytest.raises(FileNotFoundError):
         MeshFeature.load(tmp_path / "missing.obj")
 
