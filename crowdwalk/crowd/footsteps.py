@@ -1,14 +1,14 @@
 """The footstep planner in the crowd: ground profiles along the agents' local paths,
-batched ``planners.plan_batch`` calls, and the first planned step of each plan.
+batched ``planners.plan_batch`` calls, plan caching.
 
-Chen & Li (§4.2) plan the next n steps and the walker takes them; in a crowd the local
-path changes at every heel strike (neighbours move), so each deciding agent re-plans and
-takes only the first step of its plan (receding horizon). The planner is the cost centre,
-so identical planning problems are answered from a cache: the key is the planner, the
-leg, the speed and the ground profile *relative to the stance foot* (s, z − z₀ rounded to
-1 mm). On level ground every step of an agent is the same problem, so an agent plans on
-flat ground once; on stairs the profile differs with the position on the flight and the
-planner runs.
+Chen & Li (§4.2) plan the next n steps and walk them. In a crowd the simulation walks the
+planned steps while the agent keeps its line, and re-plans at a heel strike when steering
+turns it (receding horizon). The planner is the cost centre, so identical planning
+problems are answered from a cache. The key is the planner, the leg, the speed, the
+trailing foot (1 cm) and the ground profile *relative to the stance foot* (s rounded to
+4 mm, z − z₀ to 1 mm): a reused plan's footholds lie within 2 mm of where the planner
+would put them, and the planner keeps 2 cm from every edge. On level ground every step of
+an agent is the same problem, so an agent plans there only a few times.
 """
 
 from __future__ import annotations
@@ -20,26 +20,27 @@ import numpy as np
 __all__ = ["PlannedSteps", "FootstepPlanner"]
 
 _BEHIND = 1.0  # [m] of ground behind the stance foot in the profile (trailing swing foot)
-_QUANTUM = 1e-3  # [m] rounding of the profile in the cache key
+_S_QUANTUM = 4e-3  # [m] rounding of profile arc lengths in the cache key
+_Z_QUANTUM = 1e-3  # [m] rounding of profile heights in the cache key
 
 
 @dataclass(frozen=True)
 class PlannedSteps:
-    """First planned step of m agents (struct-of-arrays).
+    """Planned steps of m agents (struct-of-arrays, H = planning horizon).
 
     Attributes
     ----------
     ok : (m,) bool
-        A legal step was found.
-    step_length : (m,) float
-        Ankle-to-ankle step length along the local path [m].
-    step_height : (m,) float
-        Height of the new foothold above the stance foothold [m].
-    swing : (m, 4, 2) float
-        Swing-ankle Bezier control points (s, z) relative to the stance ankle (s = 0,
-        z = 0) [m]; NaN when the planner gave none.
-    energy : (m,) float
-        Energy of the step [J/kg].
+        A legal plan was found.
+    step_length : (m, H) float
+        Ankle-to-ankle step lengths along the local path [m].
+    step_height : (m, H) float
+        Height of each new foothold above the previous one [m].
+    swing : (m, H, 4, 2) float
+        Swing-ankle Bezier control points (s, z) relative to each step's stance ankle
+        [m]; NaN when the planner gave none.
+    energy : (m, H) float
+        Energy of each step [J/kg].
     from_cache : (m,) bool
         The plan came from the cache.
     """
@@ -52,33 +53,30 @@ class PlannedSteps:
     from_cache: np.ndarray
 
 
-def _first_step(plan) -> tuple:
-    """(ok, step_length, step_height, swing (4,2) relative, energy) of a Plan."""
+def _steps_of(plan, horizon: int) -> tuple:
+    """(ok, step lengths (H,), heights (H,), swings (H,4,2) relative, energies (H,))."""
+    sl, sh = np.zeros(horizon), np.zeros(horizon)
+    swing, energy = np.full((horizon, 4, 2), np.nan), np.zeros(horizon)
     if getattr(plan, "status", "ok") != "ok" or len(plan.step_lengths) == 0:
-        return (False, 0.0, 0.0, np.full((4, 2), np.nan), 0.0)
-    s0, z0 = float(plan.footholds_s[0]), float(plan.footholds_z[0])
-    swing = np.full((4, 2), np.nan)
+        return (False, sl, sh, swing, energy)
+    k = min(horizon, len(plan.step_lengths))
+    fs = np.asarray(plan.footholds_s, float)
+    fz = np.asarray(plan.footholds_z, float)
+    sl[:k] = np.asarray(plan.step_lengths, float)[:k]
+    sh[:k] = np.diff(fz)[:k]
     ctrl = getattr(plan, "swing_controls", None)
     if ctrl is not None and len(ctrl):
-        swing = np.asarray(ctrl[0], dtype=float) - [s0, z0]
-    energy = _step_energy(plan)
-    return (True, float(plan.step_lengths[0]), float(plan.footholds_z[1] - z0), swing, energy)
+        swing[:k] = np.asarray(ctrl, float)[:k] - np.stack([fs[:k], fz[:k]], axis=1)[:, None, :]
+    energy[:k] = _step_energies(plan)[:k]
+    return (True, sl, sh, swing, energy)
 
 
-def _step_energy(plan) -> float:
-    """Energy of the plan's first step [J/kg] (the planner's E of Eq. 4)."""
-    for name in ("energies", "energy", "E"):
-        value = getattr(plan, name, None)
-        if value is None:
-            continue
-        if isinstance(value, dict):
-            value = value.get("E", next(iter(value.values())))
-        elif hasattr(value, "E"):
-            value = value.E
-        arr = np.asarray(value, dtype=float).reshape(-1)
-        if arr.size:
-            return float(arr[0])
-    return float("nan")
+def _step_energies(plan) -> np.ndarray:
+    """Energies of the plan's steps [J/kg] (the planner's E of Eq. 4)."""
+    value = getattr(plan, "E", None)
+    if value is None:
+        return np.full(len(plan.step_lengths), np.nan)
+    return np.asarray(value, dtype=float).reshape(-1)
 
 
 class FootstepPlanner:
@@ -95,13 +93,17 @@ class FootstepPlanner:
         n steps of at most ``max_step_ratio`` leg lengths).
     config : planners.PlannerConfig or None
         Planner configuration (None: the planners' defaults).
+    horizon : int
+        Steps kept per plan (the planner's ``n_steps``).
     """
 
-    def __init__(self, terrain, legs, lookahead: float = 4.5, config=None) -> None:
+    def __init__(self, terrain, legs, lookahead: float = 3.0, config=None,
+                 horizon: int = 3) -> None:
         self.terrain = terrain
         self.legs = list(legs)
         self.lookahead = float(lookahead)
         self.config = config
+        self.horizon = int(horizon)
         self._cache: dict[bytes, tuple] = {}
         self.calls = 0
         self.hits = 0
@@ -138,15 +140,16 @@ class FootstepPlanner:
         from planners import plan_batch
 
         m = stance.shape[0]
+        H = self.horizon
         ok = np.zeros(m, bool)
-        sl = np.zeros(m)
-        sh = np.zeros(m)
-        swing = np.full((m, 4, 2), np.nan)
-        energy = np.zeros(m)
+        sl, sh = np.zeros((m, H)), np.zeros((m, H))
+        swing = np.full((m, H, 4, 2), np.nan)
+        energy = np.zeros((m, H))
         cached = np.zeros(m, bool)
         if trailing is None:
             trailing = np.full(m, -0.6)
-        trailing = np.clip(np.round(np.asarray(trailing, float), 3), -2.9, -0.01)
+        # the trailing foot only shapes the first swing curve: 1 cm is plenty
+        trailing = np.clip(np.round(np.asarray(trailing, float), 2), -2.9, -0.01)
         keys: list[bytes] = []
         profiles = []
         lines = np.stack([stance - _BEHIND * direction, stance + self.lookahead * direction],
@@ -162,8 +165,8 @@ class FootstepPlanner:
             key = b"|".join([
                 str(planner[i]).encode(), np.int64(leg[i]).tobytes(),
                 np.round(speed[i], 3).tobytes(), trailing[i].tobytes(),
-                np.round(s / _QUANTUM).astype(np.int64).tobytes(),
-                np.round(z / _QUANTUM).astype(np.int64).tobytes(),
+                np.round(s / _S_QUANTUM).astype(np.int64).tobytes(),
+                np.round(z / _Z_QUANTUM).astype(np.int64).tobytes(),
             ])
             keys.append(key)
             profiles.append((s, z))
@@ -190,7 +193,7 @@ class FootstepPlanner:
                     trailing=[float(trailing[i]) for i in first],
                 )
                 for i, plan in zip(first, plans, strict=True):
-                    self._cache[keys[i]] = _first_step(plan)
+                    self._cache[keys[i]] = _steps_of(plan, H)
         planned_now = set(todo)
         for i in range(m):
             hit = self._cache[keys[i]]

@@ -77,6 +77,8 @@ class CrowdParams:
         Standing time after which an agent looks for another route [s].
     stair_rise : float
         A step with a larger height change is a stair step (Weidmann speed) [m].
+    planning_horizon : int
+        Steps the footstep planner looks ahead (Chen & Li §4.2: three or four) [-].
     steering : SteeringParams
     """
 
@@ -90,13 +92,14 @@ class CrowdParams:
     neighbour_range: float = 3.0
     reroute_after: float = 8.0
     stair_rise: float = 0.05
+    planning_horizon: int = 3
     steering: SteeringParams = field(default_factory=SteeringParams)
 
 
 class AgentState:
     """Struct-of-arrays state of n agents (one array per field, leading dimension n)."""
 
-    def __init__(self, n: int) -> None:
+    def __init__(self, n: int, horizon: int = 3) -> None:
         self.status = np.full(n, WAITING, dtype=np.int8)
         self.pos0 = np.zeros((n, 2))  # body position at the start of the current step [m]
         self.pos1 = np.zeros((n, 2))  # ... at its end [m]
@@ -112,6 +115,15 @@ class AgentState:
         self.foot = np.zeros(n, dtype=np.int8)  # foot that swings next: 0 left, 1 right
         self.stance_foot = np.zeros((n, 3))  # foothold of the stance foot (with offset) [m]
         self.animated = np.zeros(n, bool)  # has received a step command
+        # the rest of the current footstep plan (H steps at most)
+        self.queue_sl = np.zeros((n, horizon))
+        self.queue_sh = np.zeros((n, horizon))
+        self.queue_energy = np.zeros((n, horizon))
+        self.queue_swing = np.full((n, horizon, 4, 2), np.nan)
+        self.queue_len = np.zeros(n, dtype=np.int64)
+        self.queue_next = np.zeros(n, dtype=np.int64)
+        self.queue_dir = np.zeros((n, 2))
+        self.queue_anchor = np.full((n, 2), np.nan)  # stance where the next step starts
         self.route = np.zeros(n, dtype=np.int64)
         self.segment = np.zeros(n, dtype=np.int64)
         self.progress = np.zeros(n)  # global route arc length [m]
@@ -183,7 +195,6 @@ class CrowdSimulation:
         self.duration = float(duration)
         n = len(population)
         self.n = n
-        self.state = AgentState(n)
         self.radius = params.radius_ratio * population.body_height
         self.min_step_time = 1.0 / cadence_at(population.free_speed)
         self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
@@ -192,7 +203,15 @@ class CrowdSimulation:
         self.legs = [Leg.from_body_height(float(h)) for h in heights]
         self.planner_of = population.planner
         self.clearance = ClearanceField.from_area(self.routes.walkable_area)
-        self.footsteps = FootstepPlanner(self.terrain, self.legs, config=planner_config)
+        if planner_config is None:
+            from planners import PlannerConfig
+
+            # Chen & Li plan "three or four" steps ahead (§4.2); three is an order of
+            # magnitude cheaper on stairs than four, and the crowd re-plans often
+            planner_config = PlannerConfig(n_steps=params.planning_horizon)
+        self.footsteps = FootstepPlanner(self.terrain, self.legs, config=planner_config,
+                                         horizon=planner_config.n_steps)
+        self.state = AgentState(n, planner_config.n_steps)
         self.table = RouteTable()
         self._route_nodes: dict[int, list[str]] = {}
         self._assign_routes()
@@ -411,25 +430,48 @@ class CrowdSimulation:
         sh = np.zeros(idx.size)
         energy = np.zeros(idx.size)
         swing = np.full((idx.size, 4, 2), np.nan)
-        # 3. plan the footsteps of all movers at once
+        # 3. footsteps: walk on along the current plan while the agent keeps its line
+        # (Chen & Li plan n steps and walk them), else plan all movers at once
         if mv.size:
-            w0 = _time.perf_counter()
             a = idx[mv]
-            trailing = -np.einsum("ij,ij->i", st.stance[a] - st.trail[a], choice.direction[mv])
-            planned = self.footsteps.plan(st.stance[a], st.stance_z[a], choice.direction[mv],
-                                          self.leg_index[a], self.pop.free_speed[a],
-                                          self.planner_of[a], trailing)
-            self.wall_planning += _time.perf_counter() - w0
-            st.plans[a] += 1
-            st.plan_failures[a] += ~planned.ok
-            sl[mv], sh[mv] = planned.step_length, planned.step_height
-            energy[mv], swing[mv] = planned.energy, planned.swing
-            move[mv] = planned.ok
+            q = st.queue_next[a]
+            along = (np.einsum("ij,ij->i", st.queue_dir[a], choice.direction[mv]) > 1 - 1e-9)
+            reuse = ((q < st.queue_len[a]) & along
+                     & (np.linalg.norm(st.stance[a] - st.queue_anchor[a], axis=1) < 1e-9))
+            ok = np.ones(mv.size, bool)
+            r = np.flatnonzero(reuse)
+            if r.size:
+                ar, qr = a[r], q[r]
+                sl[mv[r]], sh[mv[r]] = st.queue_sl[ar, qr], st.queue_sh[ar, qr]
+                energy[mv[r]], swing[mv[r]] = st.queue_energy[ar, qr], st.queue_swing[ar, qr]
+                st.queue_next[ar] += 1
+            p = np.flatnonzero(~reuse)
+            if p.size:
+                w0 = _time.perf_counter()
+                ap = a[p]
+                d = choice.direction[mv[p]]
+                trailing = -np.einsum("ij,ij->i", st.stance[ap] - st.trail[ap], d)
+                planned = self.footsteps.plan(st.stance[ap], st.stance_z[ap], d,
+                                              self.leg_index[ap], self.pop.free_speed[ap],
+                                              self.planner_of[ap], trailing)
+                self.wall_planning += _time.perf_counter() - w0
+                st.plans[ap] += 1
+                st.plan_failures[ap] += ~planned.ok
+                ok[p] = planned.ok
+                sl[mv[p]], sh[mv[p]] = planned.step_length[:, 0], planned.step_height[:, 0]
+                energy[mv[p]], swing[mv[p]] = planned.energy[:, 0], planned.swing[:, 0]
+                st.queue_sl[ap], st.queue_sh[ap] = planned.step_length, planned.step_height
+                st.queue_energy[ap], st.queue_swing[ap] = planned.energy, planned.swing
+                st.queue_len[ap] = np.where(planned.ok, planned.step_length.shape[1], 0)
+                st.queue_next[ap] = 1
+                st.queue_dir[ap] = d
+            move[mv] = ok
             # a neighbour or wall closer than the planned step: a shorter step if the foot
             # lands on even ground, else wait
-            short = mv[planned.ok & (planned.step_length > choice.free_length[mv] + 1e-9)]
+            short = mv[ok & (sl[mv] > choice.free_length[mv] + 1e-9)]
             if short.size:
                 self._shorten(idx, short, choice, sl, sh, energy, swing, move)
+                st.queue_len[idx[short]] = 0
         # 4. commit
         self._commit(idx, te, t, move, choice.direction, sl, sh, energy, swing)
 
@@ -480,6 +522,7 @@ class CrowdSimulation:
 
         wait = idx[~move]
         if wait.size:
+            st.queue_len[wait] = 0
             st.pos0[wait] = st.pos1[wait]
             st.z0[wait] = st.z1[wait]
             st.t0[wait] = st.t1[wait]
@@ -532,6 +575,7 @@ class CrowdSimulation:
         foothold = new_c + (side * prm.foot_half_width)[:, None] * _left(d)
         st.trail[a], st.trail_z[a] = st.stance[a], st.stance_z[a]
         st.stance[a], st.stance_z[a] = new_c, new_z
+        st.queue_anchor[a] = new_c
         st.foot[a] = 1 - foot
         st.steps[a] += 1
         st.energy[a] += energy[go]

@@ -162,9 +162,14 @@ def choose_steps(
     m = position.shape[0]
     if m == 0:
         return StepChoice(np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool))
-    offsets = np.deg2rad(np.asarray(params.offsets_deg))  # (C,)
     lengths = np.asarray(params.step_lengths)  # (L,)
-    dirs = _rotate(route_direction[:, None, :], offsets[None, :])  # (m, C, 2)
+    # candidates: fixed offsets from the route direction, plus keeping the current heading
+    # (so a walker going straight keeps its exact line and its footstep plan)
+    route_angle = np.arctan2(route_direction[:, 1], route_direction[:, 0])
+    keep = (heading - route_angle + np.pi) % (2 * np.pi) - np.pi
+    offsets = np.concatenate([np.broadcast_to(np.deg2rad(params.offsets_deg), (m, len(
+        params.offsets_deg))), keep[:, None]], axis=1)  # (m, C)
+    dirs = _rotate(route_direction[:, None, :], offsets)  # (m, C, 2)
     ends = stance[:, None, None, :] + 0.5 * lengths[None, None, :, None] * dirs[:, :, None, :]
     # (m, C, L, 2): body position at the end of a step of each length
 
@@ -210,13 +215,15 @@ def choose_steps(
     utility += params.wall_weight * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)
     cand_heading = np.arctan2(dirs[..., 1], dirs[..., 0])  # (m, C)
     utility[:, :-1] += params.turn_weight * (1.0 - np.cos(cand_heading - heading[:, None]))
-    utility[:, :-1] += params.right_bias * np.maximum(np.sin(offsets), 0.0)[None, :]
+    utility[:, :-1] += params.right_bias * np.maximum(np.sin(offsets), 0.0)
+    utility[:, :-1] = np.where(np.abs(offsets) <= np.pi / 2 + 1e-9, utility[:, :-1], np.inf)
     utility[:, -1] += params.wait_cost
     utility[:, :-1] = np.where(free >= params.min_step, utility[:, :-1], np.inf)
 
+    n_dir = offsets.shape[1]
     best = np.argmin(utility, axis=1)
-    move = best < offsets.size
-    pick = np.minimum(best, offsets.size - 1)
+    move = best < n_dir
+    pick = np.minimum(best, n_dir - 1)
     rows = np.arange(m)
     return StepChoice(
         direction=dirs[rows, pick],
