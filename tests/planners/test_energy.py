@@ -1,0 +1,57 @@
+"""The energy model (Eqs. 1-5) against hand calculations."""
+
+import numpy as np
+import pytest
+
+from planners import EnergyWeights, Leg, PlannerConfig, flat_efficiency
+from planners.energy import (
+    EV_PEAK_CM,
+    joint_energy,
+    total_energy,
+    vertical_energy,
+    walking_energy,
+)
+
+
+def test_walking_energy_is_ralston_rate_over_cadence():
+    # v = 1.34 m/s = 80.4 m/min; n = 80.4 / 0.7 steps/min
+    expected = (32 + 0.005 * 80.4**2) / (80.4 / 0.7)
+    assert walking_energy(0.7, 1.34) == pytest.approx(expected)
+    # per metre it is minimal at Ralston's 80 m/min
+    v = np.linspace(0.5, 2.5, 201)
+    per_metre = walking_energy(1.0, v)
+    assert 60 * v[np.argmin(per_metre)] == pytest.approx(80, abs=1)
+
+
+def test_vertical_energy_matches_eq2_below_the_peak_and_stays_monotone():
+    assert vertical_energy(0.17) == pytest.approx(-0.18 * 17**2 + 7.14 * 17)
+    assert vertical_energy(0.0) == 0.0
+    peak = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
+    assert vertical_energy(0.30) == pytest.approx(peak + 7.14 * (30 - EV_PEAK_CM))
+    h = np.linspace(0, 0.4, 401)
+    assert np.all(np.diff(vertical_energy(h)) > 0)
+    # stepping down costs a third of stepping up
+    assert vertical_energy(-0.17) == pytest.approx(vertical_energy(0.17) / 3)
+
+
+def test_joint_and_total_energy_combine_with_the_weights():
+    w = EnergyWeights(alpha=2.0, beta=0.5, gamma=3.0, c_thigh=0.7, c_calf=0.2)
+    assert joint_energy(1.5, 2.0, w) == pytest.approx(0.7 * 1.5 + 0.2 * 2.0)
+    assert total_energy(1.0, 10.0, 4.0, w) == pytest.approx(2.0 + 5.0 + 12.0)
+
+
+def test_flat_efficiency_peaks_near_0_6_to_0_7_m_and_scales_with_body():
+    L = np.linspace(0.25, 0.95, 71)
+    best = {h: L[np.argmax(flat_efficiency(Leg.from_body_height(h), 1.34, L))]
+            for h in (1.5, 1.75, 1.9)}
+    assert 0.58 <= best[1.75] <= 0.70
+    assert best[1.5] < best[1.75] < best[1.9]
+    eff = flat_efficiency(Leg.from_body_height(1.75), 1.34, L)
+    assert eff[0] < eff.max() and eff[-1] < eff.max()  # an interior maximum (Fig. 2)
+
+
+def test_bad_weights_are_rejected():
+    with pytest.raises(ValueError, match="EnergyWeights.beta must be finite and >= 0"):
+        EnergyWeights(beta=-1.0)
+    with pytest.raises(ValueError, match="PlannerConfig.n_steps"):
+        PlannerConfig(n_steps=0)

@@ -1,0 +1,62 @@
+"""GroundProfile: validation, heights at vertical changes, exact range maxima."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from planners import GroundProfile, ProfileError
+
+
+@pytest.mark.parametrize(
+    ("s", "z", "field", "value"),
+    [
+        ([], [], "GroundProfile.s", "[]"),
+        ([0.0, 1.0], [0.0, np.nan], "GroundProfile.z", "z[1]=nan"),
+        ([0.0, np.inf], [0.0, 0.0], "GroundProfile.s", "s[1]=inf"),
+        ([0.0, 2.0, 1.0], [0.0, 0.0, 0.0], "GroundProfile.s", "s[1]=2 > s[2]=1"),
+        ([0.0, 1.0], [0.0], "GroundProfile.z", "1"),
+    ],
+)
+def test_bad_profiles_raise_value_errors_naming_field_and_value(s, z, field, value):
+    with pytest.raises(ProfileError) as info:
+        GroundProfile(s, z)
+    assert isinstance(info.value, ValueError)
+    assert str(info.value).startswith(field + " must be")
+    assert value in str(info.value)
+
+
+def test_vertical_change_is_right_continuous_and_flat_beyond_the_ends():
+    p = GroundProfile([0.0, 1.0, 1.0, 2.0], [0.0, 0.0, 0.3, 0.5])
+    assert p.height(1.0) == pytest.approx(0.3)
+    assert p.height(0.999) == pytest.approx(0.0)
+    assert p.height(1.5) == pytest.approx(0.4)
+    assert p.height(-5.0) == 0.0 and p.height(9.0) == pytest.approx(0.5)
+    js, dz = p.jumps
+    assert js.tolist() == [1.0] and dz == pytest.approx([0.3])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 5), st.floats(-1, 1)), min_size=2, max_size=12),
+       st.lists(st.tuples(st.floats(-1, 6), st.floats(0, 2)), min_size=1, max_size=10))
+def test_max_height_is_exact_against_brute_force(vertices, intervals):
+    vertices.sort(key=lambda v: v[0])
+    p = GroundProfile([v[0] for v in vertices], [v[1] for v in vertices])
+    a = np.array([i[0] for i in intervals])
+    b = a + np.array([i[1] for i in intervals])
+    got = p.max_height(a, b)
+    for ai, bi, g in zip(a, b, got, strict=True):
+        inside = (p.s >= ai) & (p.s <= bi)
+        dense = p.height(np.linspace(ai, bi, 200)).max()
+        expect = max(dense, p.z[inside].max() if inside.any() else -np.inf)
+        assert g == pytest.approx(expect, abs=1e-12)
+    # the conservative raster never underestimates
+    raster = p.raster(-1.5, 8.5, 0.01)
+    assert np.all(raster.max_height(a, b) >= got - 1e-12)
+
+
+def test_shifted_translates_heights():
+    p = GroundProfile.stairs(0.17, 0.3, 3)
+    q = p.shifted(1.5, -0.2)
+    x = np.linspace(-1, 4, 51)
+    assert np.allclose(q.height(x + 1.5), p.height(x) - 0.2)
