@@ -890,9 +890,11 @@ class Terrain:
             region = shapely.union_all(faces[own == o])
             feat = self.features[o]
             if isinstance(feat, MeshFeature):
+                # faces seen from above or from the side (a bottom face is hidden)
                 tri3 = feat.mesh.triangles
                 c = tri3.mean(axis=1)
                 seen = shapely.intersects_xy(region.buffer(1e-6), c[:, 0], c[:, 1])
+                seen &= feat.mesh.face_normals[:, 2] > -1e-9
                 as_is.append(tri3[seen])
                 continue
             # rough ground: its planar triangles, clipped to the visible region, each
