@@ -294,6 +294,11 @@ class Animator:
             feet = foot_points(self.body.take(ah), end.positions, end.rotations)
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
             landed_heel[had] = new_st[:, 0]
+            # on the ground: the landing pose may leave the heel a few mm off it
+            if self.ground is not None:
+                landed_heel[had, 2] = np.asarray(self.ground(new_st[:, 0, :2]), dtype=float)
+            else:
+                landed_heel[had, 2] = cmd.start[had, 2]
             toward = new_st[:, 1] - new_st[:, 0]
             landed_yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
             old_yaw[had] = self._yaw[ah] + self._spin[ah]

@@ -626,29 +626,28 @@ def _shifted_stance_leg(body: Body, ankle, phi_shank, phi_thigh, heading, offset
 def _two_link_ik(body: Body, hip, knee, goal, r_thigh):
     """Thigh orientation and knee flexion that put the ankle at ``goal`` (k, 3) [m].
 
-    The knee bends in the plane through hip, goal and the current knee; the thigh's
-    hinge axis (local y) is kept as close as possible to its current direction.
+    The knee hinge axis (the thigh's local y) keeps its direction as far as possible: it
+    is the current axis made perpendicular to the hip→goal line, and the knee bends
+    forward in the plane normal to it. So the leg's toe-out is kept even when the knee
+    is nearly straight. ``knee`` (the current knee position) is not needed by this
+    construction and only kept for the signature.
     """
+    del knee
     l1, l2 = body.thigh, body.shank
     to_goal = goal - hip
     dist = np.linalg.norm(to_goal, axis=1)
     dist_c = np.clip(dist, np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
     u = to_goal / np.maximum(dist, 1e-9)[:, None]
-    pole = knee - hip
-    v = pole - u * _dot(pole, u)[:, None]
-    nv = np.linalg.norm(v, axis=1)
-    fallback = r_thigh[:, :, 0]  # bend forward if the knee is on the hip–goal line
-    v = np.where((nv > 1e-9)[:, None], v / np.maximum(nv, 1e-12)[:, None], fallback)
+    y_old, x_old = r_thigh[:, :, 1], r_thigh[:, :, 0]
+    y_axis = y_old - u * _dot(y_old, u)[:, None]
+    y_axis /= np.maximum(np.linalg.norm(y_axis, axis=1), 1e-12)[:, None]
+    v = np.cross(y_axis, u)  # in the leg plane, perpendicular to the hip→goal line
+    v *= np.where(_dot(v, x_old) < 0, -1.0, 1.0)[:, None]  # knee forward
     cos_b = np.clip((l1**2 + dist_c**2 - l2**2) / (2 * l1 * dist_c), -1.0, 1.0)
     sin_b = np.sqrt(1.0 - cos_b**2)
     knee_new = hip + l1[:, None] * (cos_b[:, None] * u + sin_b[:, None] * v)
     ankle_new = hip + dist_c[:, None] * u
     z_axis = (hip - knee_new) / l1[:, None]
-    y_old = r_thigh[:, :, 1]
-    y_axis = np.cross(z_axis, u)  # perpendicular to the leg plane
-    y_axis *= np.where(_dot(y_axis, y_old) < 0, -1.0, 1.0)[:, None]
-    ny = np.linalg.norm(y_axis, axis=1)
-    y_axis = np.where((ny > 1e-9)[:, None], y_axis / np.maximum(ny, 1e-12)[:, None], y_old)
     x_axis = np.cross(y_axis, z_axis)
     r_new = np.stack([x_axis, y_axis, z_axis], axis=2)
     shank = np.einsum("kba,kb->ka", r_new, ankle_new - knee_new)  # thigh frame

@@ -1,0 +1,185 @@
+"""The Animator contract (docs/architecture.md, "crowdwalk.gait"): step commands in,
+batched poses out; swing clearance over obstacles; robustness (fallback, no NaN)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from crowdwalk.body import (
+    JOINT_NAMES,
+    PARENTS,
+    Body,
+    forward_kinematics,
+    quaternion_to_matrix,
+)
+from crowdwalk.errors import InputError
+from crowdwalk.gait.animator import Animator, StepCommand
+from crowdwalk.gait.elevwalker import GaitStyle, foot_points
+
+BLOCK = (0.30, 0.45, 0.10)  # x from, x to, height [m]
+
+
+def _flat(xy):
+    return np.zeros(len(xy))
+
+
+def _block(xy):
+    inside = (xy[:, 0] > BLOCK[0]) & (xy[:, 0] < BLOCK[1])
+    return np.where(inside, BLOCK[2], 0.0)
+
+
+def _command(agents, t, swing_foot, start, target, bezier=None, duration=0.6, heading=0.0):
+    m = len(agents)
+    start, target = np.asarray(start, float), np.asarray(target, float)
+    d = target - start
+    along = d[:, 0] * np.cos(heading) + d[:, 1] * np.sin(heading)
+    return StepCommand(
+        agent=np.asarray(agents), time=np.full(m, t), duration=np.full(m, duration),
+        swing_foot=np.full(m, swing_foot), start=start, target=target,
+        heading=np.full(m, heading), step_length=along, step_height=d[:, 2],
+        swing_bezier=bezier,
+    )  # fmt: skip
+
+
+def _straight(animator, k, steps=3, sl=0.65, fps=50.0, start_y=0.045):
+    frames = []
+    for s in range(steps):
+        left_stance = s % 2 == 0
+        y = start_y if left_stance else -start_y
+        start = np.column_stack([np.full(k, s * sl), np.full(k, y), np.zeros(k)])
+        target = np.column_stack([np.full(k, (s + 1) * sl), np.full(k, -y), np.zeros(k)])
+        animator.command(_command(np.arange(k), s * 0.6, 1 if left_stance else 0, start,
+                                  target))  # fmt: skip
+        for f in range(30):
+            frames.append(animator.pose(s * 0.6 + f / fps))
+    return frames
+
+
+def test_pose_frame_contract():
+    body = Body.from_heights([1.6, 1.8, 1.9])
+    animator = Animator(body, ground=_flat)
+    frames = _straight(animator, 3, steps=2)
+    frame = frames[-1]
+    k, nj = 3, len(JOINT_NAMES)
+    assert frame.root_position.shape == (k, 3) and frame.root_quaternion.shape == (k, 4)
+    assert frame.joints.shape == (k, nj, 4) and frame.positions.shape == (k, nj, 3)
+    assert frame.contact.shape == (k, 2) and frame.fallback.shape == (k,)
+    assert np.allclose(np.linalg.norm(frame.joints, axis=2), 1.0)
+    assert np.allclose(frame.joints[:, 0], frame.root_quaternion)
+    names, parents = animator.skeleton
+    assert tuple(names) == JOINT_NAMES and np.array_equal(parents, PARENTS)
+    # the quaternions reproduce the positions through forward kinematics
+    positions, _ = forward_kinematics(body, frame.root_position,
+                                      quaternion_to_matrix(frame.root_quaternion),
+                                      quaternion_to_matrix(frame.joints))  # fmt: skip
+    assert np.allclose(positions, frame.positions, atol=1e-9)
+    # subsets of agents, any order
+    sub = animator.pose(frame.time, np.array([2, 0]))
+    assert np.array_equal(sub.agents, [2, 0])
+
+
+def test_feet_land_on_the_commanded_footholds_and_the_root_moves_smoothly():
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_flat)
+    frames = _straight(animator, 1, steps=4)
+    for frame in frames[30::30]:  # first frame of each later step: the new stance foot
+        side = 0 if frame.stance_left[0] else 1
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        heel = foot_points(body, frame.positions, rot)[0, side, 0]
+        step = round(frame.time / 0.6)
+        expected_x = step * 0.65 - body.heel_offset[0]
+        assert heel[0] == pytest.approx(expected_x, abs=0.01)  # heel strike at the foothold
+        assert heel[2] == pytest.approx(0.0, abs=1e-6)
+    roots = np.array([f.root_position[0] for f in frames])
+    speed = np.linalg.norm(np.diff(roots, axis=0), axis=1) * 50.0
+    assert speed.max() < 2.0 * speed.mean()  # no pops at the step changes
+
+
+def test_swing_follows_the_planner_bezier_over_a_block():
+    """Item 6: a block between the footholds that the data-driven foot would hit."""
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_block)
+    a = float(body.ankle_height[0])
+    start, target = np.array([[0.0, 0.045, 0.0]]), np.array([[0.75, -0.045, 0.0]])
+    # the trailing (right) foot starts behind the stance foot
+    animator.command(_command([0], -0.6, 1, [[-0.75, 0.045, 0.0]], [[0.0, -0.045, 0.0]]))
+    bezier = np.array([[[-0.0, -0.045, a], [0.15, -0.045, a + 0.3], [0.6, -0.045, a + 0.3],
+                        [0.75, -0.045, a]]])  # fmt: skip
+    bezier[0, 0, 0] = 0.0
+    animator.command(_command([0], 0.0, 1, start, target, bezier=bezier))
+    assert animator.stats["bezier_steps"] == 1
+    lowest = np.inf
+    for f in range(30):
+        frame = animator.pose(f / 50.0)
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        swing = foot_points(body, frame.positions, rot)[0, 1]
+        gap = swing[:, 2] - _block(swing[:, :2])
+        lowest = min(lowest, gap.min())
+    assert lowest > -1e-3
+
+
+def test_non_converged_solves_fall_back_to_the_previous_pose_and_are_flagged():
+    body = Body.from_heights([1.7, 1.7])
+    animator = Animator(body, ground=_flat)
+    frames = _straight(animator, 2, steps=1)
+    before = frames[-1]
+    animator.style = GaitStyle(tolerance=1e-15, max_iterations=1)  # cannot converge
+    after = animator.pose(before.time + 0.02)
+    assert after.fallback.all()
+    assert np.array_equal(after.positions, before.positions)
+    assert animator.stats["fallbacks"] == 2
+
+
+def test_no_nan_reaches_the_output_even_from_broken_data():
+    body = Body.from_heights([1.7, 1.8])
+    animator = Animator(body, ground=_flat)
+    frames = _straight(animator, 2, steps=1)
+    animator._angles[1] = np.nan  # simulate a corrupted dataset for agent 1
+    frame = animator.pose(frames[-1].time + 0.02)
+    assert frame.fallback.tolist() == [False, True]
+    for field in ("root_position", "root_quaternion", "joints", "positions"):
+        assert np.isfinite(getattr(frame, field)).all()
+
+
+def test_bad_commands_and_requests_are_rejected_with_clear_messages():
+    body = Body.from_heights([1.7])
+    animator = Animator(body)
+    good = dict(agent=[0], time=[0.0], duration=[0.5], swing_foot=[1], start=[[0, 0, 0]],
+                target=[[0.6, 0, 0]], heading=[0.0], step_length=[0.6], step_height=[0.0])
+    with pytest.raises(InputError, match=r"^StepCommand\.duration must be > 0 \[s\]; got"):
+        StepCommand(**{**good, "duration": [0.0]})
+    with pytest.raises(InputError, match=r"^StepCommand\.swing_foot must be"):
+        StepCommand(**{**good, "swing_foot": [2]})
+    with pytest.raises(InputError, match=r"^StepCommand\.agent must be indices"):
+        animator.command(StepCommand(**{**good, "agent": [3]}))
+    with pytest.raises(InputError, match=r"^Animator\.agents must be agents that received"):
+        animator.pose(0.0)
+    with pytest.raises(InputError, match=r"^Animator\.body must be"):
+        Animator("not a body")
+
+
+def test_heading_change_turns_the_walker_smoothly_without_fallbacks():
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_flat)
+    pos = np.array([0.0, 0.045, 0.0])
+    heading = 0.0
+    frames = []
+    for s in range(6):
+        heading += np.radians(25.0)
+        d = np.array([np.cos(heading), np.sin(heading), 0.0])
+        n = np.array([-d[1], d[0], 0.0])
+        side = 1 if s % 2 == 0 else -1
+        target = pos + 0.6 * d - side * 0.09 * n
+        animator.command(_command([0], s * 0.6, 1 if s % 2 == 0 else 0, [pos], [target],
+                                  heading=heading))  # fmt: skip
+        for f in range(30):
+            frames.append(animator.pose(s * 0.6 + f / 50.0))
+        pos = target
+    assert not any(f.fallback.any() for f in frames)
+    yaw = [np.arctan2(*quaternion_to_matrix(f.root_quaternion)[0][:, 0][1::-1]) for f in frames]
+    assert np.abs(np.diff(np.unwrap(yaw))).max() < np.radians(5.0)
