@@ -57,6 +57,9 @@ class Place:
             if not area.is_valid or area.area <= 0:
                 raise invalid(f"Place[{self.name!r}]", "area",
                               "a valid polygon with positive area [m²]", area.wkt)
+            if not area.buffer(1e-9).covers(Point(self.x, self.y)):
+                raise invalid(f"Place[{self.name!r}]", "area", f"a polygon around its node "
+                              f"({self.x}, {self.y}) [m]", area.wkt)
             object.__setattr__(self, "area", area)
 
 
@@ -186,6 +189,10 @@ class RouteGraph:
             if terrain is not None and not terrain.area.covers(Point(p.x, p.y)):
                 raise invalid(f"RouteGraph.nodes[{p.name!r}]", "xy",
                               f"inside the terrain extent {terrain.bounds} [m]", (p.x, p.y))
+            if terrain is not None and p.area is not None and not terrain.area.buffer(
+                    1e-9).covers(p.area):
+                raise invalid(f"RouteGraph.nodes[{p.name!r}]", "area",
+                              f"inside the terrain extent {terrain.bounds} [m]", p.area.bounds)
         seen = set()
         lines = [self._corridor_line(c, seen) for c in self.corridors]
         # one batched terrain pass for the profiles of every corridor, both directions

@@ -187,6 +187,10 @@ def test_error_messages():
         RouteGraph([a, b], [Corridor("a", "b", 1.0)], wall)
     with pytest.raises(InputError, match=r"RouteGraph\.nodes\['out'\]\.xy must be inside"):
         RouteGraph([a, Place("out", 30, 2)], [], ter)
+    with pytest.raises(InputError, match=r"Place\['p'\]\.area must be a polygon around its node"):
+        Place("p", 0, 0, [(1, 1), (2, 1), (2, 2)])
+    with pytest.raises(InputError, match=r"RouteGraph\.nodes\['e'\]\.area must be inside"):
+        RouteGraph([Place("e", 1, 1, [(-1, 0), (2, 0), (2, 2)])], [], ter)
 
 
 def test_walkable_area_excludes_tall_obstacles_but_not_curbs():
