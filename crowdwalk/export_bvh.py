@@ -58,7 +58,7 @@ def write_bvh(
     pathlib.Path
     """
     import bvhio
-    import glm
+    from pyglm import glm
     from SpatialTransform import Pose
 
     root_position = np.asarray(root_position, dtype=float)
@@ -134,7 +134,7 @@ def export_bvh(run_dir: str | Path, agent: int, out: str | Path, scale: float = 
     if not run_dir.is_dir():
         raise FileNotFoundError(2, "run folder not found", str(run_dir))
     run = open_run(run_dir)
-    poses = run.poses
+    poses = run.poses()
     if poses is None:
         raise FileNotFoundError(2, "the run recorded no poses", str(run_dir / "poses.sqlite"))
     try:
