@@ -363,7 +363,7 @@ class SceneView:
                 show_scalar_bar=hi - lo > 1e-6, name="terrain", ambient=0.25,
                 clim=[lo, hi if hi - lo > 1e-6 else lo + 1.0],
                 scalar_bar_args=dict(title="height [m]", vertical=True, position_x=0.92,
-                                     position_y=0.3, height=0.35, width=0.04, fmt="%.2f",
+                                     position_y=0.12, height=0.3, width=0.035, fmt="%.2f",
                                      color="black", n_labels=3,
                                      title_font_size=self._font(16),
                                      label_font_size=self._font(14)),
@@ -388,8 +388,8 @@ class SceneView:
             if edges_mesh.n_points:
                 p.add_mesh(edges_mesh, color=ROUTE_COLOR, line_width=2, name="route edges")
             if nodes is not None:
-                p.add_mesh(nodes, color=ROUTE_COLOR, point_size=9, render_points_as_spheres=True,
-                           name="route nodes")
+                p.add_mesh(nodes, color=ROUTE_COLOR, point_size=max(3, self._font(9)),
+                           render_points_as_spheres=True, name="route nodes")
         if bounds is None:
             bounds = np.array([-5.0, 5.0, -5.0, 5.0, 0.0, 2.0])
         return bounds
@@ -454,7 +454,9 @@ class SceneView:
         else:
             energy = self.scene.footsteps.energy
             finite = energy[np.isfinite(energy)]
-            lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+            # 2nd-98th percentile: a few very costly steps must not wash out the rest
+            lo, hi = (np.percentile(finite, [2, 98]) if finite.size else (0.0, 1.0))
+            lo, hi = float(lo), float(hi)
             kwargs.update(clim=[lo, hi if hi > lo else lo + 1.0])
         if "footprints" in self.plotter.actors:
             self.plotter.remove_actor("footprints")
@@ -464,18 +466,26 @@ class SceneView:
         self.plotter.add_mesh(fp.mesh, **kwargs)
 
     def _add_legend(self) -> None:
+        """Legend in the top right corner: each entry's label written in its colour.
+
+        (VTK's legend box clips long labels at some window sizes; plain text does not.)
+        """
         entries = []
         if self.figures is not None:
-            entries.append(["agents", FIGURE_COLOR])
+            entries.append(("agents", FIGURE_COLOR))
         if self.scene.walkable_area is not None:
-            entries.append(["walkable area", WALKABLE_COLOR])
+            entries.append(("walkable area", WALKABLE_COLOR))
         if getattr(self.scene.routes, "graph", None) is not None:
-            entries.append(["route graph", ROUTE_COLOR])
-        if entries:
-            # trailing spaces keep VTK's legend box from clipping the longest label
-            entries = [[label + "    ", color] for label, color in entries]
-            self.plotter.add_legend(entries, bcolor="white", border=True, size=(0.2, 0.12),
-                                    loc="upper right", face="rectangle")
+            entries.append(("route graph", ROUTE_COLOR))
+        size = self._font(7)  # pyvista doubles the font size of positioned text
+        line = 2.6 * size / self.plotter.window_size[1] * 1.3
+        for i, (label, color) in enumerate(entries):
+            text = self.plotter.add_text(
+                f"{label} —", position=(0.985, 0.96 - i * line), viewport=True,
+                font_size=size, color=color, name=f"legend {label}",
+            )
+            text.GetTextProperty().SetJustificationToRight()
+            text.GetTextProperty().SetVerticalJustificationToTop()
 
     # --- animation ------------------------------------------------------------------
 
