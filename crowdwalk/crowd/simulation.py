@@ -79,6 +79,8 @@ class CrowdParams:
         A step with a larger height change is a stair step (Weidmann speed) [m].
     planning_horizon : int
         Steps the footstep planner looks ahead (Chen & Li §4.2: three or four) [-].
+    min_step_ratio : float
+        Shortest planned step as a fraction of the leg length [-].
     steering : SteeringParams
     """
 
@@ -93,6 +95,7 @@ class CrowdParams:
     reroute_after: float = 8.0
     stair_rise: float = 0.05
     planning_horizon: int = 3
+    min_step_ratio: float = 0.15
     steering: SteeringParams = field(default_factory=SteeringParams)
 
 
@@ -207,8 +210,11 @@ class CrowdSimulation:
             from planners import PlannerConfig
 
             # Chen & Li plan "three or four" steps ahead (§4.2); three is an order of
-            # magnitude cheaper on stairs than four, and the crowd re-plans often
-            planner_config = PlannerConfig(n_steps=params.planning_horizon)
+            # magnitude cheaper on stairs than four, and the crowd re-plans often. The step
+            # range reaches down to 0.15 leg lengths (planners' default 0.30): in queues
+            # and when arriving close to a riser people take short steps.
+            planner_config = PlannerConfig(n_steps=params.planning_horizon,
+                                           min_step_ratio=params.min_step_ratio)
         self.footsteps = FootstepPlanner(self.terrain, self.legs, config=planner_config,
                                          horizon=planner_config.n_steps)
         self.state = AgentState(n, planner_config.n_steps)
@@ -529,14 +535,20 @@ class CrowdSimulation:
             st.t1[wait] = t + prm.wait_time
             # standing still brings the feet together under the body (on level footing),
             # so the next step may go any way
+            # (only where the whole foot, heel to toe, rests on even ground there)
             apart = wait[np.linalg.norm(st.stance[wait] - st.trail[wait], axis=1) > 1e-6]
             if apart.size:
                 here = st.pos1[apart]
-                flat = self.terrain.kind(here) != 2  # not on a stair flight
-                level = apart[flat & (np.abs(st.stance_z[apart] - st.trail_z[apart]) <= 0.3)]
-                z = self.terrain.height(st.pos1[level])
-                st.stance[level] = st.trail[level] = st.pos1[level]
-                st.stance_z[level] = st.trail_z[level] = z
+                d = np.column_stack([np.cos(st.heading[apart]), np.sin(st.heading[apart])])
+                heel = np.array([self.legs[k].heel_offset for k in self.leg_index[apart]])
+                toe = np.array([self.legs[k].toe_offset for k in self.leg_index[apart]])
+                pts = np.concatenate([here - (heel + 0.03)[:, None] * d, here,
+                                      here + (toe + 0.03)[:, None] * d])
+                z = self.terrain.height(pts).reshape(3, -1)
+                even = np.ptp(z, axis=0) <= 0.01
+                level = apart[even]
+                st.stance[level] = st.trail[level] = here[even]
+                st.stance_z[level] = st.trail_z[level] = z[1, even]
             dur = t + prm.wait_time - st.t0[wait]
             st.wait[wait] += dur
             st.stuck[wait] += dur
