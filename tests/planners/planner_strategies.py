@@ -10,7 +10,7 @@ from planners import GroundProfile
 def terrain_profiles(draw):
     """Random walkable terrain: flat runs, stair flights, low blocks and ramps [m]."""
     s, z = [-2.0], [0.0]
-    x = draw(st.floats(0.0, 0.8))
+    x = draw(st.floats(0.25, 0.8))  # the stance foot (ankle at s = 0) stands on flat ground
     while x < 5.0:
         kind = draw(st.integers(0, 3))
         h = z[-1]

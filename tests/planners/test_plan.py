@@ -1,0 +1,116 @@
+"""Planner properties: optimality order, translation invariance, determinism, batches."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from planner_strategies import terrain_profiles
+
+from planners import GroundProfile, Leg, PlannerConfig, plan, plan_batch
+from planners.lattice import build_tables
+from planners.optimal import optimal
+from planners.search import all_configs_evaluated
+
+
+def test_flat_ground_gives_equal_neutral_steps(leg):
+    p = plan(GroundProfile.flat(), leg, 1.34)
+    assert p.ok and p.step_lengths.size == 4
+    assert np.allclose(p.step_lengths, p.stats["neutral_step"])
+    assert np.allclose(p.footholds_z, 0) and p.footholds_s[0] == 0
+    assert p.efficiency == pytest.approx(p.distance / p.energy_total)
+    assert p.phase_durations.sum(axis=1) == pytest.approx(p.step_lengths / 1.34)
+
+
+@settings(max_examples=30, deadline=None)
+@given(terrain_profiles())
+def test_optimal_is_best_and_fixed_never_beats_it(leg, profile):
+    plans = {name: plan(profile, leg, 1.34, name) for name in ("best_first", "fixed", "optimal")}
+    best = plans["optimal"]
+    for name, p in plans.items():
+        if p.ok:
+            assert best.ok, name
+            assert best.efficiency >= p.efficiency * (1 - 1e-12), name
+            assert best.energy_per_metre <= p.energy_per_metre * (1 + 1e-12), name
+
+
+@settings(max_examples=15, deadline=None)
+@given(terrain_profiles())
+def test_optimal_equals_exhaustive_enumeration(leg, profile):
+    tables = build_tables([profile], [leg], np.array([1.34]), None, np.zeros(1),
+                          PlannerConfig())
+    legal, eff = all_configs_evaluated(tables, np.array([0]))
+    result = optimal(tables)
+    assert result.found[0] == legal.any()
+    if legal.any():
+        _, got = tables.evaluate(np.array([0]), result.configs)
+        assert got[0] == pytest.approx(eff[0][legal[0]].max(), rel=1e-12)
+
+
+@settings(max_examples=20, deadline=None)
+@given(terrain_profiles(), st.floats(-3, 3), st.floats(-2, 2),
+       st.sampled_from(["best_first", "fixed", "optimal"]))
+def test_translation_changes_only_offsets(leg, profile, ds, dz, planner):
+    a = plan(profile, leg, 1.34, planner)
+    b = plan(profile.shifted(ds, dz), leg, 1.34, planner, origin=ds)
+    assert a.status == b.status
+    assert np.allclose(b.footholds_s, a.footholds_s + ds, atol=1e-9)
+    assert np.allclose(b.footholds_z, a.footholds_z + dz, atol=1e-9)
+    assert np.allclose(b.E, a.E, rtol=1e-9, atol=1e-12)
+    assert np.allclose(b.swing_controls, a.swing_controls + [ds, dz], atol=1e-9)
+
+
+def test_plans_are_deterministic_and_batches_match_single_plans(leg):
+    profiles = [GroundProfile.flat(), GroundProfile.stairs(0.17, 0.3, 5, first_edge=0.4),
+                GroundProfile.stairs(-0.15, 0.32, 4, first_edge=0.7),
+                GroundProfile([-2, 0, 3, 8], [0, 0, 0.3, 0.3])]
+    legs = [leg, Leg.from_body_height(1.55), Leg.from_body_height(1.9), leg]
+    speeds = [1.34, 1.0, 1.5, 1.2]
+    for planner in ("best_first", "fixed", "optimal"):
+        batch = plan_batch(profiles, legs, speeds, planner)
+        again = plan_batch(profiles, legs, speeds, planner)
+        for p, q, prof, lg, v in zip(batch, again, profiles, legs, speeds, strict=True):
+            assert q.status == p.status  # the same call gives the same bits
+            assert np.array_equal(q.footholds_s, p.footholds_s) and np.array_equal(q.E, p.E)
+            single = plan(prof, lg, v, planner)  # batching only shifts s by an offset
+            assert single.status == p.status
+            assert np.allclose(single.footholds_s, p.footholds_s, atol=1e-9)
+            assert np.allclose(single.E, p.E, rtol=1e-9)
+
+
+def test_fig_11_planned_walker_strides_over_a_low_block_the_fixed_one_steps_on(leg):
+    block = GroundProfile([-2, 1.15, 1.15, 1.5, 1.5, 8], [0, 0, 0.1, 0.1, 0, 0])
+    fixed = plan(block, leg, 1.34, "fixed")
+    planned = plan(block, leg, 1.34, "best_first")
+    assert fixed.ok and planned.ok
+    assert np.any(fixed.footholds_z > 0.05)  # steps onto the block
+    assert np.all(planned.footholds_z == 0)  # strides across
+    assert planned.energy_per_metre < fixed.energy_per_metre
+
+
+def test_trailing_foot_and_origin_are_honoured(leg):
+    p = plan(GroundProfile.flat(), leg, 1.34, trailing=-0.4, origin=2.0)
+    assert p.trailing_s == pytest.approx(1.6)
+    assert p.swing_controls[0, 0, 0] == pytest.approx(1.6)
+    assert p.footholds_s[0] == 2.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"speed": float("nan")}, "plan.speeds must be finite"),
+        ({"speed": -1.0}, "plan.speed must be finite and in \\(0, 3\\] \\[m/s\\]; got -1.0"),
+        ({"planner": "astar"}, "plan.planner must be one of"),
+        ({"trailing": 0.3}, "plan.trailing must be in \\(-3, 0\\)"),
+        ({"config": "fast"}, "plan.config must be a PlannerConfig"),
+    ],
+)
+def test_bad_arguments_raise_value_errors(leg, kwargs, match):
+    args = {"speed": 1.34, **kwargs}
+    speed = args.pop("speed")
+    with pytest.raises(ValueError, match=match):
+        plan(GroundProfile.flat(), leg, speed, **args)
+
+
+def test_negative_leg_lengths_are_rejected():
+    with pytest.raises(ValueError, match="Leg.thigh must be finite and > 0 \\[m\\]; got -0.4"):
+        Leg(-0.4, 0.4, 0.26, 0.06, 0.2)
