@@ -132,7 +132,7 @@ class StickFigures:
         pyvista.PolyData
             The same mesh object every call.
         """
-        positions = np.asarray(positions, dtype=np.float32)
+        positions = np.asarray(positions, dtype=np.float64)
         n_joints = len(self.parents)
         if positions.ndim != 3 or positions.shape[1:] != (n_joints, 3):
             raise invalid(
@@ -178,8 +178,9 @@ class StickFigures:
         parent = positions[:, self.bones[:, 1]]
         axis = (parent - child).reshape(-1, 3)
         length = np.linalg.norm(axis, axis=1, keepdims=True)
-        axis = np.divide(axis, length, out=np.tile(np.float32([0, 0, 1]), (len(axis), 1)),
-                         where=length > 1e-9)
+        # bones shorter than 1 µm (coincident joints) get a vertical axis
+        axis = np.divide(axis, length, out=np.tile([0.0, 0.0, 1.0], (len(axis), 1)),
+                         where=length > 1e-6)
         u, v = _perpendicular_frames(axis)
         radial = normals[:, :n_bone].reshape(k, b, 2, s, 3)
         ring = (u[:, None, :] * self._cos[None, :, None]
@@ -190,6 +191,6 @@ class StickFigures:
         bone_points[:, :, 1:] = bone_points[:, :, :1]
         bone_points[:, :, 0] += child[:, :, None, :]
         bone_points[:, :, 1] += parent[:, :, None, :]
-        head_centre = positions[:, self.head_joint] + np.float32([0, 0, self.head_radius])
+        head_centre = positions[:, self.head_joint] + [0.0, 0.0, self.head_radius]
         points[:, n_bone:] = head_centre[:, None, :] + self._sphere_points[None] * self.head_radius
         normals[:, n_bone:] = self._sphere_points[None]
