@@ -437,9 +437,10 @@ class SceneView:
         if fp is None:
             return
         style = _COLOR_STYLE[self.color]
-        bar = dict(title=style["title"], color="black", position_x=0.3, position_y=0.05,
-                   width=0.4, height=0.06, fmt="%.3g", n_labels=3 if self._small else 5,
-                   title_font_size=self._font(16), label_font_size=self._font(14))
+        bar = dict(title=style["title"], color="black", position_x=0.3, position_y=0.02,
+                   width=0.4, height=0.1, fmt="%.3g", n_labels=3 if self._small else 5,
+                   title_font_size=self._font(16), label_font_size=self._font(14),
+                   background_color="white", fill=True)
         kwargs = dict(scalars=self.color, cmap=style["cmap"], name="footprints",
                       scalar_bar_args=bar, show_scalar_bar=True)
         if self.color == "planner":
@@ -477,7 +478,7 @@ class SceneView:
             entries.append(("walkable area", WALKABLE_COLOR))
         if getattr(self.scene.routes, "graph", None) is not None:
             entries.append(("route graph", ROUTE_COLOR))
-        size = self._font(7)  # pyvista doubles the font size of positioned text
+        size = self._font(8)  # pyvista doubles the font size of positioned text
         line = 2.6 * size / self.plotter.window_size[1] * 1.3
         for i, (label, color) in enumerate(entries):
             text = self.plotter.add_text(
