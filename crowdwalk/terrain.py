@@ -866,8 +866,18 @@ class Terrain:
         """Edges where the ground changes height by more than ``min_height`` [m] (risers,
         curbs, block sides, walls) as segments (m, 2, 2) [m]."""
         a, b, zla, zlb, zra, zrb, _, _ = self._edge_steps(self._arrangement)
-        big = np.maximum(np.abs(zla - zra), np.abs(zlb - zrb)) > min_height
-        return np.stack([a[big], b[big]], axis=1)
+        ja, jb = zla - zra, zlb - zrb  # the step height varies linearly along an edge
+        out = []
+        for sign in (1.0, -1.0):  # where sign·j(t) > min_height, t ∈ [0, 1]
+            fa, fb = sign * ja - min_height, sign * jb - min_height
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t0 = np.where(fa == fb, 0.0, fa / (fa - fb))  # root of the linear function
+            lo = np.where(fa > 0, 0.0, np.clip(t0, 0, 1))
+            hi = np.where(fb > 0, 1.0, np.clip(t0, 0, 1))
+            keep = ((fa > 0) | (fb > 0)) & (hi - lo > 1e-12)
+            d = b - a
+            out.append(np.stack([a + lo[:, None] * d, a + hi[:, None] * d], axis=1)[keep])
+        return np.concatenate(out)
 
     def mesh(self) -> trimesh.Trimesh:
         """The whole ground as one triangle mesh [m]: treads, tops and slopes as exact

@@ -19,8 +19,17 @@ FAST = settings(max_examples=30, deadline=None)
 EXTENT = (-50.0, -50.0, 50.0, 50.0)
 
 
+HILLY = Terrain(EXTENT, 0.0, (
+    Slope.ramp((-10, -10), 0.5, 30, 12, 0.0, 0.45),
+    StairFlight((5, 5), 1.0, 8, 0.3, 0.12, 3),
+    Block.box((20, 10), (6, 6), 0.3),
+    Slope([(0, 20), (30, 20), (30, 26), (0, 26)], (0, 20), 0.0, math.pi / 2,
+          math.tan(math.radians(-4))),
+))
+
+
 @st.composite
-def graphs(draw):
+def graphs(draw, terrain=None):
     """A random connected graph of places on a jittered grid with random widths."""
     n = draw(st.integers(3, 8))
     rng = np.random.default_rng(draw(st.integers(0, 10_000)))
@@ -40,11 +49,11 @@ def graphs(draw):
             mid = (xy[a] + xy[b]) / 2 + rng.uniform(-3, 3, 2)
             via = (tuple(mid),)
         corridors.append(Corridor(f"n{a}", f"n{b}", float(rng.uniform(0.6, 4.0)), via))
-    return RouteGraph(places, corridors, Terrain.flat(EXTENT)), n
+    return RouteGraph(places, corridors, terrain or Terrain.flat(EXTENT)), n
 
 
 @FAST
-@given(g=graphs(), data=st.data())
+@given(g=st.one_of(graphs(), graphs(HILLY)), data=st.data())
 def test_paths_stay_inside_walkable_area_and_cost_at_least_distance(g, data):
     routes, n = g
     a = f"n{data.draw(st.integers(0, n - 1))}"

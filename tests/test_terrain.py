@@ -99,7 +99,7 @@ def test_profile_agrees_with_point_queries(pts, frac):
     total = seg.sum()
     if total < 1e-6:
         return
-    assert s_rows[-1] == pytest.approx(total, abs=1e-9)
+    assert s_rows[-1] == pytest.approx(total, abs=1e-8)  # sub-nm legs are dropped
     s = np.array(frac) * total
     # query away from the profile's vertices: at a vertical change the profile has two
     # values, and a path may merely touch a footprint's corner there (measure zero)
@@ -183,6 +183,12 @@ def test_heightfield_nodes_exact_and_seeded():
     nodes = np.stack([1.0 + 0.5 * ii.ravel(), 2.0 + 0.5 * jj.ravel()], 1)
     np.testing.assert_allclose(ter.height(nodes), h.ravel(), atol=1e-12)
     assert ter.kind(nodes[:1])[0] == TerrainKind.ROUGH
+    # each cell is two planar triangles split along the (1, 0)-(0, 1) diagonal
+    n = ter.normal([[1.1, 2.1], [1.4, 2.4]])
+    expect = np.array([[-0.2, -0.4, 1.0], [-0.4, -0.6, 1.0]])
+    np.testing.assert_allclose(n, expect / np.linalg.norm(expect, axis=1, keepdims=True))
+    np.testing.assert_allclose(ter.height([[1.1, 2.1], [1.4, 2.4]]),
+                               [0.2 * 0.1 + 0.4 * 0.1, 0.4 - 0.4 * 0.1 - 0.6 * 0.1])
     a = Heightfield.noise((0, 0), (4, 4), 0.25, 0.05, 1.0, seed=7)
     b = Heightfield.noise((0, 0), (4, 4), 0.25, 0.05, 1.0, seed=7)
     c = Heightfield.noise((0, 0), (4, 4), 0.25, 0.05, 1.0, seed=8)
@@ -293,5 +299,25 @@ def test_normals_match_finite_differences_of_height(pts):
     expect = np.column_stack([-gx, -gy, np.ones(len(xy))])
     expect /= np.linalg.norm(expect, axis=1, keepdims=True)
     n = ter.normal(xy)
-    smooth = same & (np.abs(z - ter.height(xy)[:, None]).max(1) < 0.01)
+    zc = ter.height(xy)
+    # and where the ground has no kink there (a rough-ground grid line or diagonal)
+    smooth = same & (np.abs(z - zc[:, None]).max(1) < 0.01)
+    smooth &= (np.abs(z[:, 0] + z[:, 1] - 2 * zc) < 1e-11) & (np.abs(z[:, 2] + z[:, 3] - 2 * zc)
+                                                              < 1e-11)
     np.testing.assert_allclose(n[smooth], expect[smooth], atol=1e-4)
+
+
+def test_steps_cover_only_where_the_change_is_high_enough():
+    # a slope falling to -1.4 m: its sides are walls only where they drop more than 0.5 m
+    grade = -0.07
+    slope = Slope([(0, 0), (10, 0), (10, 20), (0, 20)], (0, 0), 0.0, math.pi / 2, grade)
+    ter = Terrain(EXTENT, 0.0, (slope, Block.box((-10, -10), (2, 2), 0.3)))
+    steps = ter.steps(0.5)
+    ys = steps[:, :, 1]
+    start = 0.5 / -grade
+    sides = np.isclose(steps[:, 0, 0], steps[:, 1, 0])  # the two sides x = 0 and x = 10
+    assert sides.sum() == 2
+    np.testing.assert_allclose(ys[sides].min(axis=1), start, atol=1e-9)
+    np.testing.assert_allclose(ys[sides].max(axis=1), 20, atol=1e-9)
+    assert len(ter.steps(0.2)) > len(steps)  # the 0.3 m block joins at a lower threshold
+    assert np.abs(steps).max() <= 20
