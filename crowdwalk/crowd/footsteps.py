@@ -5,9 +5,9 @@ Chen & Li (§4.2) plan the next n steps and walk them. In a crowd the simulation
 planned steps while the agent keeps its line, and re-plans at a heel strike when steering
 turns it (receding horizon). The planner is the cost centre, so identical planning
 problems are answered from a cache. The key is the planner, the leg, the speed, the
-trailing foot (1 cm) and the ground profile *relative to the stance foot* (s rounded to
-4 mm, z − z₀ to 1 mm): a reused plan's footholds lie within 2 mm of where the planner
-would put them, and the planner keeps 2 cm from every edge. On level ground every step of
+trailing foot (1 cm) and the ground profile *relative to the stance foot* (s and z − z₀
+rounded to 1 mm): a reused plan's footholds lie within 0.5 mm of where the planner would
+put them. On level ground every step of
 an agent is the same problem, so an agent plans there only a few times.
 """
 
@@ -20,7 +20,7 @@ import numpy as np
 __all__ = ["PlannedSteps", "FootstepPlanner"]
 
 _BEHIND = 1.0  # [m] of ground behind the stance foot in the profile (trailing swing foot)
-_S_QUANTUM = 4e-3  # [m] rounding of profile arc lengths in the cache key
+_S_QUANTUM = 1e-3  # [m] rounding of profile arc lengths in the cache key
 _Z_QUANTUM = 1e-3  # [m] rounding of profile heights in the cache key
 
 

@@ -19,8 +19,8 @@ Speed model (deviation from Chen & Li, whose Table 1 shortens the phases equally
 and downhill): the step duration is step length / speed with the agent's free speed
 scaled on stairs by Weidmann's (1993) measured horizontal stair speeds (0.610 m/s up,
 0.694 m/s down against 1.34 m/s level) and on slopes by Tobler's (1993) hiking function;
-a step never takes less than 1/cadence at the free speed (Fukuchi et al. 2018 cadence
-fit), so short steps in a queue are slow steps, not a shuffle at high cadence.
+a level step never takes less than 1/cadence at the free speed (Fukuchi et al. 2018
+cadence fit), so short steps in a queue are slow steps, not a shuffle at high cadence.
 """
 
 from __future__ import annotations
@@ -571,7 +571,9 @@ class CrowdSimulation:
                           np.where(H < -prm.stair_rise, STAIR_DOWN_FACTOR,
                                    1.0 / np.maximum(1.0, np.exp(3.5 * (np.abs(grade + 0.05)
                                                                        - 0.05)))))
-        duration = np.maximum(L / (v0 * factor), self.min_step_time[a])
+        stair = np.abs(H) > prm.stair_rise
+        duration = np.where(stair, L / (v0 * factor),
+                            np.maximum(L / (v0 * factor), self.min_step_time[a]))
         t0 = te[go]
         end = 0.5 * (st.stance[a] + new_c)
         st.distance[a] += np.linalg.norm(end - st.pos1[a], axis=1)
