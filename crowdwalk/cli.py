@@ -52,16 +52,24 @@ def friendly_errors(func):
 @friendly_errors
 def validate(scenario: Path = typer.Argument(..., help="Scenario YAML file.")) -> None:
     """Check a scenario file against the schema and build its world."""
+    from collections import Counter
+
     from crowdwalk.scenario import load_scenario
     from crowdwalk.world import build_world
 
     sc = load_scenario(scenario)
     world = build_world(sc)
     n = sum(g.count for g in sc.groups)
+    x0, y0, x1, y1 = world.terrain.bounds
+    kinds = Counter(f.type for f in sc.terrain.features)
+    feats = ", ".join(f"{k} {v}" for k, v in sorted(kinds.items()))
     typer.echo(
-        f"{scenario}: valid — {len(sc.groups)} group(s), {n} agent(s), "
+        f"{scenario}: valid — terrain {x1 - x0:g} × {y1 - y0:g} m"
+        f"{f' ({feats})' if feats else ''}, "
         f"{world.routes.graph.number_of_nodes()} route nodes, "
-        f"walkable area {world.routes.walkable_area.area:.1f} m²."
+        f"{len(world.routes.corridors)} corridors, "
+        f"walkable area {world.routes.walkable_area.area:.1f} m², "
+        f"{len(sc.groups)} group(s), {n} agent(s)."
     )
 
 
