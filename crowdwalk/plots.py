@@ -455,3 +455,53 @@ def plot_plan(profile, plans, out, *, labels=None, title: str | None = None):
     if title:
         fig.suptitle(title, fontsize=10)
     return _save(fig, out)
+
+
+# --- planner comparison by terrain type (issue 5: crowdwalk compare) -------------------
+
+
+def plot_by_terrain(values, out, *, ylabel: str, title: str):
+    """Grouped bars: one group per terrain type, one bar per planner.
+
+    Parameters
+    ----------
+    values : mapping of planner -> mapping of terrain type name -> float
+        e.g. energy per metre [J/(kg m)] of each planner on each terrain type; a missing
+        or non-finite value leaves its bar out.
+    out : path
+        PNG file.
+    ylabel : str
+        Y axis label with its unit.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import numpy as np
+
+    from crowdwalk.errors import invalid
+
+    if not values:
+        raise invalid("plot_by_terrain", "values", "a non-empty mapping", values)
+    planners = list(values)
+    kinds = sorted({k for v in values.values() for k in v})
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(max(4.0, 1.3 * len(kinds) * len(planners) ** 0.5), 3.6))
+    width = 0.8 / len(planners)
+    x = np.arange(len(kinds))
+    for i, name in enumerate(planners):
+        ys = np.array([values[name].get(k, np.nan) for k in kinds], dtype=float)
+        bars = ax.bar(x + (i - (len(planners) - 1) / 2) * width, np.nan_to_num(ys), width,
+                      label=name)
+        for bar, y in zip(bars, ys, strict=True):
+            if np.isfinite(y):
+                ax.annotate(f"{y:.3g}", (bar.get_x() + bar.get_width() / 2, y),
+                            xytext=(0, 2), textcoords="offset points", ha="center",
+                            fontsize=7)
+    ax.set_xticks(x, kinds)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    return _save(fig, out)
