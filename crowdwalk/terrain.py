@@ -45,8 +45,6 @@ __all__ = [
     "Terrain",
 ]
 
-_EDGE_EPS = 1e-7  # [m] offset used to look at either side of an edge
-
 
 class TerrainKind(enum.IntEnum):
     """Terrain-type codes returned by :meth:`Terrain.kind`."""
@@ -493,6 +491,12 @@ class MeshFeature:
         return np.flatnonzero(np.abs(self.mesh.face_normals[:, 2]) > 1e-9)
 
     @functools.cached_property
+    def _centroid_tree(self):
+        from scipy.spatial import cKDTree
+
+        return cKDTree(self.mesh.triangles_center[self._up_faces, :2])
+
+    @functools.cached_property
     def footprint(self) -> Polygon:
         tri = self.triangles()
         geom = shapely.union_all(shapely.polygons(np.concatenate([tri, tri[:, :1]], axis=1)))
@@ -520,9 +524,9 @@ class MeshFeature:
     def _plane(self, ref):
         f = self._hit_faces(ref)
         miss = f < 0
-        if miss.any():  # on the rim: a point a hair inside the footprint
-            f[miss] = self._hit_faces(ref[miss] + _EDGE_EPS * 10)[...]
-        f = np.where(f < 0, self._up_faces[0], f)
+        if miss.any():  # a ray grazing the rim: the face with the nearest centroid
+            _, k = self._centroid_tree.query(ref[miss])
+            f[miss] = self._up_faces[k]
         n = self.mesh.face_normals[f]
         v0 = self.mesh.vertices[self.mesh.faces[f, 0]]
         return v0, n
