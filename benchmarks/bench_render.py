@@ -12,6 +12,7 @@ way ``crowdwalk render`` produces them: move every agent and footprint to the ne
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import numpy as np
@@ -85,7 +86,11 @@ def main() -> None:
         table.add_row(name, str(n), f"{r['triangles']:,}", f"{r['footprint_triangles']:,}",
                       f"{r['update']:.1f}", f"{r['render']:.1f}", f"{r['read']:.1f}",
                       f"{r['fps']:.1f}")
-    Console(width=130).print(table)
+    console = Console(width=130)
+    console.print(table)
+    load = os.getloadavg()
+    console.print(f"load average during the run: {load[0]:.2f} (1 min), {load[1]:.2f} (5 min) "
+                  f"on {os.cpu_count()} cores — other processes slow software rendering.")
 
 
 if __name__ == "__main__":

@@ -405,7 +405,7 @@ class SceneView:
         self.figures = StickFigures(
             poses.parents, head_joint=_head_joint(poses.names, first),
             radius=0.035 if len(poses.parents) > 2 else 0.12,
-            sides=5 if large else 8, head_detail=0 if large else 2,
+            sides=4 if large else 8, head_detail=0 if large else 2,
         )
         self._root = int(np.flatnonzero(np.asarray(poses.parents) < 0)[0])
         self._show_frame(0)
