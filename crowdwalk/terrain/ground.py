@@ -1,0 +1,338 @@
+"""The composed ground: a flat base plus features in override order."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+import trimesh
+from shapely.geometry import Polygon
+
+from crowdwalk.errors import invalid
+from crowdwalk.terrain.features import (
+    Feature,
+    TerrainKind,
+    _points,
+    _ring_segments,
+)
+
+__all__ = ["Terrain"]
+
+class _EdgeIndex:
+    """Break segments (k, 2, 2) [m] with a bounding-box test, or an STRtree when many."""
+
+    def __init__(self, edges: np.ndarray):
+        self.edges = edges
+        self.lo, self.hi = edges.min(axis=1), edges.max(axis=1)
+        self.tree = shapely.STRtree(shapely.linestrings(edges)) if len(edges) > 256 else None
+
+    def pairs(self, a: np.ndarray, b: np.ndarray):
+        """Candidate (segment, edge) index pairs whose bounding boxes overlap."""
+        if self.tree is not None:
+            boxes = shapely.box(*np.minimum(a, b).T - 1e-9, *np.maximum(a, b).T + 1e-9)
+            i, j = self.tree.query(boxes)
+            yield i, j
+            return
+        chunk = max(1, 200_000 // max(len(self.edges), 1))
+        for c0 in range(0, len(a), chunk):
+            aa, bb = a[c0:c0 + chunk, None, :], b[c0:c0 + chunk, None, :]
+            near = ((np.maximum(aa, bb) >= self.lo - 1e-9).all(-1)
+                    & (np.minimum(aa, bb) <= self.hi + 1e-9).all(-1))
+            i, j = np.nonzero(near)
+            yield i + c0, j
+
+
+def _crossings(a: np.ndarray, b: np.ndarray, index: _EdgeIndex):
+    """Where segments a→b (m, 2) [m] cross the indexed edges: (segment index (h,),
+    parameter t ∈ [0, 1] along it (h,))."""
+    seg_idx, ts = [], []
+    edges = index.edges
+    e0, e = edges[:, 0], edges[:, 1] - edges[:, 0]
+    tol = 1e-12
+    for i, j in index.pairs(a, b):
+        if len(i) == 0:
+            continue
+        d = b[i] - a[i]
+        r = e0[j] - a[i]
+        ej = e[j]
+        den = d[:, 0] * ej[:, 1] - d[:, 1] * ej[:, 0]
+        ok = np.abs(den) > 1e-15
+        den = np.where(ok, den, 1.0)
+        t = (r[:, 0] * ej[:, 1] - r[:, 1] * ej[:, 0]) / den
+        u = (r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / den
+        ok &= (t >= -tol) & (t <= 1 + tol) & (u >= -tol) & (u <= 1 + tol)
+        seg_idx.append(i[ok])
+        ts.append(np.clip(t[ok], 0.0, 1.0))
+    if not seg_idx:
+        return np.zeros(0, dtype=np.int64), np.zeros(0)
+    return np.concatenate(seg_idx), np.concatenate(ts)
+
+
+class _FeatureGrid:
+    """A uniform grid over the extent listing the features whose bounding box touches each
+    cell, so that a query tests each feature only on the points near it (many obstacles).
+    Features spanning many cells are tested on all points (their bounding-box test is
+    cheaper than gathering)."""
+
+    MAX_CELLS = 64
+
+    def __init__(self, extent, features):
+        x0, y0, x1, y1 = extent
+        bb = np.array([f.bbox for f in features])
+        size = np.maximum(bb[:, 2] - bb[:, 0], bb[:, 3] - bb[:, 1])
+        self.cell = max(float(np.median(size)), math.sqrt((x1 - x0) * (y1 - y0) / 65536))
+        self.origin = np.array([x0, y0])
+        self.shape = (max(1, math.ceil((x1 - x0) / self.cell)),
+                      max(1, math.ceil((y1 - y0) / self.cell)))
+        lo = self._cell_xy(bb[:, :2])
+        hi = self._cell_xy(bb[:, 2:])
+        self.cells: list[np.ndarray | None] = []
+        for (i0, j0), (i1, j1) in zip(lo, hi, strict=True):
+            if (i1 - i0 + 1) * (j1 - j0 + 1) > self.MAX_CELLS:
+                self.cells.append(None)
+                continue
+            ii, jj = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1))
+            self.cells.append((ii + self.shape[0] * jj).ravel())
+
+    def _cell_xy(self, xy: np.ndarray) -> np.ndarray:
+        ij = np.floor((xy - self.origin) / self.cell).astype(np.int64)
+        return np.clip(ij, 0, np.array(self.shape) - 1)
+
+    def candidates(self, xy: np.ndarray):
+        """A function: feature index → indices of the points in its cells (or None)."""
+        ij = self._cell_xy(xy)
+        cid = ij[:, 0] + self.shape[0] * ij[:, 1]
+        order = np.argsort(cid, kind="stable")
+        sorted_cid = cid[order]
+
+        def points_of(i: int):
+            cells = self.cells[i]
+            if cells is None:
+                return None
+            start = np.searchsorted(sorted_cid, cells, "left")
+            stop = np.searchsorted(sorted_cid, cells, "right")
+            if len(cells) == 1:
+                return order[start[0]:stop[0]]
+            return np.concatenate([order[a:b] for a, b in zip(start, stop, strict=True)])
+
+        return points_of
+
+
+@dataclass(frozen=True, eq=False)
+class Terrain:
+    """A flat base plane over ``extent`` plus features composed in override order.
+
+    Parameters
+    ----------
+    extent : (xmin, ymin, xmax, ymax) of the ground [m]
+    base : height of the flat base plane [m]
+    features : features; where footprints overlap the last one listed wins.
+    """
+
+    extent: tuple[float, float, float, float]
+    base: float = 0.0
+    features: tuple[Feature, ...] = ()
+
+    def __post_init__(self):
+        ext = tuple(float(v) for v in self.extent)
+        if len(ext) != 4 or not (ext[2] > ext[0] and ext[3] > ext[1]):
+            raise invalid("Terrain", "extent", "(xmin, ymin, xmax, ymax) with max > min [m]",
+                          self.extent)
+        object.__setattr__(self, "extent", ext)
+        object.__setattr__(self, "features", tuple(self.features))
+        if not np.isfinite(self.base):
+            raise invalid("Terrain", "base", "a finite height [m]", self.base)
+        area = shapely.box(*ext)
+        for i, f in enumerate(self.features):
+            if not area.buffer(1e-9).covers(shapely.box(*f.bbox)):
+                raise invalid("Terrain", f"features[{i}]", f"inside the extent {ext} [m]",
+                              tuple(round(v, 3) for v in f.bbox))
+
+    @classmethod
+    def flat(cls, extent, base: float = 0.0) -> Terrain:
+        """Flat ground at height ``base`` [m] over ``extent`` [m]."""
+        return cls(extent, base)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of the ground [m]."""
+        return self.extent
+
+    @functools.cached_property
+    def area(self) -> Polygon:
+        """The ground's extent as a shapely polygon [m]."""
+        return shapely.box(*self.extent)
+
+    # -- point queries --
+
+    @functools.cached_property
+    def _grid(self) -> _FeatureGrid | None:
+        return _FeatureGrid(self.extent, self.features) if len(self.features) > 16 else None
+
+    def owner(self, xy) -> np.ndarray:
+        """Index of the feature that decides each point's height, −1 for the base; (n,)."""
+        xy = _points(xy)
+        own = np.full(len(xy), -1, dtype=np.int64)
+        if self._grid is None or len(xy) < 64:
+            for i, f in enumerate(self.features):
+                own[f.covers(xy)] = i
+            return own
+        candidates = self._grid.candidates(xy)
+        for i, f in enumerate(self.features):  # in order: later features override
+            idx = candidates(i)
+            if idx is None:
+                own[f.covers(xy)] = i
+            elif len(idx):
+                own[idx[f.covers(xy[idx])]] = i
+        return own
+
+    @staticmethod
+    def _by_owner(own: np.ndarray):
+        """(feature index, point indices) for every feature that owns points."""
+        idx = np.flatnonzero(own >= 0)
+        if len(idx) == 0:
+            return
+        order = idx[np.argsort(own[idx], kind="stable")]
+        feats, starts = np.unique(own[order], return_index=True)
+        stops = np.append(starts[1:], len(order))
+        for f, a, b in zip(feats, starts, stops, strict=True):
+            yield int(f), order[a:b]
+
+    def _surface(self, xy: np.ndarray, ref: np.ndarray, own: np.ndarray) -> np.ndarray:
+        z = np.full(len(xy), float(self.base))
+        for i, k in self._by_owner(own):
+            z[k] = self.features[i].surface(xy[k], ref[k])
+        return z
+
+    def height(self, xy) -> np.ndarray:
+        """Ground height z [m] at points ``xy`` (n, 2) [m]; (n,)."""
+        xy = _points(xy)
+        return self._surface(xy, xy, self.owner(xy))
+
+    def normal(self, xy) -> np.ndarray:
+        """Unit upward surface normal (n, 3) at ``xy`` (n, 2) [m] (of the tread or top face
+        at an edge, never of a riser)."""
+        xy = _points(xy)
+        own = self.owner(xy)
+        g = np.zeros((len(xy), 2))
+        for i, k in self._by_owner(own):
+            g[k] = self.features[i].gradient(xy[k])
+        n = np.column_stack([-g, np.ones(len(xy))])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def kind(self, xy) -> np.ndarray:
+        """Terrain-type code (:class:`TerrainKind`) of each point (n, 2) [m]; (n,) int."""
+        own = self.owner(xy)
+        codes = np.array([int(f.kind) for f in self.features] + [int(TerrainKind.FLAT)])
+        return codes[own]
+
+    # -- profile --
+
+    @functools.cached_property
+    def _breaks(self) -> _EdgeIndex:
+        parts = [f.breaks() for f in self.features]
+        return _EdgeIndex(np.concatenate(parts) if parts else np.zeros((0, 2, 2)))
+
+    def profile_arrays(self, polyline) -> tuple[np.ndarray, np.ndarray]:
+        """Ground profile along ``polyline`` (k, 2) [m]: arc length s (m,) [m] from the first
+        point and height z (m,) [m], piecewise linear; two rows with equal s are a vertical
+        height change. Exact at every edge (floating-point precision)."""
+        p = _points(polyline, "Terrain", "polyline")
+        if len(p) < 2:
+            raise invalid("Terrain", "polyline", "at least 2 points [m]", len(p))
+        return self.profiles([p])[0]
+
+    def profiles(self, polylines) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`profile_arrays` for many polylines in one batched pass (one terrain query
+        for all of them): a list of (s, z) pairs [m]."""
+        lines = [_points(pl, "Terrain", "polyline") for pl in polylines]
+        a_list, b_list, line_of, s0_list, singles = [], [], [], [], {}
+        for li, pl in enumerate(lines):
+            if len(pl) < 2:
+                raise invalid("Terrain", "polyline", "at least 2 points [m]", len(pl))
+            seg = np.linalg.norm(np.diff(pl, axis=0), axis=1)
+            keep = np.concatenate([[True], seg > 1e-9])  # drop repeated points
+            pl, seg = pl[keep], seg[seg > 1e-9]
+            if len(pl) < 2:
+                singles[li] = pl[:1]
+                continue
+            a_list.append(pl[:-1])
+            b_list.append(pl[1:])
+            line_of.append(np.full(len(seg), li))
+            s0_list.append(np.concatenate([[0.0], np.cumsum(seg)[:-1]]))
+        out: list = [None] * len(lines)
+        for li, pt in singles.items():
+            out[li] = (np.zeros(1), self.height(pt))
+        if not a_list:
+            return out
+        a, b = np.concatenate(a_list), np.concatenate(b_list)
+        line_of, s_seg0 = np.concatenate(line_of), np.concatenate(s0_list)
+        seg_len = np.linalg.norm(b - a, axis=1)
+        m = len(a)
+        index = self._breaks
+        hit_seg, hit_t = _crossings(a, b, index) if len(index.edges) else (
+            np.zeros(0, dtype=np.int64), np.zeros(0))
+        seg = np.concatenate([np.arange(m), np.arange(m), hit_seg])
+        t = np.concatenate([np.zeros(m), np.ones(m), hit_t])
+        order = np.lexsort((t, seg))
+        seg, t = seg[order], t[order]
+        s = s_seg0[seg] + t * seg_len[seg]
+        pts = a[seg] + t[:, None] * (b[seg] - a[seg])
+        # pieces between consecutive cut points of the same segment, each on one plane
+        i0 = np.flatnonzero((seg[1:] == seg[:-1]) & (s[1:] - s[:-1] > 1e-12))
+        mid = 0.5 * (pts[i0] + pts[i0 + 1])
+        own = self.owner(mid)
+        za = self._surface(pts[i0], mid, own)
+        zb = self._surface(pts[i0 + 1], mid, own)
+        n = len(i0)
+        s_rows = np.empty(2 * n)
+        z_rows = np.empty(2 * n)
+        s_rows[0::2], s_rows[1::2] = s[i0], s[i0 + 1]
+        z_rows[0::2], z_rows[1::2] = za, zb
+        row_line = np.repeat(line_of[seg[i0]], 2)
+        # drop a row that repeats the previous one (continuous ground at a cut)
+        same_line = np.concatenate([[False], row_line[1:] == row_line[:-1]])
+        dup = same_line & np.concatenate([[False], (np.abs(np.diff(s_rows)) <= 1e-12)
+                                          & (np.abs(np.diff(z_rows)) <= 1e-12)])
+        s_rows, z_rows, row_line = s_rows[~dup], z_rows[~dup], row_line[~dup]
+        # snap the two rows of a vertical change to exactly the same s
+        same_line = np.concatenate([[False], row_line[1:] == row_line[:-1]])
+        step = same_line & np.concatenate([[False], np.abs(np.diff(s_rows)) <= 1e-12])
+        s_rows[step] = s_rows[np.flatnonzero(step) - 1]
+        bounds = np.searchsorted(row_line, np.arange(len(lines) + 1))
+        for li in range(len(lines)):
+            if out[li] is None:
+                out[li] = (s_rows[bounds[li]:bounds[li + 1]], z_rows[bounds[li]:bounds[li + 1]])
+        return out
+
+    def profile(self, polyline):
+        """Ground profile along ``polyline`` (k, 2) [m] as a ``planners.GroundProfile``
+        (s = 0 at the polyline's first point)."""
+        s, z = self.profile_arrays(polyline)
+        from planners.profile import GroundProfile
+
+        return GroundProfile(s, z)
+
+    # -- mesh (crowdwalk.terrain.meshing) --
+
+    @functools.cached_property
+    def _arrangement(self):
+        """All feature outlines and the extent, noded into one line network [m]."""
+        lines = [_ring_segments(self.area)] + [f.outline() for f in self.features]
+        return shapely.union_all(shapely.linestrings(np.concatenate(lines)))
+
+    def steps(self, min_height: float = 0.0) -> np.ndarray:
+        """Edges where the ground changes height by more than ``min_height`` [m] (risers,
+        curbs, block sides, walls) as segments (m, 2, 2) [m]."""
+        from crowdwalk.terrain.meshing import height_steps
+
+        return height_steps(self, min_height)
+
+    def mesh(self) -> trimesh.Trimesh:
+        """The whole ground as one triangle mesh [m] (see :mod:`crowdwalk.terrain.meshing`)."""
+        from crowdwalk.terrain.meshing import ground_mesh
+
+        return ground_mesh(self)
