@@ -17,7 +17,18 @@ with the same arc length.
 
 Footprints are closed sets (a point on a block's edge is on the block); stair treads are
 half-open along the walking direction (a point on a riser line belongs to the upper tread
-of an up flight).
+of an up flight). Outside the extent the flat base continues.
+
+Design choices: override order rather than ``max`` composition, because ``max`` cannot
+express a pit or a flight going down from a platform and makes the result depend on
+heights rather than on the author's order; a rough heightfield is two planar triangles
+per grid cell rather than bilinear, so that it too is exactly piecewise planar (profiles
+and meshes agree with point queries to floating point); a mesh's height is the topmost
+hit of a vertical ray (trimesh, embree when installed).
+
+Modules: :mod:`~crowdwalk.terrain.features` (the features),
+:mod:`~crowdwalk.terrain.ground` (:class:`Terrain`: composition, point queries, ground
+profiles), :mod:`~crowdwalk.terrain.meshing` (one trimesh mesh, height steps).
 """
 
 from crowdwalk.terrain.features import (
