@@ -107,7 +107,7 @@ def plot_efficiency_curve(
         (line,) = ax.plot(x, curve, lw=2, label=label)
         ax.plot(best[i], np.nanmax(curve), "o", color=line.get_color())
         ax.annotate(f"{best[i]:.2f} m", (best[i], np.nanmax(curve)), textcoords="offset points",
-                    xytext=(4, 6), color=line.get_color())
+                    xytext=(10, -4 - 12 * i), va="top", color=line.get_color(), fontsize=8)
     ax.set_xlabel("step length [m]")
     ax.set_ylabel(f"efficiency [{unit}]")
     ax.set_title(title, fontsize=10)
