@@ -199,21 +199,23 @@ class RoughSpec(_Model):
 
 
 class MeshSpec(_Model):
-    """Any mesh trimesh reads (OBJ/STL/PLY/GLB), z up: scaled, turned by ``rotate`` [deg]
-    about z, then moved by ``translate`` [m]."""
+    """Any mesh trimesh reads (OBJ/STL/PLY/GLB), turned to z up if ``up: y``, scaled,
+    turned by ``rotate`` [deg] about z, then moved by ``translate`` [m]."""
 
     type: Literal["mesh"]
     path: str = Field(description="relative to the scenario file")
     translate: Vec3 = (0.0, 0.0, 0.0)
     scale: Positive = 1.0
     rotate: float = Field(0.0, description="[deg] about z")
+    up: Literal["z", "y"] = Field("z", description="the file's up axis (glTF: y)")
 
     _resolve_path = field_validator("path")(_resolve)
 
     def build(self):
         from crowdwalk.terrain import MeshFeature
 
-        return MeshFeature.load(self.path, self.translate, self.scale, math.radians(self.rotate))
+        return MeshFeature.load(self.path, self.translate, self.scale, math.radians(self.rotate),
+                                self.up)
 
 
 FeatureSpec = Annotated[

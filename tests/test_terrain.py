@@ -321,3 +321,31 @@ def test_steps_cover_only_where_the_change_is_high_enough():
     np.testing.assert_allclose(ys[sides].max(axis=1), 20, atol=1e-9)
     assert len(ter.steps(0.2)) > len(steps)  # the 0.3 m block joins at a lower threshold
     assert np.abs(steps).max() <= 20
+
+
+@pytest.mark.parametrize("suffix", ["obj", "ply", "glb", "stl"])
+def test_mesh_formats(tmp_path, suffix):
+    box = trimesh.creation.box(extents=(2, 2, 0.3))
+    box.apply_translation((0, 0, 0.15))
+    path = tmp_path / f"box.{suffix}"
+    box.export(path)
+    feat = MeshFeature.load(path, translate=(3.0, 1.0, 0.0), rotate_z=math.radians(45))
+    ter = Terrain(EXTENT, 0.0, (feat,))
+    # rotated by 45°: (3 + 1.3, 1) is inside the turned box's corner reach, (3 + 1.1, 2.1) not
+    z = ter.height([[3.0, 1.0], [4.3, 1.0], [4.1, 2.1]])
+    np.testing.assert_allclose(z, [0.3, 0.3, 0.0], atol=1e-9)
+
+
+def test_mesh_y_up_and_unreadable(tmp_path):
+    box = trimesh.creation.box(extents=(2, 0.4, 2))  # 0.4 m tall along y
+    box.apply_translation((0, 0.2, 0))
+    path = tmp_path / "y_up.glb"
+    box.export(path)
+    ter = Terrain(EXTENT, 0.0, (MeshFeature.load(path, up="y"),))
+    assert ter.height([[0.0, 0.0]])[0] == pytest.approx(0.4)
+    bad = tmp_path / "bad.obj"
+    bad.write_text("this is not a mesh\n")
+    with pytest.raises(InputError, match=r"MeshFeature\.path must be a"):
+        MeshFeature.load(bad)
+    with pytest.raises(InputError, match=r"MeshFeature\.up must be 'y' or 'z'"):
+        MeshFeature.load(path, up="x")

@@ -455,16 +455,27 @@ class MeshFeature:
 
     @classmethod
     def load(cls, path, translate=(0.0, 0.0, 0.0), scale: float = 1.0,
-             rotate_z: float = 0.0) -> MeshFeature:
-        """Read OBJ/STL/PLY/GLB/... from ``path``; scale, rotate about z by ``rotate_z``
+             rotate_z: float = 0.0, up: str = "z") -> MeshFeature:
+        """Read OBJ/STL/PLY/GLB/... from ``path``; turn a ``up="y"`` file (the glTF
+        convention, most DCC exports) to z up, scale, rotate about z by ``rotate_z``
         [rad], then translate (3,) [m]."""
         path = Path(path)
         if not path.exists():
             raise FileNotFoundError(2, "No such file", str(path))
-        mesh = trimesh.load(path, force="mesh")
         if not scale > 0:
             raise invalid("MeshFeature", "scale", "> 0", scale)
+        if up not in ("y", "z"):
+            raise invalid("MeshFeature", "up", "'y' or 'z'", up)
+        try:
+            mesh = trimesh.load(path, force="mesh")
+        except Exception as exc:  # noqa: BLE001 - loaders raise many types
+            raise invalid("MeshFeature", "path", "a mesh file trimesh can read",
+                          f"{path} ({exc})") from exc
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            raise invalid("MeshFeature", "path", "a file with triangles", str(path))
         m = trimesh.transformations.rotation_matrix(rotate_z, [0, 0, 1])
+        if up == "y":  # y up → z up: +90° about x
+            m = m @ trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0])
         m[:3, :3] *= scale
         m[:3, 3] = translate
         mesh.apply_transform(m)
