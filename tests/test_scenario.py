@@ -221,3 +221,26 @@ def test_schema_command_prints_json_schema():
     assert printed["properties"].keys() == schema["properties"].keys()
     edge = printed["$defs"]["EdgeSpec"]["properties"]
     assert "from" in edge and math.isfinite(len(edge))
+
+
+def test_rough_ground_from_noise_inline_and_file(tmp_path):
+    np.save(tmp_path / "h.npy", np.array([[0.0, 0.1], [0.2, 0.3]]))
+    (tmp_path / "h.csv").write_text("0,0.1\n0.2,0.3\n")
+    feats = {
+        "noise": "{type: rough, origin: [8, 6], cell: 0.25, size: [2, 2], amplitude: 0.02, "
+                 "seed: 4}",
+        "inline": "{type: rough, origin: [8, 6], cell: 1.0, heights: [[0, 0.1], [0.2, 0.3]]}",
+        "npy": "{type: rough, origin: [8, 6], cell: 1.0, heights_file: h.npy}",
+        "csv": "{type: rough, origin: [8, 6], cell: 1.0, heights_file: h.csv}",
+    }
+    for name, feat in feats.items():
+        text = mutate(MINIMAL, "  features:\n", f"  features:\n    - {feat}\n")
+        (tmp_path / f"{name}.yaml").write_text(text)
+        ter = build_world(load_scenario(tmp_path / f"{name}.yaml")).terrain
+        assert ter.kind([[8.5, 6.5]])[0] == TerrainKind.ROUGH
+        if name != "noise":
+            assert ter.height([[9.0, 7.0]])[0] == pytest.approx(0.3)
+    text = mutate(MINIMAL, "  features:\n", "  features:\n    - {type: rough, origin: [8, 6], "
+                  "cell: 1.0}\n")
+    with pytest.raises(InputError, match="give exactly one of amplitude"):
+        parse_scenario(text, "s.yaml")
