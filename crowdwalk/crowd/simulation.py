@@ -427,7 +427,8 @@ class CrowdSimulation:
         w0 = _time.perf_counter()
         nbs = self._neighbours(idx, t)
         choice = choose_steps(pos, st.stance[idx], st.heading[idx], self.radius[idx], route_dir,
-                              target, self.nominal_step[idx], nbs, self.clearance, prm.steering)
+                              target, self.nominal_step[idx], nbs, self.clearance,
+                              prm.steering, speed=self.pop.free_speed[idx])
         self.wall_steering += _time.perf_counter() - w0
 
         move = choice.move.copy()

@@ -71,7 +71,7 @@ class SteeringParams:
     foot_clearance: float = 0.05
     personal_weight: float = 0.35
     personal_range: float = 0.2
-    anticipation: float = 1.0
+    anticipation: float = 1.5
     wall_weight: float = 0.3
     wall_range: float = 0.1
     turn_weight: float = 0.05
@@ -129,6 +129,7 @@ def choose_steps(
     neighbours: Neighbours,
     clearance: ClearanceField,
     params: SteeringParams = SteeringParams(),
+    speed: np.ndarray | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -154,6 +155,8 @@ def choose_steps(
     clearance : ClearanceField
         Wall distance field.
     params : SteeringParams
+    speed : (m,), optional
+        Walking speeds for the anticipation term [m/s] (default 2 nominal steps per s).
 
     Returns
     -------
@@ -162,6 +165,7 @@ def choose_steps(
     m = position.shape[0]
     if m == 0:
         return StepChoice(np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool))
+    speed = 2.0 * nominal_step if speed is None else np.asarray(speed, dtype=float)
     lengths = np.asarray(params.step_lengths)  # (L,)
     # candidates: fixed offsets from the route direction, plus keeping the current heading
     # (so a walker going straight keeps its exact line and its footstep plan)
@@ -204,12 +208,21 @@ def choose_steps(
         rr = radius[:, None, None] + neighbours.radius[:, None, :]
         gap_end = np.linalg.norm(cand[:, :, None, :] - neighbours.end[:, None, :, :], axis=-1)
         rep = params.personal_weight * np.exp(-(gap_end - rr) / params.personal_range)
-        ahead = neighbours.now + params.anticipation * neighbours.velocity
+        # anticipation: the closest approach within ``anticipation`` seconds if this agent
+        # walked the candidate direction at its speed and the oncoming neighbour kept its
+        # velocity (the time-to-collision idea of Karamouzas et al. 2014)
         own_dir = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
         oncoming = np.einsum("mkj,mj->mk", neighbours.velocity, own_dir) < -0.1
-        gap_ahead = np.linalg.norm(cand[:, :, None, :] - ahead[:, None, :, :], axis=-1)
+        mine = speed[:, None, None] * dirs  # (m, C, 2) candidate velocities
+        mine = np.concatenate([mine, np.zeros((m, 1, 2))], axis=1)  # waiting stands
+        rel_p = (neighbours.now - position[:, None, :])[:, None, :, :]  # (m, 1, K, 2)
+        rel_v = neighbours.velocity[:, None, :, :] - mine[:, :, None, :]  # (m, C+1, K, 2)
+        vv = np.einsum("mckj,mckj->mck", rel_v, rel_v)
+        t_close = np.clip(-np.einsum("mckj,mckj->mck", np.broadcast_to(rel_p, rel_v.shape),
+                                     rel_v) / np.maximum(vv, 1e-12), 0.0, params.anticipation)
+        closest = np.linalg.norm(rel_p + t_close[..., None] * rel_v, axis=-1)
         rep = rep + (oncoming[:, None, :] * params.personal_weight
-                     * np.exp(-(gap_ahead - rr) / params.personal_range))
+                     * np.exp(-(closest - rr) / params.personal_range))
         utility += np.where(neighbours.valid[:, None, :], rep, 0.0).sum(axis=-1)
     wall_gap = clearance(cand) - radius[:, None]  # soft term uses the full radius
     utility += params.wall_weight * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)

@@ -1,0 +1,79 @@
+"""Local steering: the chosen step's swept body keeps clear of neighbours and walls."""
+
+import numpy as np
+import shapely
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from crowdwalk.crowd.clearance import ClearanceField
+from crowdwalk.crowd.geometry import segment_distance
+from crowdwalk.crowd.steering import Neighbours, choose_steps
+
+ROOM = ClearanceField.from_area(shapely.box(-6, -6, 6, 6))
+R = 0.2
+
+
+def _neighbours(now, end):
+    k = len(now)
+    return Neighbours(valid=np.ones((1, k), bool), now=now[None], end=end[None],
+                      velocity=(end - now)[None] / 0.5, radius=np.full((1, k), R))
+
+
+def _choose(now, end, heading=0.0, target=(3.0, 0.0)):
+    return choose_steps(
+        position=np.zeros((1, 2)), stance=np.array([[0.1, 0.0]]), heading=np.array([heading]),
+        radius=np.array([R]), route_direction=np.array([[1.0, 0.0]]),
+        target=np.array([target]), nominal_step=np.array([0.7]),
+        neighbours=_neighbours(now, end), clearance=ROOM)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.tuples(st.floats(-2.5, 2.5), st.floats(-2.5, 2.5), st.floats(-0.4, 0.4),
+                          st.floats(-0.4, 0.4)), min_size=1, max_size=12))
+def test_step_sweep_keeps_clear_of_committed_sweeps(raw):
+    arr = np.array(raw)
+    now, end = arr[:, :2], arr[:, :2] + arr[:, 2:]
+    # a valid starting state: the agent (a point now) is clear of every sweep
+    assume(np.all(segment_distance(np.zeros(2), np.zeros(2), now, end) >= 2 * R))
+    choice = _choose(now, end)
+    if not choice.move[0]:
+        return
+    for length in np.linspace(0.15, choice.free_length[0], 5):
+        body_end = np.array([0.1, 0.0]) + 0.5 * length * choice.direction[0]
+        gap = segment_distance(np.zeros(2), body_end, now, end)
+        assert np.all(gap >= 2 * R - 1e-9)
+
+
+def test_free_corridor_goes_straight_at_the_preferred_length():
+    far = np.array([[0.0, 5.0]])
+    choice = _choose(far, far)
+    assert choice.move[0]
+    np.testing.assert_allclose(choice.direction[0], [1, 0], atol=1e-9)
+    assert choice.free_length[0] >= 0.7
+
+
+def test_blocked_ahead_sidesteps_or_waits_but_never_walks_into_the_blocker():
+    wall_of_people = np.array([[0.45, y] for y in np.linspace(-0.4, 0.4, 3)])
+    choice = _choose(wall_of_people, wall_of_people)
+    if choice.move[0]:
+        assert choice.direction[0][0] < 0.99  # not straight ahead
+
+
+def test_oncoming_walker_is_passed_on_the_right():
+    oncoming = np.array([[2.0, 0.0]])
+    choice = _choose(oncoming, oncoming + [-0.35, 0.0])
+    assert choice.move[0]
+    assert choice.direction[0][1] < 0  # to the right of +x is -y
+
+
+def test_walls_are_respected():
+    corridor = ClearanceField.from_area(shapely.box(-1, -0.5, 10, 0.5))
+    choice = choose_steps(
+        position=np.zeros((1, 2)), stance=np.zeros((1, 2)), heading=np.array([np.pi / 2]),
+        radius=np.array([R]), route_direction=np.array([[0.0, 1.0]]),
+        target=np.array([[0.0, 3.0]]), nominal_step=np.array([0.7]),
+        neighbours=Neighbours(*(np.zeros((1, 0) + s) for s in ((), (2,), (2,), (2,), ()))),
+        clearance=corridor)
+    if choice.move[0]:
+        end = 0.5 * choice.free_length[0] * choice.direction[0]
+        assert corridor(end[None])[0] >= R - 1e-9
