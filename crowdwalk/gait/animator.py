@@ -59,6 +59,9 @@ _CLEARANCE = 0.005  # swing foot closer to the ground than this [m] → follow t
 _CHECK_TAUS = np.array([0.15, 0.3, 0.45, 0.6, 0.75, 0.9])  # swing samples for the check
 _PHASE_END = 0.5 - 1e-6
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
+_MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
+_MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
+_MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:
@@ -317,9 +320,19 @@ class Animator:
             stance = StanceFoot(np.where(had[:, None], ball, stance.ball), yaw, slope)
         # The swing foot leaves with the yaw it had as stance foot, then turns to toe-out.
         psi0 = np.where(first, cmd.heading, self._psi1[a])
-        self._toe_start[a] = np.where(had, side_sw * _wrap(old_yaw - psi0), toe_out)
+        start_toe = np.clip(side_sw * _wrap(old_yaw - psi0), -_MAX_TOE_START, _MAX_TOE_START)
+        self._toe_start[a] = np.where(had, start_toe, toe_out)
 
-        data = self.interp.request(body, cmd.step_length, cmd.step_height)
+        # The step ElevInterp must produce is the one between the footholds the feet
+        # really use: the stance foot where it landed, the commanded target.
+        d = np.stack([np.cos(stance.yaw) * np.cos(stance.slope),
+                      np.sin(stance.yaw) * np.cos(stance.slope), np.sin(stance.slope)], axis=1)
+        stance_foothold = stance.ball - body.ball_offset[:, None] * d  # fmt: skip
+        rel = cmd.target - stance_foothold
+        length = rel[:, 0] * np.cos(cmd.heading) + rel[:, 1] * np.sin(cmd.heading)
+        length = np.maximum(length, _MIN_STEP)
+        height = rel[:, 2]
+        data = self.interp.request(body, length, height)
         self._angles[a] = data.angles
         self._stance_fraction[a] = data.stance_fraction
         self._psi0[a] = psi0
@@ -328,7 +341,12 @@ class Animator:
         self._duration[a] = cmd.duration
         self._stance_left[a] = stance_left
         self._ball[a], self._yaw[a], self._slope[a] = stance.ball, stance.yaw, stance.slope
-        self._spin[a] = 0.0 if cmd.spin is None else cmd.spin
+        # Spin turn (§6.1): the stance foot pivots on its ball when the heading would
+        # otherwise twist the stance hip by more than _MAX_STANCE_TWIST.
+        spin = np.zeros(a.size) if cmd.spin is None else cmd.spin.copy()
+        twist = _wrap(cmd.heading - side_sw * self.style.toe_out - (yaw + spin))
+        excess = np.sign(twist) * np.maximum(np.abs(twist) - _MAX_STANCE_TWIST, 0.0)
+        self._spin[a] = spin + excess
         self._toe_out[a] = toe_out
         self._start[a], self._target[a] = cmd.start, cmd.target
         self._d0[a] = 0.0
@@ -550,7 +568,7 @@ class Animator:
         again = self._walk(a[sink], phase[sink], corrected=True, lift=depth[sink] + 1e-3)
         merged = {}
         for name in ("root_position", "root_rotation", "local", "positions", "rotations",
-                     "contact", "converged"):  # fmt: skip
+                     "contact", "converged", "solves"):  # fmt: skip
             arr = getattr(walked, name).copy()
             arr[sink] = getattr(again, name)
             merged[name] = arr

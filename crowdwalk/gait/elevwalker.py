@@ -106,7 +106,7 @@ class GaitStyle:
     arm_swing: float = 0.75
     elbow_flexion: float = float(np.deg2rad(20.0))
     tolerance: float = 1e-7
-    max_iterations: int = 8
+    max_iterations: int = 12
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
@@ -185,6 +185,8 @@ class WalkerPose:
     contact : (k, 2) bool, left/right foot on the ground.
     converged : (k,) bool, every analytic and Gauss–Newton solve succeeded.
     warm : WarmStart for the next frame.
+    solves : (k, 5) bool, which solve succeeded: stance ankle GN, swing hip GN, stance
+        knee, swing knee, swing talocrural (analytic).
     """
 
     root_position: np.ndarray
@@ -195,6 +197,7 @@ class WalkerPose:
     contact: np.ndarray
     converged: np.ndarray
     warm: WarmStart
+    solves: np.ndarray | None = None
 
 
 # --- geometry helpers -------------------------------------------------------------------
@@ -603,6 +606,7 @@ def elevwalker_pose(
         contact=contact,
         converged=converged,
         warm=WarmStart(x_ankle, x_hip, jac_ankle, jac_hip),
+        solves=np.stack([ok_ankle, ok_hip, ok_knee_st, ok_knee_sw, ok_foot_sw], axis=1),
     )
 
 
