@@ -88,6 +88,7 @@ class StickFigures:
     head_detail: int = 1
     mesh: pv.PolyData = field(init=False, repr=False)
     n_agents: int = field(init=False, default=-1)
+    _ids: np.ndarray | None = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.bones = bone_pairs(self.parents)
@@ -145,10 +146,12 @@ class StickFigures:
             self._write_geometry(positions)
             self.mesh.GetPoints().Modified()
             self.mesh.point_data["Normals"].Modified()
-            if agent_ids is not None:
+            ids = None if agent_ids is None else np.asarray(agent_ids, dtype=np.float32)
+            if ids is not None and not np.array_equal(ids, self._ids):
                 agent = self.mesh.point_data["agent"].reshape(k, -1)
-                agent[:] = np.asarray(agent_ids, dtype=np.float32)[:, None]
-                self.mesh.point_data["agent"].Modified()
+                agent[:] = ids[:, None]
+                self.mesh.point_data["agent"].Modified()  # re-uploaded only when changed
+                self._ids = ids
         self.mesh.Modified()
         return self.mesh
 
@@ -166,6 +169,7 @@ class StickFigures:
         self.mesh.point_data["Normals"] = np.zeros((n_points, 3), np.float32)
         self.mesh.point_data.active_normals_name = "Normals"
         self.mesh.point_data["agent"] = np.zeros(n_points, np.float32)
+        self._ids = None
         self.n_agents = k
 
     def _write_geometry(self, positions: np.ndarray) -> None:
