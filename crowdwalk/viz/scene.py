@@ -21,7 +21,7 @@ from crowdwalk.viz import camera as cam
 from crowdwalk.viz.figures import StickFigures
 from crowdwalk.viz.footprints import COLOR_FIELDS, FootprintMesh, Footsteps
 from crowdwalk.viz.playback import Playback
-from crowdwalk.viz.sources import PoseSource, RunPoses, TrajectoryPoses, frame_index
+from crowdwalk.viz.sources import PoseSource, PoseTimeline, RunPoses, TrajectoryPoses
 from crowdwalk.viz.world_meshes import (
     flat_ground,
     outline_lines,
@@ -100,6 +100,8 @@ class Scene:
         Show only footprints placed in the last this many seconds [s]; all when None.
     title : str
         Shown in the window title and the corner label.
+    interpolate : bool
+        Blend poses linearly between stored output frames (display only).
     """
 
     terrain: object | None = None
@@ -111,6 +113,7 @@ class Scene:
     follow: int | None = None
     footprint_trail: float | None = None
     title: str = "crowdwalk"
+    interpolate: bool = True
 
     def __post_init__(self) -> None:
         if self.color not in COLOR_FIELDS:
@@ -327,6 +330,7 @@ class SceneView:
         self.figures: StickFigures | None = None
         self.footprints: FootprintMesh | None = None
         self.frame: int | None = None
+        self._shown_time: float | None = None
         self.agent_ids = np.zeros(0, dtype=int)
         self.agent_roots = np.zeros((0, 3))
         self._framed: int | None = None
@@ -408,7 +412,8 @@ class SceneView:
             sides=4 if large else 8, head_detail=0 if large else 2,
         )
         self._root = int(np.flatnonzero(np.asarray(poses.parents) < 0)[0])
-        self._show_frame(0)
+        self._timeline = PoseTimeline(poses, interpolate=self.scene.interpolate)
+        self._show_time(float(poses.times[0]))
         self._figures_actor = None
         self._add_figures_actor()
 
@@ -490,20 +495,19 @@ class SceneView:
 
     # --- animation ------------------------------------------------------------------
 
-    def _show_frame(self, index: int) -> None:
-        ids, positions = self.scene.poses.at(index)
+    def _show_time(self, t: float) -> None:
+        index, ids, positions = self._timeline.at_time(t)
         self.figures.update(positions, np.mod(ids, AGENT_HUES))
         self.agent_ids = np.asarray(ids)
         self.agent_roots = np.asarray(positions)[:, self._root] if len(ids) else np.zeros((0, 3))
         self.frame = index
+        self._shown_time = t
 
     def set_time(self, t: float) -> float:
         """Show the scene at simulated time ``t`` [s] (clamped to the run); returns it."""
         t = self.playback.seek(t)
-        if self.figures is not None:
-            index = frame_index(self.scene.poses.times, t)
-            if index != self.frame:
-                self._show_frame(index)
+        if self.figures is not None and t != self._shown_time:
+            self._show_time(t)
         if self.footprints is not None:
             trail = self.scene.footprint_trail
             self.footprints.show_window(-np.inf if trail is None else t - trail, t)

@@ -15,7 +15,15 @@ import numpy as np
 
 from crowdwalk.errors import invalid
 
-__all__ = ["PoseSource", "ArrayPoses", "RunPoses", "TrajectoryPoses", "frame_index"]
+__all__ = [
+    "PoseSource",
+    "ArrayPoses",
+    "RunPoses",
+    "TrajectoryPoses",
+    "PoseTimeline",
+    "blend_frames",
+    "frame_index",
+]
 
 
 class PoseSource(Protocol):
@@ -125,3 +133,68 @@ class TrajectoryPoses:
         """Ids (k,) and pole end points (k, 2, 3) [m] of frame ``index``."""
         rows = slice(self._start[index], self._stop[index])
         return self._ids[rows], self._positions[rows]
+
+
+def blend_frames(
+    ids0: np.ndarray, positions0: np.ndarray, ids1: np.ndarray, positions1: np.ndarray,
+    alpha: float,
+) -> np.ndarray:
+    """Joint positions between two output frames, for the agents of the first.
+
+    Agents present in both frames move linearly by ``alpha`` ∈ [0, 1] towards the second
+    frame; agents missing from it keep their first-frame pose.
+
+    Parameters
+    ----------
+    ids0, ids1 : (k0,), (k1,) int
+        Agent ids of the two frames (unique).
+    positions0, positions1 : (k0, J, 3), (k1, J, 3) float
+        Joint world positions [m].
+    alpha : float
+        Fraction of the frame interval [-].
+
+    Returns
+    -------
+    (k0, J, 3) float
+        Positions [m] in the order of ``ids0``.
+    """
+    out = np.array(positions0, dtype=float, copy=True)
+    _, i0, i1 = np.intersect1d(ids0, ids1, assume_unique=True, return_indices=True)
+    out[i0] += alpha * (np.asarray(positions1, dtype=float)[i1] - out[i0])
+    return out
+
+
+class PoseTimeline:
+    """Poses at any time: the output frame at or before ``t``, blended linearly with the
+    next frame (display only: smooth slow motion and movies at more frames per second
+    than the run stored). Keeps the last frames read, so playback reads each once.
+
+    Parameters
+    ----------
+    source : PoseSource
+    interpolate : bool
+        Blend between frames; when False, hold the frame at or before ``t``.
+    """
+
+    def __init__(self, source: PoseSource, interpolate: bool = True) -> None:
+        self.source = source
+        self.interpolate = interpolate
+        self._cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def _frame(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        if index not in self._cache:
+            if len(self._cache) >= 4:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[index] = self.source.at(index)
+        return self._cache[index]
+
+    def at_time(self, t: float) -> tuple[int, np.ndarray, np.ndarray]:
+        """Frame index at or before ``t`` [s], agent ids (k,) and positions (k, J, 3) [m]."""
+        times = self.source.times
+        index = frame_index(times, t)
+        ids, positions = self._frame(index)
+        if self.interpolate and index + 1 < len(times) and t > times[index] + 1e-9:
+            alpha = min((t - times[index]) / (times[index + 1] - times[index]), 1.0)
+            ids1, positions1 = self._frame(index + 1)
+            positions = blend_frames(ids, positions, ids1, positions1, alpha)
+        return index, ids, positions
