@@ -239,7 +239,6 @@ class Animator:
         self._toe_start = np.full(n, self.style.toe_out)
         self._start = np.zeros((n, 3))
         self._target = np.zeros((n, 3))
-        self._land_slope = np.zeros(n)
         self._d0 = np.zeros((n, 3))
         self._d1 = np.zeros((n, 3))
         self._bezier = np.zeros((n, 4, 3))
@@ -297,11 +296,6 @@ class Animator:
             feet = foot_points(self.body.take(ah), end.positions, end.rotations)
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
             landed_heel[had] = new_st[:, 0]
-            # on the ground: the landing pose may leave the heel a few mm off it
-            if self.ground is not None:
-                landed_heel[had, 2] = np.asarray(self.ground(new_st[:, 0, :2]), dtype=float)
-            else:
-                landed_heel[had, 2] = cmd.start[had, 2]
             toward = new_st[:, 1] - new_st[:, 0]
             landed_yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
             old_yaw[had] = self._yaw[ah] + self._spin[ah]
@@ -311,13 +305,10 @@ class Animator:
         # foothold with default toe-out for an agent's first step.
         toe_out = cmd.toe_out if cmd.toe_out is not None else np.full(a.size, self.style.toe_out)
         yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, landed_yaw)
-        slope = self._slope_at(body, cmd.start, yaw)
-        stance = StanceFoot.from_foothold(body, cmd.start, yaw, slope)
-        if had.any():
-            d = np.stack([np.cos(yaw) * np.cos(slope), np.sin(yaw) * np.cos(slope),
-                          np.sin(slope)], axis=1)  # fmt: skip
-            ball = landed_heel + (body.heel_offset + body.ball_offset)[:, None] * d
-            stance = StanceFoot(np.where(had[:, None], ball, stance.ball), yaw, slope)
+        along = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+        heel_xy = np.where(had[:, None], landed_heel[:, :2],
+                           cmd.start[:, :2] - body.heel_offset[:, None] * along)  # fmt: skip
+        stance = self._contact(body, heel_xy, cmd.start[:, 2], yaw)
         # The swing foot leaves with the yaw it had as stance foot, then turns to toe-out.
         psi0 = np.where(first, cmd.heading, self._psi1[a])
         start_toe = np.clip(side_sw * _wrap(old_yaw - psi0), -_MAX_TOE_START, _MAX_TOE_START)
@@ -375,14 +366,14 @@ class Animator:
         sub = sw_idx[:, 3]
         heel_to_ball = pose.rotations[m + rows, sub][:, :, 0]
         land_yaw = np.arctan2(heel_to_ball[:, 1], heel_to_ball[:, 0])
-        land_slope = self._slope_at(body, cmd.target, land_yaw)
-        land = StanceFoot.from_foothold(body, cmd.target, land_yaw, land_slope)
+        land_along = np.stack([np.cos(land_yaw), np.sin(land_yaw)], axis=1)
+        land_heel = cmd.target[:, :2] - body.heel_offset[:, None] * land_along
+        land = self._contact(body, land_heel, cmd.target[:, 2], land_yaw)
         land_phi = sample(data.angles, np.zeros(m))[:, 0]
         land_pitch = np.arctan(np.tan(land_phi) * np.cos(land_yaw - cmd.heading))
         ankle_land = _stance_foot_pose(body, land, land_pitch)[1]
         self._d0[a] = np.where(had[:, None], liftoff - ankle0, 0.0)
         self._d1[a] = ankle_land - ankle1
-        self._land_slope[a] = land_slope
 
         # Swing clearance: would the corrected data-driven foot touch the ground?
         if cmd.swing_bezier is not None:
@@ -479,16 +470,34 @@ class Animator:
         s = _smoothstep(2.0 * phase)
         return self._psi0[a] + _wrap(self._psi1[a] - self._psi0[a]) * s
 
-    def _slope_at(self, body: Body, foothold: np.ndarray, yaw: np.ndarray) -> np.ndarray:
-        """Ground pitch along a foot placed at ``foothold`` with ``yaw`` [rad]."""
-        if self.ground is None:
-            return np.zeros(len(body))
-        d = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
-        heel = foothold[:, :2] - body.heel_offset[:, None] * d
-        ball = foothold[:, :2] + body.ball_offset[:, None] * d
-        z = np.asarray(self.ground(np.concatenate([heel, ball])), dtype=float)
+    def _contact(self, body: Body, heel_xy: np.ndarray, z: np.ndarray, yaw: np.ndarray):
+        """How a foot with its heel at ``heel_xy`` (m, 2) [m] and ``yaw`` (m,) [rad] rests
+        on the ground (:class:`StanceFoot`).
+
+        The sole is pitched so that neither the ball nor the toe tip is below the ground
+        (on a plane: the plane's slope; before a curb: tilted up onto its edge). A heel
+        over a drop (a tread's nosing behind it) leaves the heel in the air and the front
+        of the foot on the tread. Without ``ground`` the foot is flat at height ``z``.
+        """
         m = len(body)
-        return np.arctan2(z[m:] - z[:m], body.heel_offset + body.ball_offset)
+        along = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
+        hb = body.heel_offset + body.ball_offset
+        ht = body.heel_offset + body.toe_offset
+        ball_xy = heel_xy + hb[:, None] * along
+        if self.ground is None:
+            zero = np.zeros(m)
+            return StanceFoot(np.column_stack([ball_xy, z]), yaw, zero)
+        toe_xy = heel_xy + ht[:, None] * along
+        zs = np.asarray(self.ground(np.concatenate([heel_xy, ball_xy, toe_xy])), dtype=float)
+        zh, zb, zt = zs[:m], zs[m:2 * m], zs[2 * m:]
+        slope = np.maximum(np.arctan2(zb - zh, hb), np.arctan2(zt - zh, ht))
+        front = np.arctan2(zt - zb, ht - hb)
+        heel_drop = (zh < np.minimum(zb, zt) - 0.01) & (np.abs(front) < np.abs(slope))
+        slope = np.where(heel_drop, front, slope)
+        d = np.column_stack([along * np.cos(slope)[:, None], np.sin(slope)])
+        ball = np.where(heel_drop[:, None], np.column_stack([ball_xy, zb]),
+                        np.column_stack([heel_xy, zh]) + hb[:, None] * d)  # fmt: skip
+        return StanceFoot(ball, yaw, slope)
 
     def _ground_at(self, a: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Ground height [m] below points (p, q, 3) of agents a (p,)."""

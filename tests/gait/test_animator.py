@@ -183,3 +183,26 @@ def test_heading_change_turns_the_walker_smoothly_without_fallbacks():
     assert not any(f.fallback.any() for f in frames)
     yaw = [np.arctan2(*quaternion_to_matrix(f.root_quaternion)[0][:, 0][1::-1]) for f in frames]
     assert np.abs(np.diff(np.unwrap(yaw))).max() < np.radians(5.0)
+
+
+def test_a_foot_placed_against_a_curb_rests_on_its_edge_instead_of_entering_it():
+    """An unplanned walker may put its foot so close to a 15 cm curb that the toes would
+    be inside it: the sole tilts up onto the edge, nothing goes below the ground."""
+    body = Body.from_heights([1.75])
+    toe = float(body.toe_offset[0])
+
+    def curb(xy):
+        return np.where(xy[:, 0] > 0.65 + toe - 0.03, 0.15, 0.0)
+
+    animator = Animator(body, ground=curb)
+    animator.command(_command([0], 0.0, 1, [[0.0, 0.045, 0.0]], [[0.65, -0.045, 0.0]]))
+    animator.command(_command([0], 0.6, 0, [[0.65, -0.045, 0.0]], [[1.2, 0.045, 0.15]]))
+    worst = 0.0
+    for f in range(30):
+        frame = animator.pose(0.6 + f / 50.0)
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        stance = foot_points(body, frame.positions, rot)[0, 1]  # right foot
+        worst = max(worst, float((curb(stance[:, :2]) - stance[:, 2]).max()))
+    assert worst < 5e-3
