@@ -351,9 +351,9 @@ class SceneView:
     def _small(self) -> bool:
         return self.plotter.window_size[1] < 500
 
-    def _font(self, size_at_800: int) -> int:
+    def _font(self, size_at_800: int, minimum: int = 6) -> int:
         """Font size [pt] scaled with the window height (``size_at_800`` at 800 px)."""
-        return max(6, round(size_at_800 * self.plotter.window_size[1] / 800))
+        return max(minimum, round(size_at_800 * self.plotter.window_size[1] / 800))
 
     def _add_world(self) -> np.ndarray:
         p, scene = self.plotter, self.scene
@@ -483,7 +483,7 @@ class SceneView:
             entries.append(("walkable area", WALKABLE_COLOR))
         if getattr(self.scene.routes, "graph", None) is not None:
             entries.append(("route graph", ROUTE_COLOR))
-        size = self._font(8)  # pyvista doubles the font size of positioned text
+        size = self._font(8, minimum=4)  # pyvista doubles the size of positioned text
         line = 2.6 * size / self.plotter.window_size[1] * 1.3
         for i, (label, color) in enumerate(entries):
             text = self.plotter.add_text(
