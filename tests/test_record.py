@@ -7,6 +7,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -148,3 +149,66 @@ def test_killed_writer_leaves_readable_files(tmp_path):
     pedpy = pytest.importorskip("pedpy")
     assert len(pedpy.load_trajectory_from_jupedsim_sqlite(
         trajectory_file=tmp_path / "trajectories.sqlite").data) >= 30
+
+
+SCENARIO = Path(__file__).parents[1] / "scenarios" / "counterflow.yaml"
+
+
+def _start_run(out):
+    return subprocess.Popen(
+        [sys.executable, "-m", "crowdwalk.cli", "run", str(SCENARIO), "--out", str(out),
+         "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for_frames(out, proc, frames: int, timeout: float = 60.0) -> None:
+    import sqlite3
+
+    start = time.monotonic()
+    while time.monotonic() - start < timeout:
+        assert proc.poll() is None, proc.stderr.read()
+        path = out / "trajectories.sqlite"
+        if path.exists():
+            try:
+                with sqlite3.connect(f"file:{path}?mode=ro", uri=True) as con:
+                    n = con.execute("SELECT MAX(frame) FROM trajectory_data").fetchone()[0]
+            except sqlite3.OperationalError:
+                n = None
+            if n is not None and n >= frames:
+                return
+        time.sleep(0.2)
+    raise AssertionError("the run did not write frames in time")
+
+
+def test_killed_crowdwalk_run_stays_readable(tmp_path):
+    """SIGKILL mid-run: everything up to the last flush (once per simulated second)."""
+    proc = _start_run(tmp_path)
+    try:
+        _wait_for_frames(tmp_path, proc, frames=25)  # 2.5 s simulated at 10 fps
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+    run = open_run(tmp_path)
+    traj = run.trajectories()
+    assert traj.frame.max() >= 20 and len(np.unique(traj.id)) >= 2
+    steps = run.footsteps()
+    assert steps["agent"].size > 0 and np.isfinite(steps["x"]).all()
+    pedpy = pytest.importorskip("pedpy")
+    data = pedpy.load_trajectory_from_jupedsim_sqlite(
+        trajectory_file=tmp_path / "trajectories.sqlite")
+    assert len(data.data) == traj.frame.size
+
+
+def test_interrupted_crowdwalk_run_exits_130_with_a_summary(tmp_path):
+    proc = _start_run(tmp_path)
+    try:
+        _wait_for_frames(tmp_path, proc, frames=15)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "interrupted" in err
+    summary = open_run(tmp_path).summary
+    assert summary["interrupted"] is True and summary["complete"] is False
+    assert 1.0 <= summary["simulated_time_s"] < 70.0
