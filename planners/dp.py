@@ -59,6 +59,7 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     agents = np.arange(tables.neutral.size) if agents is None else agents
     B = agents.size
     rows = agents[:, None, None, None]
+    step_cost = np.round(step_cost, 10)  # ties broken alike whatever the offsets
     value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
     choices = []
     for k, (step, swing, valid) in enumerate(_depth_indices(st), start=1):

@@ -19,7 +19,7 @@ from planners.config import PlannerConfig
 from planners.energy import step_energy
 from planners.legality import Reason, foot_support, snap_to_support
 from planners.profile import GroundProfile
-from planners.swing import adjust_swings
+from planners.swing import adjust_swings, bezier_points, sole_clearance
 
 __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_profiles",
            "grid", "neutral_index"]
@@ -237,18 +237,21 @@ class StepTables:
                  & self.swing_ok[rows, swings].all(axis=-1))
         energy = self.E[rows, steps].sum(axis=-1)
         length = self.length[rows, steps].sum(axis=-1)
-        return legal, length / energy
+        # Rounded to 1e-12 so that ties (mirror-image plans on level ground) are broken
+        # the same way whatever the profile's offsets.
+        return legal, np.round(length / energy, 12)
 
 
 _FLAT_CACHE: dict = {}
 
 
-def flat_swings(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
+def flat_swings(legs, config: PlannerConfig):
     """Swing curves over flat ground for every stride ``2 L_min + s dL`` (s = 0..2J-2).
 
-    Returns control points (A, 2J-1, 4, 2) relative to the lift-off foothold [m] and ok
-    flags (A, 2J-1); reused for every pair whose span is flat. Curves are computed once
-    per distinct (leg, config), all missing legs in one vectorised call.
+    Returns control points (A, 2J-1, 4, 2) relative to the lift-off foothold [m], ok
+    flags (A, 2J-1) and the sole's clearance slack (A, 2J-1) [m] (how much more than
+    the required clearance the curve keeps away from the footholds' zones). Curves are
+    computed once per distinct (leg, config), all missing legs in one vectorised call.
     """
     S = 2 * config.intervals + 1
     missing = list({leg: None for leg in legs if (leg, config) not in _FLAT_CACHE})
@@ -260,13 +263,20 @@ def flat_swings(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
         zero = np.zeros_like(strides)
         feet = _LegArrays(missing).take(np.repeat(np.arange(len(missing)), S))
         swing = adjust_swings(zero, zero, strides, zero, flat, feet, config)
+        pts = bezier_points(swing.controls, config.bezier_samples)
+        deficit = sole_clearance(pts, zero, strides, flat, feet, config)
+        zone = 0.5 * feet.foot_length[:, None]
+        s_lo = np.minimum(pts[:, :-1, 0], pts[:, 1:, 0])
+        s_hi = np.maximum(pts[:, :-1, 0], pts[:, 1:, 0])
+        away = (s_hi > zone) & (s_lo < strides[:, None] - zone)
+        slack = -np.max(np.where(away, deficit, -np.inf), axis=1)
         if len(_FLAT_CACHE) > 4096:
             _FLAT_CACHE.clear()
         for i, leg in enumerate(missing):
             rows = slice(i * S, (i + 1) * S)
-            _FLAT_CACHE[(leg, config)] = (swing.controls[rows], swing.ok[rows])
+            _FLAT_CACHE[(leg, config)] = (swing.controls[rows], swing.ok[rows], slack[rows])
     entries = [_FLAT_CACHE[(leg, config)] for leg in legs]
-    return np.stack([e[0] for e in entries]), np.stack([e[1] for e in entries])
+    return tuple(np.stack([e[i] for e in entries]) for i in range(3))
 
 
 def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
@@ -362,7 +372,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
 
     # Swings: lift-off node -> touch-down node, only where the touch-down is supported.
     back, front = st.swing_back, st.swing_front
-    needed = (support[:, front] == 0) & (
+    needed = (support[:, front] == 0) & (support[:, back] == 0) & (
         np.abs(node_z[:, front] - node_z[:, back]) <= 2 * config.max_step_rise)
     P = back.size
     controls = np.zeros((A, P, 4, 2))
@@ -374,20 +384,31 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         start = base[agent_of, 0] + node_s[agent_of, b_node]
         end = base[agent_of, 0] + node_s[agent_of, f_node]
         z_start, z_end = node_z[agent_of, b_node], node_z[agent_of, f_node]
-        # Spans with nothing above the (equal) foothold heights reuse the flat curve.
+        # Spans where the ground is one straight segment reuse the flat curve, sheared to
+        # the slope: the sole then keeps the flat clearance minus |grade| x foot offset.
         stride = st.swing_stride[which]
-        flat = (stride >= 0) & (np.abs(z_end - z_start) <= 1e-9) & (profile.max_height(
-            start - legs_col.heel_offset[agent_of, 0], end + legs_col.toe_offset[agent_of, 0])
-            <= z_start + 1e-9)
+        heel = legs_col.heel_offset[agent_of, 0]
+        toe = legs_col.toe_offset[agent_of, 0]
+        vertices = (np.searchsorted(profile.s, end + toe, side="left")
+                    - np.searchsorted(profile.s, start - heel, side="right"))
+        grade = (z_end - z_start) / (end - start)
+        nominal = 2 * lo[agent_of] + np.maximum(stride, 0) * delta[agent_of]
+        flat = ((stride >= 0) & (vertices == 0) & (np.abs(grade) <= config.max_foot_slope)
+                & (np.abs(end - start - nominal) <= 1e-9))  # snapped footholds differ
         if flat.any():
-            flat_ctrl, flat_ok = flat_swings(legs, config)
+            flat_ctrl, flat_ok, flat_slack = flat_swings(legs, config)
             ag, rows = agent_of[flat], np.flatnonzero(flat)
+            fits = flat_ok[ag, stride[rows]] & (
+                np.abs(grade[rows]) * np.maximum(heel[rows], toe[rows])
+                <= flat_slack[ag, stride[rows]])
+            flat[rows[~fits]] = False
+            ag, rows = ag[fits], rows[fits]
             ctrl = flat_ctrl[ag, stride[rows]].copy()
+            ctrl[..., 1] += z_start[rows, None] + grade[rows, None] * ctrl[..., 0]
             ctrl[..., 0] += node_s[ag, b_node[rows], None]
-            ctrl[..., 1] += z_start[rows, None]
             controls[ag, which[rows]] = ctrl
             rounds[ag, which[rows]] = 0
-            swing_ok[ag, which[rows]] = flat_ok[ag, stride[rows]]
+            swing_ok[ag, which[rows]] = True
         rest = ~flat
         if rest.any():
             margin = 2 * float(legs_col.foot_length.max())

@@ -97,7 +97,7 @@ def snap_to_support(ankle_s: np.ndarray, window, profile: GroundProfile, heel_of
     edges = jump_s[np.abs(jump_dz) > config.support_tolerance]
     if edges.size == 0:
         return ankle_s
-    m = config.edge_margin
+    m = config.edge_margin + 1e-9  # 1 nm inside, so rounding cannot put the foot back
     i = np.searchsorted(edges, ankle_s)
     picks = np.clip(i[..., None] + np.arange(-neighbours, neighbours)[None, None, :], 0,
                     edges.size - 1)

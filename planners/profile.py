@@ -11,6 +11,9 @@ from planners.errors import invalid
 
 __all__ = ["GroundProfile", "HeightRaster"]
 
+#: Rows closer than this in s [m] form a vertical height change.
+_VERTICAL = 1e-12
+
 
 @dataclass(frozen=True, eq=False)
 class GroundProfile:
@@ -19,9 +22,9 @@ class GroundProfile:
     Parameters
     ----------
     s : array_like, shape (m,)
-        Non-decreasing arc length of the vertices [m]. Two rows with the same ``s`` are a
-        vertical height change (a stair riser, the side of a block). ``s = 0`` is where
-        the current stance foot (its ankle) stands.
+        Non-decreasing arc length of the vertices [m]. Two rows with the same ``s``
+        (within 1e-12 m) are a vertical height change (a stair riser, the side of a
+        block). ``s = 0`` is where the current stance foot (its ankle) stands.
     z : array_like, shape (m,)
         Ground height of the vertices [m].
 
@@ -94,7 +97,7 @@ class GroundProfile:
         ds = np.diff(self.s)
         dz = np.diff(self.z)
         slope = np.zeros(self.s.size)
-        slope[:-1] = np.divide(dz, ds, out=np.zeros_like(dz), where=ds > 0)
+        slope[:-1] = np.divide(dz, ds, out=np.zeros_like(dz), where=ds > _VERTICAL)
         return slope
 
     def height(self, s: np.ndarray | float) -> np.ndarray:
@@ -106,7 +109,7 @@ class GroundProfile:
     @cached_property
     def jumps(self) -> tuple[np.ndarray, np.ndarray]:
         """Vertical height changes: arc lengths (j,) [m] and signed rises (j,) [m]."""
-        same = np.flatnonzero(np.diff(self.s) == 0)
+        same = np.flatnonzero(np.diff(self.s) <= _VERTICAL)
         return self.s[same], self.z[same + 1] - self.z[same]
 
     @cached_property
@@ -151,7 +154,11 @@ class GroundProfile:
         """
         count = max(1, int(np.ceil((stop - start) / cell)))
         edges = start + cell * np.arange(count + 1)
-        return HeightRaster(start, cell, self.max_height(edges[:-1], edges[1:]))
+        return HeightRaster(start, cell, self.max_height(edges[:-1], edges[1:]), self.s)
+
+    def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Number of profile vertices in the closed intervals ``[a, b]`` [m] (same shapes)."""
+        return np.searchsorted(self.s, b, side="right") - np.searchsorted(self.s, a, side="left")
 
     def __repr__(self) -> str:
         return (f"GroundProfile({self.s.size} vertices, s=[{self.s[0]:g}, {self.s[-1]:g}] m, "
@@ -183,9 +190,12 @@ class HeightRaster:
         Cell width [m].
     heights : ndarray, shape (c,)
         Highest ground in each cell [m].
+    vertex_s : ndarray, shape (m,)
+        Arc lengths of the profile's vertices [m].
     """
 
-    def __init__(self, start: float, cell: float, heights: np.ndarray):
+    def __init__(self, start: float, cell: float, heights: np.ndarray, vertex_s: np.ndarray):
+        self.vertex_s = vertex_s
         self.start = float(start)
         self.cell = float(cell)
         c = heights.size
@@ -201,6 +211,11 @@ class HeightRaster:
         self._table = table
         self._log2 = np.zeros(c + 1, dtype=np.intp)
         self._log2[2:] = np.floor(np.log2(np.arange(2, c + 1))).astype(np.intp)
+
+    def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Number of profile vertices in the closed intervals ``[a, b]`` [m]."""
+        s = self.vertex_s
+        return np.searchsorted(s, b, side="right") - np.searchsorted(s, a, side="left")
 
     def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Highest ground [m] over ``[a, b]`` [m] (same shapes), never underestimated.

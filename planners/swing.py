@@ -65,7 +65,8 @@ def sole_clearance(points: np.ndarray, start_s: np.ndarray, end_s: np.ndarray,
     away from the footholds the sole of a level foot, heel to toe, stays ``clearance``
     [m] above the ground; within half a foot length of either foothold (lift-off and
     touch-down, where the real foot rotates about its toe or heel) only the ankle's own
-    path must stay above the ground (up to the rise of a legal foot slope over a segment).
+    path must stay above the ground (over a straight piece of ground, up to the rise of a
+    legal foot slope over the segment).
     ``profile`` may be a :class:`GroundProfile` (exact) or a conservative
     :class:`~planners.profile.HeightRaster`.
 
@@ -96,9 +97,12 @@ def sole_clearance(points: np.ndarray, start_s: np.ndarray, end_s: np.ndarray,
     a = np.where(in_zone, s_lo, s_lo - heel)
     b = np.where(in_zone, s_hi, s_hi + toe)
     ground = profile.max_height(a, b)
-    # In the lift-off and touch-down zones the ankle may sit below the highest ground of
-    # a segment by the rise a legal foot slope allows over it.
-    need = np.where(in_zone, -config.max_foot_slope * (s_hi - s_lo), config.clearance)
+    # In the lift-off and touch-down zones, over a straight piece of ground (no vertex in
+    # the segment), the ankle may sit below the segment's highest ground by the rise a
+    # legal foot slope allows over it; over an edge or kink it must pass above it.
+    straight = profile.vertices_between(s_lo, s_hi) == 0
+    allowance = np.where(straight, config.max_foot_slope * (s_hi - s_lo), 0.0)
+    need = np.where(in_zone, -allowance, config.clearance)
     return need - (z_lo - ankle - ground)
 
 
@@ -158,12 +162,14 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: L
             break
         rounds[active] += 1
         rows = np.arange(active.size)
-        summit = np.argmax(pts[..., 1], axis=1)
+        # Ties (a level obstacle top, a symmetric curve) are broken on values rounded to
+        # 1 nm so that translating the problem cannot change the adjustment path.
+        summit = np.argmax(np.round(pts[..., 1] - pts[:, :1, 1], 9), axis=1)
         left_half = np.arange(samples - 1)[None, :] < summit[:, None]
         moves = np.zeros((active.size, 2, 2))  # (curve, P1/P2, s/z)
         for side, half in ((0, left_half), (1, ~left_half)):
             d = np.where(half, deficit, -np.inf)
-            worst = np.argmax(d, axis=1)
+            worst = np.argmax(np.round(d, 9), axis=1)
             need = d[rows, worst]
             hit = need > 1e-9
             target = 0.5 * (pts[rows, worst] + pts[rows, worst + 1])

@@ -1,0 +1,171 @@
+"""Planner benchmark: a Table-2-style timing table, batch throughput and best-first quality.
+
+Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N]``. Prints:
+
+1. per terrain and grid resolution (13/11/7 intervals, n = 4): median and p95 wall time
+   per plan of ``best_first``, nodes expanded, ``optimal`` median time, the time ratio
+   best_first / optimal and the energy-per-metre gap of best_first over optimal;
+2. ``plan_batch`` throughput for a crowd of walkers (time per plan, amortised);
+3. on random terrain profiles, how often ``best_first`` is within 1 % of ``optimal``
+   (for 1 start -- the paper's single search -- and the default starts), and the gap of
+   ``fixed``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from planners import GroundProfile, Leg, PlannerConfig, plan, plan_batch
+
+
+def terrains() -> dict[str, GroundProfile]:
+    """The terrains of Table 2 (flat, stairs, slopes) and two uneven profiles [m]."""
+    uneven_a = GroundProfile(  # Fig. 10(a)-like: a step, a block, a dip
+        np.array([-2, 0.5, 0.5, 1.4, 1.4, 1.75, 1.75, 2.6, 2.6, 3.1, 3.1, 9]),
+        np.array([0, 0, 0.12, 0.12, 0.22, 0.22, 0.12, 0.12, 0.04, 0.04, 0.12, 0.12]))
+    uneven_b = GroundProfile(  # Fig. 10(b)-like: stairs up, a landing, a ramp down
+        np.array([-2, 0.4, 0.4, 0.7, 0.7, 1.0, 1.0, 1.8, 3.0, 9]),
+        np.array([0, 0, 0.16, 0.16, 0.32, 0.32, 0.48, 0.48, 0.2, 0.2]))
+    return {
+        "flat ground": GroundProfile.flat(),
+        "upstairs": GroundProfile.stairs(0.17, 0.30, 8, first_edge=0.4),
+        "uphill 10 %": GroundProfile(np.array([-2, 0.3, 8.0]), np.array([0, 0, 0.77])),
+        "downstairs": GroundProfile.stairs(-0.17, 0.30, 8, first_edge=0.4),
+        "downhill 10 %": GroundProfile(np.array([-2, 0.3, 8.0]), np.array([0, 0, -0.77])),
+        "uneven (a)": uneven_a,
+        "uneven (b)": uneven_b,
+    }
+
+
+def random_terrain(rng: np.random.Generator) -> GroundProfile:
+    """Flat runs, stair flights (rise 12-19 cm, going 28-35 cm), blocks, ramps [m]."""
+    s, z = [-2.0], [0.0]
+    x = rng.uniform(0.25, 0.8)
+    while x < 5.0:
+        kind = rng.integers(4)
+        h = z[-1]
+        s.append(x)
+        z.append(h)
+        if kind == 0:
+            x += rng.uniform(0.5, 1.5)
+        elif kind == 1:
+            rise = rng.choice([-1, 1]) * rng.uniform(0.12, 0.19)
+            tread = rng.uniform(0.28, 0.35)
+            for _ in range(rng.integers(2, 5)):
+                s += [x]
+                z += [z[-1] + rise]
+                x += tread
+                s += [x]
+                z += [z[-1]]
+        elif kind == 2:
+            height, depth = rng.uniform(0.05, 0.2), rng.uniform(0.1, 0.4)
+            s += [x, x + depth, x + depth]
+            z += [h + height, h + height, h]
+            x += depth + rng.uniform(0.3, 1.0)
+        else:
+            length, grade = rng.uniform(0.5, 2.0), rng.uniform(-0.15, 0.15)
+            x += length
+            s.append(x)
+            z.append(h + grade * length)
+    s.append(12.0)
+    z.append(z[-1])
+    return GroundProfile(np.array(s), np.array(z))
+
+
+def timed(profile, leg, planner, config, repeat):
+    plan(profile, leg, 1.34, planner, config)  # warm caches (flat swings, structures)
+    times, result = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        result = plan(profile, leg, 1.34, planner, config)
+        times.append(time.perf_counter() - t0)
+    return 1e3 * np.array(times), result
+
+
+def table_2(repeat: int) -> None:
+    leg = Leg.from_body_height(1.75)
+    print("Table 2 (n = 4 steps, 1.75 m body, 1.34 m/s); times per plan [ms]")
+    print(f"{'terrain':<15}{'int':>4}{'bf med':>8}{'bf p95':>8}{'min':>7}{'nodes':>8}"
+          f"{'opt med':>9}{'bf/opt':>7}{'gap %':>7}{'fixed gap %':>12}  status")
+    for name, profile in terrains().items():
+        for intervals in (13, 11, 7):
+            config = PlannerConfig(intervals=intervals)
+            bf_t, bf = timed(profile, leg, "best_first", config, repeat)
+            op_t, op = timed(profile, leg, "optimal", config, repeat)
+            _, fx = plan(profile, leg, 1.34, "fixed", config), None
+            fx = plan(profile, leg, 1.34, "fixed", config)
+            gap = 100 * (bf.energy_per_metre / op.energy_per_metre - 1) if op.ok else np.nan
+            fgap = 100 * (fx.energy_per_metre / op.energy_per_metre - 1) if fx.ok else np.nan
+            print(f"{name:<15}{intervals:>4}{np.median(bf_t):>8.2f}"
+                  f"{np.percentile(bf_t, 95):>8.2f}{bf_t.min():>7.2f}"
+                  f"{bf.stats['nodes_expanded']:>8}{np.median(op_t):>9.2f}"
+                  f"{np.median(bf_t) / np.median(op_t):>7.2f}{gap:>7.2f}{fgap:>12.2f}"
+                  f"  {bf.status}")
+
+
+def batch(agents: int) -> None:
+    rng = np.random.default_rng(7)
+    profiles = [random_terrain(rng) for _ in range(agents)]
+    legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
+    speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+    print(f"\nplan_batch: {agents} walkers on random terrain (per plan, amortised)")
+    print(f"{'planner':<12}{'total [ms]':>12}{'per plan [ms]':>15}{'ok':>6}")
+    for planner in ("best_first", "optimal", "fixed"):
+        plan_batch(profiles[:4], legs[:4], speeds[:4], planner)
+        t0 = time.perf_counter()
+        plans = plan_batch(profiles, legs, speeds, planner)
+        total = 1e3 * (time.perf_counter() - t0)
+        ok = sum(p.ok for p in plans)
+        print(f"{planner:<12}{total:>12.1f}{total / agents:>15.2f}{ok:>6}")
+
+
+def quality(count: int) -> None:
+    rng = np.random.default_rng(2026)
+    profiles = [random_terrain(rng) for _ in range(count)]
+    leg = Leg.from_body_height(1.75)
+    optimal = plan_batch(profiles, leg, 1.34, "optimal")
+    fixed = plan_batch(profiles, leg, 1.34, "fixed")
+    print(f"\nbest_first against optimal on {count} random terrain profiles "
+          "(energy per metre; ok plans only)")
+    print(f"{'search':<26}{'within 1 %':>11}{'median gap %':>14}{'p90 gap %':>11}"
+          f"{'max gap %':>11}{'time [ms]':>11}")
+    for starts in (1, 2, 4, 8):
+        config = PlannerConfig(search_starts=starts)
+        t0 = time.perf_counter()
+        bf = plan_batch(profiles, leg, 1.34, "best_first", config)
+        per_plan = 1e3 * (time.perf_counter() - t0) / count
+        gaps = np.array([b.energy_per_metre / o.energy_per_metre - 1
+                         for b, o in zip(bf, optimal, strict=True) if o.ok and b.ok])
+        label = f"best_first, {starts} start" + ("s" if starts > 1 else "") + (
+            " (paper)" if starts == 1 else " (default)" if starts == 4 else "")
+        print(f"{label:<26}{100 * np.mean(gaps < 0.01):>10.1f}%"
+              f"{100 * np.median(gaps):>14.2f}{100 * np.percentile(gaps, 90):>11.2f}"
+              f"{100 * gaps.max():>11.2f}{per_plan:>11.2f}")
+    gaps = np.array([f.energy_per_metre / o.energy_per_metre - 1
+                     for f, o in zip(fixed, optimal, strict=True) if o.ok and f.ok])
+    print(f"{'fixed (unplanned)':<26}{100 * np.mean(gaps < 0.01):>10.1f}%"
+          f"{100 * np.median(gaps):>14.2f}{100 * np.percentile(gaps, 90):>11.2f}"
+          f"{100 * gaps.max():>11.2f}")
+    print(f"optimal found a legal plan on {sum(o.ok for o in optimal)} of {count}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=30, help="timed plans per cell")
+    parser.add_argument("--profiles", type=int, default=200, help="random profiles")
+    parser.add_argument("--agents", type=int, default=200, help="walkers in the batch")
+    args = parser.parse_args()
+    start = time.perf_counter()
+    table_2(args.repeat)
+    batch(args.agents)
+    quality(args.profiles)
+    print(f"\n(total {time.perf_counter() - start:.0f} s; machine load average "
+          f"{statistics.mean(__import__('os').getloadavg()):.1f})")
+
+
+if __name__ == "__main__":
+    main()
