@@ -88,3 +88,10 @@ def test_view_without_display_explains_itself(monkeypatch, run_dir):
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     result = runner.invoke(app, ["view", str(run_dir)])
     assert result.exit_code == 2 and "crowdwalk render" in result.output
+
+
+def test_help_lists_view_and_render_with_units():
+    result = runner.invoke(app, ["render", "--help"])
+    assert result.exit_code == 0
+    assert "simulated time [s]" in result.output and "WIDTHxHEIGHT [px]" in result.output
+    assert "view" in runner.invoke(app, ["--help"]).output
