@@ -20,12 +20,12 @@ import numpy as np
 
 def bench(scene, frames: int, size=(640, 480)) -> dict:
     """Mean milliseconds per frame for update, render and read-back."""
-    from crowdwalk.viz.scene import _offscreen
+    from crowdwalk.viz.headless import offscreen_plotter
 
     t0, t1 = scene.time_range
     times = np.linspace(t0, t1, frames + 1)
     update = draw = read = 0.0
-    with _offscreen(size) as plotter:
+    with offscreen_plotter(size) as plotter:
         view = scene.attach(plotter)
         view.set_time(times[0])
         plotter.render()

@@ -15,11 +15,17 @@ Without a display, rendering goes through EGL (see :mod:`crowdwalk.viz.headless`
 from crowdwalk.viz.camera import follow, oblique_view, project_to_pixels
 from crowdwalk.viz.figures import StickFigures
 from crowdwalk.viz.footprints import COLOR_FIELDS, FootprintMesh, Footsteps
-from crowdwalk.viz.headless import configure_offscreen, gl_available, has_display
+from crowdwalk.viz.headless import (
+    configure_offscreen,
+    gl_available,
+    has_display,
+    offscreen_plotter,
+)
 from crowdwalk.viz.playback import Playback
-from crowdwalk.viz.scene import Scene, SceneView, parse_size
+from crowdwalk.viz.scene import Scene, parse_size
 from crowdwalk.viz.sources import ArrayPoses, PoseSource, RunPoses, TrajectoryPoses
 from crowdwalk.viz.synthetic import synthetic_crowd
+from crowdwalk.viz.view import SceneView
 
 __all__ = [
     "COLOR_FIELDS",
@@ -38,6 +44,7 @@ __all__ = [
     "gl_available",
     "has_display",
     "oblique_view",
+    "offscreen_plotter",
     "parse_size",
     "project_to_pixels",
     "synthetic_crowd",

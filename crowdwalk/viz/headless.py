@@ -8,12 +8,13 @@ raising, so :func:`gl_available` asks a child process first.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import subprocess
 import sys
 
-__all__ = ["configure_offscreen", "gl_available", "has_display"]
+__all__ = ["configure_offscreen", "gl_available", "has_display", "offscreen_plotter"]
 
 _PROBE = """
 import os
@@ -66,3 +67,17 @@ def gl_available(timeout: float = 60.0) -> bool:
     except (OSError, subprocess.TimeoutExpired):
         return False
     return result.returncode == 0 and result.stdout.strip().endswith("ok")
+
+
+@contextlib.contextmanager
+def offscreen_plotter(size: tuple[int, int] = (1280, 800)):
+    """An off-screen :class:`pyvista.Plotter` of ``size`` (width, height) [px], closed on
+    exit; configures EGL first when there is no display."""
+    import pyvista as pv
+
+    configure_offscreen()
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    try:
+        yield plotter
+    finally:
+        plotter.close()

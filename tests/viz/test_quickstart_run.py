@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from crowdwalk.viz.camera import project_to_pixels
-from crowdwalk.viz.scene import Scene, _offscreen
+from crowdwalk.viz.headless import offscreen_plotter
+from crowdwalk.viz.scene import Scene
 
 RUN = Path(__file__).parents[2] / "runs" / "quickstart"
 
@@ -23,7 +24,7 @@ def test_every_agent_head_is_drawn_where_the_run_puts_it(offscreen, quickstart):
     from crowdwalk.record import open_run
 
     t = 0.5 * sum(quickstart.time_range)
-    with _offscreen((800, 500)) as plotter:
+    with offscreen_plotter((800, 500)) as plotter:
         view = quickstart.attach(plotter)
         view.set_time(t)
         plotter.render()

@@ -10,7 +10,8 @@ import pytest
 import shapely
 
 from crowdwalk.viz.camera import project_to_pixels
-from crowdwalk.viz.scene import Scene, _offscreen
+from crowdwalk.viz.headless import offscreen_plotter
+from crowdwalk.viz.scene import Scene
 
 REFERENCE = Path(__file__).parent / "reference" / "synthetic_scene.png"
 AREA = shapely.box(-2.0, -2.0, 12.0, 9.0)
@@ -18,7 +19,7 @@ AREA = shapely.box(-2.0, -2.0, 12.0, 9.0)
 
 def _render(scene, t, size=(640, 400)):
     """Render ``scene`` at time t; returns (image (h,w,3) uint8, view) with the plotter open."""
-    ctx = _offscreen(size)
+    ctx = offscreen_plotter(size)
     plotter = ctx.__enter__()
     view = scene.attach(plotter)
     view.set_time(t)

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from crowdwalk.viz.camera import project_to_pixels
-from crowdwalk.viz.scene import Scene, _offscreen
+from crowdwalk.viz.headless import offscreen_plotter
+from crowdwalk.viz.scene import Scene
 from crowdwalk.viz.world_meshes import node_positions
 
 QUICKSTART = Path(__file__).parents[2] / "scenarios" / "quickstart.yaml"
@@ -20,7 +21,7 @@ def world_scene():
 
 
 def test_world_scene_has_terrain_walkable_area_and_routes(offscreen, world_scene):
-    with _offscreen((480, 300)) as plotter:
+    with offscreen_plotter((480, 300)) as plotter:
         view = world_scene.attach(plotter)
         assert {"terrain", "terrain edges", "walkable area", "route edges", "route nodes"} <= set(
             plotter.actors
@@ -38,7 +39,7 @@ def test_world_scene_has_terrain_walkable_area_and_routes(offscreen, world_scene
 
 
 def test_route_nodes_are_drawn_where_the_graph_puts_them(offscreen, world_scene):
-    with _offscreen((640, 400)) as plotter:
+    with offscreen_plotter((640, 400)) as plotter:
         view = world_scene.attach(plotter)
         view.set_time(0.0)
         plotter.render()
