@@ -10,7 +10,7 @@ from planners.dp import cheapest
 from planners.lattice import StepTables
 from planners.search import SearchResult, neighbour_deltas
 
-__all__ = ["find_init", "greedy", "hill_climb", "best_first"]
+__all__ = ["find_init", "budget", "greedy", "hill_climb", "best_first"]
 
 
 @lru_cache(maxsize=64)
@@ -116,6 +116,21 @@ def greedy(tables: StepTables) -> SearchResult:
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
 
 
+def budget(tables: StepTables) -> SearchResult:
+    """The legal configuration of least ``sum(E - lam0 * L)`` (one DP pass).
+
+    ``lam0`` is the walker's energy per metre on flat ground: each metre of progress is
+    worth what it normally costs. This is the linearisation of Eq. 5 at the neutral
+    walk, a start for the best-first search that already accounts for the terrain.
+    """
+    cost = tables.E - tables.neutral_cost[:, None] * tables.length
+    configs, found = cheapest(tables, cost)
+    per_pass = tables.struct.swing_back.size * tables.struct.J
+    A = found.size
+    return SearchResult(configs, found, np.full(A, per_pass // tables.struct.J),
+                        np.full(A, per_pass))
+
+
 def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
     """Best-first planning (Fig. 4) after FIND_INIT, all agents at once.
 
@@ -129,26 +144,51 @@ def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
     Deviations (measured in ``benchmarks/bench_planners.py``): the neighbourhood also
     moves single footholds (see :func:`~planners.search.neighbour_deltas`), and the
     search runs from ``starts`` initial configurations (``PlannerConfig.search_starts``)
-    -- FIND_INIT from the neutral step, then the step-by-step greedy configuration, then
-    FIND_INIT from constant steps spread over the grid -- keeping the best local optimum;
-    ``starts = 1`` is the paper's single search.
+    -- FIND_INIT from the neutral step, then the energy-budget configuration
+    (:func:`budget`), the step-by-step greedy configuration, FIND_INIT from constant
+    steps spread over the grid -- keeping the best local optimum; ``starts = 1`` is the
+    paper's single search.
     """
     A = tables.neutral.size
     J = tables.struct.J
     starts = tables.config.search_starts if starts is None else starts
-    results = [find_init(tables)]
+    seeds = [find_init(tables)]
     if starts >= 2:
-        results.append(greedy(tables))
-    spread = np.linspace(0, J - 1, max(starts - 2, 0) + 2)[1:-1].round().astype(np.int64)
-    results += [find_init(tables, np.full(A, c)) for c in spread]
-    rows = np.concatenate([np.flatnonzero(r.found) for r in results])
-    start_configs = np.concatenate([r.configs[r.found] for r in results])
-    expanded = sum(r.expanded for r in results)
-    checks = sum(r.checks for r in results)
-    found = results[0].found.copy()
-    for r in results[1:]:
-        found |= r.found
-    configs = results[0].configs.copy()
+        seeds.append(budget(tables))
+    if starts >= 3:
+        seeds.append(greedy(tables))
+    configs, eff, found, expanded, checks, spread_out = _climb_all(tables, seeds, None)
+    extra = np.linspace(0, J - 1, max(starts - 3, 0) + 2)[1:-1].round().astype(np.int64)
+    # Where the first starts disagree the terrain is hard: climb from the extra starts too.
+    hard = np.flatnonzero(spread_out & found) if extra.size else np.zeros(0, dtype=int)
+    if hard.size:
+        sub = [find_init(tables, np.full(A, c)) for c in extra]
+        more, more_eff, _, exp, chk, _ = _climb_all(tables, sub, hard)
+        expanded[hard] += exp[hard]
+        checks[hard] += chk[hard]
+        better = more_eff[hard] > eff[hard]
+        configs[hard[better]] = more[hard[better]]
+    return SearchResult(configs, found, expanded, checks)
+
+
+def _climb_all(tables: StepTables, seeds: list[SearchResult], only: np.ndarray | None):
+    """Hill-climb every found seed (of the agents ``only``); keep each agent's best.
+
+    Returns configs (A, n), efficiency (A,), found (A,), expanded (A,), checks (A,) and
+    whether an agent's local optima differ (A,).
+    """
+    A = tables.neutral.size
+    keep = np.ones(A, dtype=bool) if only is None else np.isin(np.arange(A), only)
+    rows = np.concatenate([np.flatnonzero(r.found & keep) for r in seeds])
+    start_configs = np.concatenate([r.configs[r.found & keep] for r in seeds])
+    expanded = sum(np.where(keep, r.expanded, 0) for r in seeds)
+    checks = sum(np.where(keep, r.checks, 0) for r in seeds)
+    found = np.zeros(A, dtype=bool)
+    for r in seeds:
+        found |= r.found & keep
+    configs = seeds[0].configs.copy()
+    best_eff = np.full(A, -np.inf)
+    differ = np.zeros(A, dtype=bool)
     if rows.size:
         local, eff, exp, chk = hill_climb(tables, rows, start_configs)
         np.add.at(expanded, rows, exp)
@@ -156,5 +196,10 @@ def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
         order = np.lexsort((-eff, rows))  # per agent, best first
         first = np.ones(order.size, dtype=bool)
         first[1:] = rows[order][1:] != rows[order][:-1]
-        configs[rows[order][first]] = local[order][first]
-    return SearchResult(configs, found, expanded, checks)
+        winners = rows[order][first]
+        configs[winners] = local[order][first]
+        best_eff[winners] = eff[order][first]
+        worst = np.full(A, np.inf)
+        np.minimum.at(worst, rows, eff)
+        differ = worst < best_eff
+    return configs, best_eff, found, expanded, checks, differ

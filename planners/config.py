@@ -92,7 +92,8 @@ class PlannerConfig:
         Largest foot rotation per step on curved paths (§5.4) [rad].
     search_starts : int
         Initial configurations of ``best_first`` (1 is the paper's single FIND_INIT +
-        BFP; more add the greedy configuration and constant-step starts).
+        BFP; 2 adds the energy-budget start, 3 the greedy one, more add constant-step
+        starts, used only where the first three end in different local optima).
     snap : bool
         Let each lattice foothold slide by up to half a grid increment to the nearest
         position where the whole foot is supported (deviation from the fixed grid of
@@ -118,7 +119,7 @@ class PlannerConfig:
     knee_max_flexion: float = math.radians(130.0)
     pelvis_height_ratio: float = 0.96
     turn_threshold: float = math.radians(45.0)
-    search_starts: int = 4
+    search_starts: int = 8
     snap: bool = True
     weights: EnergyWeights = field(default_factory=EnergyWeights)
 

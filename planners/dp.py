@@ -34,7 +34,8 @@ def _depth_indices(struct: Structure):
             valid = (m2 >= 0) & (m2 <= (J - 1) * (k - 2))
             m2 = np.clip(m2, 0, (J - 1) * (k - 2))
             swing = struct.swing_offset[k - 1] + m2 * struct.swing_strides[k - 1] + jp + j
-        out.append((step, swing, valid))
+        mm, jj = np.meshgrid(np.arange(M), np.arange(J), indexing="ij")
+        out.append((step, swing, valid, mm + jj, jj))
     return out
 
 
@@ -62,7 +63,7 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     step_cost = np.round(step_cost, 10)  # ties broken alike whatever the offsets
     value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
     choices = []
-    for k, (step, swing, valid) in enumerate(_depth_indices(st), start=1):
+    for k, (step, swing, valid, m_next, j_next) in enumerate(_depth_indices(st), start=1):
         legal = valid & tables.step_legal[rows, step] & tables.swing_ok[rows, swing]
         total = np.where(legal, value[..., None] + step_cost[np.arange(B)[:, None, None, None],
                                                              step], np.inf)
@@ -70,10 +71,9 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
         best = np.take_along_axis(total, best_prev[:, :, None, :], axis=2)[:, :, 0, :]
         M = step.shape[0]
         new = np.full((B, M + J - 1, J), np.inf)
-        m, j = np.meshgrid(np.arange(M), np.arange(J), indexing="ij")
-        new[:, m + j, j] = best
+        new[:, m_next, j_next] = best
         arg = np.zeros((B, M + J - 1, J), dtype=np.int64)
-        arg[:, m + j, j] = best_prev
+        arg[:, m_next, j_next] = best_prev
         choices.append(arg)
         value = new
         if k == n:

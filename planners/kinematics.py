@@ -125,9 +125,9 @@ def key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg: Le
     p3z = pelvis_between(p3s, back_ankle_s, back_ankle_z, front_s, zf)
     f3 = leg_angles(p3s, p3z, front_s, zf, leg, min_reach)
     s3 = leg_angles(p3s, p3z, back_ankle_s, back_ankle_z, leg, min_reach)
-    # K1': legs swapped, S at a nominal mid-swing above F.
+    # K1': legs swapped, S at a nominal mid-swing above F; F stands as S did at K1.
     p4s, p4z = front_s, zf + H
-    f4 = leg_angles(p4s, p4z, front_s, zf, leg, min_reach)
+    f4 = s1
     s4 = leg_angles(p4s, p4z, front_s, np.maximum(zf, zs) + nominal_lift, leg, min_reach)
 
     def rotation(frames, part):

@@ -27,6 +27,8 @@ __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_prof
 
 #: Cell of the conservative height raster used for swing collision checks [m].
 RASTER_CELL = 0.005
+#: Fewer swing curves than this are checked against the exact profile instead.
+RASTER_FROM = 128
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,18 +60,27 @@ class Structure:
     def indices(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Step and swing indices (..., n) of configurations (..., n) of j's."""
         configs = np.asarray(configs, dtype=np.int64)
-        steps = np.empty(configs.shape, dtype=np.int64)
-        swings = np.empty(configs.shape, dtype=np.int64)
-        m_prev = np.zeros(configs.shape[:-1], dtype=np.int64)  # m_{k-1}
-        m_prev2 = np.zeros(configs.shape[:-1], dtype=np.int64)  # m_{k-2}
-        for k in range(1, self.n + 1):
-            j = configs[..., k - 1]
-            steps[..., k - 1] = self.step_offset[k - 1] + m_prev * self.J + j
-            stride = j if k == 1 else configs[..., k - 2] + j
-            swings[..., k - 1] = (self.swing_offset[k - 1] + m_prev2 * self.swing_strides[k - 1]
-                                  + stride)
-            m_prev2, m_prev = m_prev, m_prev + j
+        lead = configs.shape[:-1]
+        zero = np.zeros(lead + (1,), dtype=np.int64)
+        total = np.cumsum(configs, axis=-1)
+        m_prev = np.concatenate([zero, total[..., :-1]], axis=-1)  # m_{k-1}
+        m_prev2 = np.concatenate([zero, zero, total[..., :-2]], axis=-1)[..., :self.n]
+        stride = configs + np.concatenate([zero, configs[..., :-1]], axis=-1)
+        steps = self._step_offsets + m_prev * self.J + configs
+        swings = self._swing_offsets + m_prev2 * self._swing_strides + stride
         return steps, swings
+
+    @cached_property
+    def _step_offsets(self) -> np.ndarray:
+        return np.array(self.step_offset, dtype=np.int64)
+
+    @cached_property
+    def _swing_offsets(self) -> np.ndarray:
+        return np.array(self.swing_offset, dtype=np.int64)
+
+    @cached_property
+    def _swing_strides(self) -> np.ndarray:
+        return np.array(self.swing_strides, dtype=np.int64)
 
     @cached_property
     def all_configs(self) -> np.ndarray:
@@ -179,6 +190,8 @@ class StepTables:
         Shortest grid step and grid increment [m].
     neutral : ndarray of int, shape (A,)
         Index of the neutral step length (best flat-ground efficiency, s_init of §4.2).
+    neutral_cost : ndarray, shape (A,)
+        Energy per metre of neutral steps on flat ground [J/(kg m)].
     node_s, node_z : ndarray, shape (A, Nn)
         Foothold arc lengths relative to the stance foot and ground heights [m].
     length, rise : ndarray, shape (A, Ns)
@@ -198,6 +211,7 @@ class StepTables:
     step_min: np.ndarray
     step_delta: np.ndarray
     neutral: np.ndarray
+    neutral_cost: np.ndarray
     node_s: np.ndarray
     node_z: np.ndarray
     length: np.ndarray
@@ -294,21 +308,39 @@ def neutral_index(legs, speeds: np.ndarray, config: PlannerConfig) -> np.ndarray
 
     With En proportional to the step length at a given speed (Eq. 1 with cadence
     v / L), the best flat step minimises Ej / L and does not depend on the speed; it is
-    cached per (leg, config). ``speeds`` is accepted for clarity of the interface.
+    cached per (leg, config).
     """
+    _neutral(legs, config)
+    return np.array([_NEUTRAL_CACHE[(leg, config)][0] for leg in legs])
+
+
+def neutral_energy_per_metre(legs, speeds: np.ndarray, config: PlannerConfig) -> np.ndarray:
+    """Energy per metre (A,) [J/(kg m)] of neutral steps on flat ground at ``speeds``."""
+    _neutral(legs, config)
+    entries = [_NEUTRAL_CACHE[(leg, config)] for leg in legs]
+    v = 60.0 * np.asarray(speeds, dtype=float)
+    # En per metre is (32 + 0.005 v^2) / v [cal/(kg m)]; the rest does not depend on v.
+    alpha = config.weights.alpha
+    return alpha * (32.0 + 0.005 * v**2) / v + np.array([e[1] for e in entries])
+
+
+def _neutral(legs, config: PlannerConfig) -> None:
     missing = list({leg: None for leg in legs if (leg, config) not in _NEUTRAL_CACHE})
-    if missing:
-        lo, delta = grid(missing, config)
-        L = lo[:, None] + delta[:, None] * np.arange(config.intervals + 1)
-        leg = _LegArrays(missing)
-        zero = np.zeros_like(L)
-        summit = leg.ankle_height + 0.75 * config.swing_lift + zero
-        _, _, _, E, _ = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
-        if len(_NEUTRAL_CACHE) > 4096:
-            _NEUTRAL_CACHE.clear()
-        for i, best in enumerate(np.argmax(L / E, axis=1)):
-            _NEUTRAL_CACHE[(missing[i], config)] = int(best)
-    return np.array([_NEUTRAL_CACHE[(leg, config)] for leg in legs])
+    if not missing:
+        return
+    lo, delta = grid(missing, config)
+    L = lo[:, None] + delta[:, None] * np.arange(config.intervals + 1)
+    leg = _LegArrays(missing)
+    zero = np.zeros_like(L)
+    summit = leg.ankle_height + 0.75 * config.swing_lift + zero
+    En, _, _, E, _ = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
+    if len(_NEUTRAL_CACHE) > 4096:
+        _NEUTRAL_CACHE.clear()
+    best = np.argmax(L / E, axis=1)
+    rows = np.arange(len(missing))
+    rest = (E - config.weights.alpha * En)[rows, best] / L[rows, best]  # [J/(kg m)]
+    for i, leg_i in enumerate(missing):
+        _NEUTRAL_CACHE[(leg_i, config)] = (int(best[i]), float(rest[i]))
 
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
@@ -386,7 +418,15 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         z_start, z_end = node_z[agent_of, b_node], node_z[agent_of, f_node]
         # Spans where the ground is one straight segment reuse the flat curve, sheared to
         # the slope: the sole then keeps the flat clearance minus |grade| x foot offset.
-        stride = st.swing_stride[which]
+        stride = st.swing_stride[which].copy()
+        # Depth 1 swings start at the trailing foot; when it stands a grid step behind
+        # (the default), their strides are on the grid too.
+        behind = (-trailing - lo) / delta
+        on_grid = ((np.abs(behind - np.round(behind)) < 1e-9) & (behind > -0.5)
+                   & (behind < config.intervals + 0.5))
+        first = (stride < 0) & on_grid[agent_of]
+        stride[first] = (np.round(behind[agent_of[first]]).astype(np.int64)
+                         + st.node_m[f_node[first]])
         heel = legs_col.heel_offset[agent_of, 0]
         toe = legs_col.toe_offset[agent_of, 0]
         vertices = (np.searchsorted(profile.s, end + toe, side="left")
@@ -412,8 +452,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         rest = ~flat
         if rest.any():
             margin = 2 * float(legs_col.foot_length.max())
-            ground = profile.raster(float(start[rest].min()) - margin,
-                                    float(end[rest].max()) + margin, RASTER_CELL)
+            ground = profile if rest.sum() < RASTER_FROM else profile.raster(
+                float(start[rest].min()) - margin, float(end[rest].max()) + margin,
+                RASTER_CELL)
             ag = agent_of[rest]
             swing = adjust_swings(start[rest], z_start[rest], end[rest], z_end[rest], ground,
                                   legs_col.take(ag), config)
@@ -422,5 +463,6 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             controls[ag, which[rest]] = ctrl
             rounds[ag, which[rest]] = swing.rounds
             swing_ok[ag, which[rest]] = swing.ok
-    return StepTables(st, lo, delta, neutral, node_s, node_z, front_s - stance_s, rise,
-                      En, Ev, Ej, E, reason, swing_ok, controls, rounds, config)
+    return StepTables(st, lo, delta, neutral, neutral_energy_per_metre(legs, speeds, config),
+                      node_s, node_z, front_s - stance_s, rise, En, Ev, Ej, E, reason,
+                      swing_ok, controls, rounds, config)
