@@ -182,7 +182,7 @@ class SceneView:
         self.figures = StickFigures(
             poses.parents, head_joint=_head_joint(poses.names, first),
             radius=0.035 if len(poses.parents) > 2 else 0.12,
-            sides=4 if large else 8, head_detail=0 if large else 2,
+            sides=4 if large else 6, head_detail=0 if large else 1,
         )
         self._root = int(np.flatnonzero(np.asarray(poses.parents) < 0)[0])
         self._timeline = PoseTimeline(poses, interpolate=self.scene.interpolate)
