@@ -21,6 +21,9 @@ Around the walker the Animator adds what a crowd needs:
 - **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
   the stance hip starts where the previous step left the root and rejoins the data over
   the first half of the step (sagittal two-link IK of the stance leg).
+- **Step-downs beyond the data.** When the landing foothold is out of the swing leg's
+  reach, the stance leg bends and lowers the pelvis toward it over the second half of
+  the step.
 - **Robustness (item 10).** An agent whose solve did not converge, or produced a
   non-finite value, keeps its previous frame's pose and is flagged in
   :attr:`PoseFrame.fallback`; no NaN reaches the output.
@@ -62,6 +65,8 @@ _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data agai
 _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
+_SOLE_SAMPLES = 8  # ground samples along the sole, heel to toe tip
+_REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:
@@ -244,6 +249,7 @@ class Animator:
         self._bezier = np.zeros((n, 4, 3))
         self._use_bezier = np.zeros(n, bool)
         self._hip_fix = np.zeros((n, 3))
+        self._hip_drop = np.zeros((n, 3))
         self._warm_ankle = np.zeros((n, 2))
         self._warm_hip = np.zeros((n, 3))
         self._jac_ankle = np.full((n, 2, 2), np.nan)
@@ -343,6 +349,7 @@ class Animator:
         self._d0[a] = 0.0
         self._d1[a] = 0.0
         self._hip_fix[a] = 0.0
+        self._hip_drop[a] = 0.0
         self._use_bezier[a] = False
         self._warm_start_swap(a, had)
         self._commanded[a] = True
@@ -373,7 +380,14 @@ class Animator:
         land_pitch = np.arctan(np.tan(land_phi) * np.cos(land_yaw - cmd.heading))
         ankle_land = _stance_foot_pose(body, land, land_pitch)[1]
         self._d0[a] = np.where(had[:, None], liftoff - ankle0, 0.0)
-        self._d1[a] = ankle_land - ankle1
+        # Out of reach (a step down deeper than the data's): the stance leg bends and
+        # lowers the pelvis toward the landing over the second half of the step.
+        hip1 = pose.positions[m + rows, sw_idx[:, 0]]
+        to_land = ankle_land - hip1
+        reach = np.linalg.norm(to_land, axis=1)
+        short = np.maximum(reach - _REACH * (body.thigh + body.shank), 0.0)
+        self._hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
+        self._d1[a] = ankle_land - ankle1 - self._hip_drop[a]
 
         # Swing clearance: would the corrected data-driven foot touch the ground?
         if cmd.swing_bezier is not None:
@@ -474,10 +488,11 @@ class Animator:
         """How a foot with its heel at ``heel_xy`` (m, 2) [m] and ``yaw`` (m,) [rad] rests
         on the ground (:class:`StanceFoot`).
 
-        The sole is pitched so that neither the ball nor the toe tip is below the ground
-        (on a plane: the plane's slope; before a curb: tilted up onto its edge). A heel
-        over a drop (a tread's nosing behind it) leaves the heel in the air and the front
-        of the foot on the tread. Without ``ground`` the foot is flat at height ``z``.
+        The sole line from the heel is pitched just enough that no point along the foot
+        (heel to toe tip, sampled) is below the ground: on a plane it takes the plane's
+        slope, against a curb it tilts up onto the edge, with the toes over a drop it stays
+        level on the edge. A heel over a drop (a nosing behind it) stays in the air with
+        the front of the foot on the tread. Without ``ground`` the foot is flat at ``z``.
         """
         m = len(body)
         along = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
@@ -485,14 +500,22 @@ class Animator:
         ht = body.heel_offset + body.toe_offset
         ball_xy = heel_xy + hb[:, None] * along
         if self.ground is None:
-            zero = np.zeros(m)
-            return StanceFoot(np.column_stack([ball_xy, z]), yaw, zero)
-        toe_xy = heel_xy + ht[:, None] * along
-        zs = np.asarray(self.ground(np.concatenate([heel_xy, ball_xy, toe_xy])), dtype=float)
-        zh, zb, zt = zs[:m], zs[m:2 * m], zs[2 * m:]
-        slope = np.maximum(np.arctan2(zb - zh, hb), np.arctan2(zt - zh, ht))
-        front = np.arctan2(zt - zb, ht - hb)
-        heel_drop = (zh < np.minimum(zb, zt) - 0.01) & (np.abs(front) < np.abs(slope))
+            return StanceFoot(np.column_stack([ball_xy, z]), yaw, np.zeros(m))
+        frac = np.linspace(0.0, 1.0, _SOLE_SAMPLES)  # heel → toe tip
+        dist = ht[:, None] * frac[None, :]  # (m, q)
+        pts = heel_xy[:, None, :] + dist[..., None] * along[:, None, :]
+        zs = np.asarray(self.ground(pts.reshape(-1, 2)), dtype=float).reshape(m, -1)
+        zh = zs[:, 0]
+        slope = np.max(np.arctan2(zs[:, 1:] - zh[:, None], dist[:, 1:]), axis=1)
+        # heel over a drop: the front of the foot (ball onward) is higher than the heel
+        beyond = dist >= hb[:, None] - 1e-9
+        z_front = np.where(beyond, zs, np.inf).min(axis=1)
+        zb = np.asarray(self.ground(ball_xy), dtype=float)
+        rel = np.where(beyond & (dist > hb[:, None] + 1e-9),
+                       np.arctan2(zs - zb[:, None], np.maximum(dist - hb[:, None], 1e-9)),
+                       -np.inf)  # fmt: skip
+        front = np.maximum(rel.max(axis=1), 0.0)
+        heel_drop = (zh < z_front - 0.01) & (front < slope)
         slope = np.where(heel_drop, front, slope)
         d = np.column_stack([along * np.cos(slope)[:, None], np.sin(slope)])
         ball = np.where(heel_drop[:, None], np.column_stack([ball_xy, zb]),
@@ -555,6 +578,7 @@ class Animator:
         hip_fix = None
         if corrected:
             hip_fix = self._hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
+            hip_fix += self._hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
         warm = WarmStart(self._warm_ankle[a], self._warm_hip[a], self._jac_ankle[a],
                          self._jac_hip[a])  # fmt: skip
         toe_out = self._toe_start[a] + (self._toe_out[a] - self._toe_start[a]) * _smoothstep(tau)
