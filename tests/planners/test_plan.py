@@ -114,3 +114,33 @@ def test_bad_arguments_raise_value_errors(leg, kwargs, match):
 def test_negative_leg_lengths_are_rejected():
     with pytest.raises(ValueError, match="Leg.thigh must be finite and > 0 \\[m\\]; got -0.4"):
         Leg(-0.4, 0.4, 0.26, 0.06, 0.2)
+
+
+@settings(max_examples=20, deadline=None)
+@given(terrain_profiles())
+def test_best_first_ends_in_a_local_optimum_and_more_starts_never_hurt(leg, profile):
+    from planners.best_first import best_first
+    from planners.search import neighbour_deltas
+
+    tables = build_tables([profile], [leg], np.array([1.34]), None, np.zeros(1),
+                          PlannerConfig(search_starts=1))
+    single = best_first(tables, starts=1)
+    multi = best_first(tables, starts=8)
+    if not single.found[0]:
+        assert not multi.found[0]
+        return
+    row = np.array([0])
+    _, eff = tables.evaluate(row, single.configs)
+    neighbours = single.configs[0] + neighbour_deltas(tables.struct.n)
+    inside = ((neighbours >= 0) & (neighbours < tables.struct.J)).all(axis=1)
+    legal, n_eff = tables.evaluate(row, np.clip(neighbours, 0, tables.struct.J - 1)[None])
+    assert not np.any(inside & legal[0] & (n_eff[0] > eff[0] * (1 + 1e-12)))
+    _, m_eff = tables.evaluate(row, multi.configs)
+    assert m_eff[0] >= eff[0]
+
+
+def test_batches_larger_than_a_chunk(leg):
+    profiles = [GroundProfile.flat(), GroundProfile.stairs(0.17, 0.3, 4, first_edge=0.5)] * 35
+    plans = plan_batch(profiles, leg, 1.34, "fixed")
+    assert len(plans) == 70 and all(p.ok for p in plans)
+    assert np.allclose(plans[-1].footholds_s, plans[1].footholds_s)
