@@ -105,7 +105,7 @@ class GaitStyle:
     toe_out: float = float(np.deg2rad(7.0))
     arm_swing: float = 0.75
     elbow_flexion: float = float(np.deg2rad(20.0))
-    tolerance: float = 1e-7
+    tolerance: float = 1e-6
     max_iterations: int = 12
 
     def __post_init__(self) -> None:

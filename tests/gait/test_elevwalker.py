@@ -85,8 +85,8 @@ def test_elevation_angles_of_the_poses_equal_the_data(heading):
         assert pose.converged.all()
         measured = leg_elevations(body, pose.positions, pose.rotations, np.full(6, heading))
         stance, swing = sample(NATURAL, np.full(6, phase)), sample(NATURAL, np.full(6, phase + .5))
-        assert np.degrees(np.abs(measured[:, 0, :3] - stance[:, :3])).max() < 1e-6
-        assert np.degrees(np.abs(measured[:, 1, :3] - swing[:, :3])).max() < 1e-6
+        assert np.degrees(np.abs(measured[:, 0, :3] - stance[:, :3])).max() < 1e-3
+        assert np.degrees(np.abs(measured[:, 1, :3] - swing[:, :3])).max() < 1e-3
         # the pelvis takes the mean of the two legs' pelvis curves: within 0.5°
         assert np.degrees(np.abs(measured[:, :, 3] - np.stack([stance, swing], 1)[:, :, 3])
                           ).max() < 0.5  # fmt: skip

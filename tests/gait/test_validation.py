@@ -178,7 +178,7 @@ def test_elevation_angles_from_poses_equal_the_dataset(name):
     err_st = np.abs(measured[rows, stance_leg] - st)
     err_sw = np.abs(measured[rows, 1 - stance_leg] - sw)
     # foot, shank, thigh of both legs: exact (well within 0.5°)
-    assert np.degrees(max(err_st[:, :3].max(), err_sw[:, :3].max())) < 1e-6
+    assert np.degrees(max(err_st[:, :3].max(), err_sw[:, :3].max())) < 1e-3
     # one rigid pelvis takes the mean of the two legs' pelvis curves; the datasets are
     # half-stride symmetric within 1° on level ground, not on stairs (Bovi 2011 means)
     asymmetry = np.abs(st[:, 3] - sw[:, 3])
