@@ -88,7 +88,7 @@ class StickFigures:
     head_detail: int = 1
     mesh: pv.PolyData = field(init=False, repr=False)
     n_agents: int = field(init=False, default=-1)
-    _ids: np.ndarray | None = field(init=False, default=None, repr=False)
+    _values: np.ndarray | None = field(init=False, default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.bones = bone_pairs(self.parents)
@@ -118,15 +118,16 @@ class StickFigures:
         self.points_per_agent = 2 * s * b + len(self._sphere_points)
         self.mesh = pv.PolyData()
 
-    def update(self, positions: np.ndarray, agent_ids: np.ndarray | None = None) -> pv.PolyData:
+    def update(self, positions: np.ndarray, values: np.ndarray | None = None) -> pv.PolyData:
         """Move the figures to one frame's poses.
 
         Parameters
         ----------
         positions : (k, J, 3) float
             Joint world positions [m] of the k agents present in the frame.
-        agent_ids : (k,) int, optional
-            Agent ids, stored as the point scalar ``"agent"``.
+        values : (k,) float, optional
+            One colour value per agent (e.g. an id or a planner code), stored as the
+            point scalar ``"value"``; kept from the last call when omitted.
 
         Returns
         -------
@@ -146,12 +147,12 @@ class StickFigures:
             self._write_geometry(positions)
             self.mesh.GetPoints().Modified()
             self.mesh.point_data["Normals"].Modified()
-            ids = None if agent_ids is None else np.asarray(agent_ids, dtype=np.float32)
-            if ids is not None and not np.array_equal(ids, self._ids):
-                agent = self.mesh.point_data["agent"].reshape(k, -1)
-                agent[:] = ids[:, None]
-                self.mesh.point_data["agent"].Modified()  # re-uploaded only when changed
-                self._ids = ids
+            new = None if values is None else np.asarray(values, dtype=np.float32)
+            if new is not None and not np.array_equal(new, self._values, equal_nan=True):
+                value = self.mesh.point_data["value"].reshape(k, -1)
+                value[:] = new[:, None]
+                self.mesh.point_data["value"].Modified()  # re-uploaded only when changed
+                self._values = new
         self.mesh.Modified()
         return self.mesh
 
@@ -168,8 +169,8 @@ class StickFigures:
         self.mesh.copy_from(pv.PolyData(np.zeros((n_points, 3), np.float32), faces=faces))
         self.mesh.point_data["Normals"] = np.zeros((n_points, 3), np.float32)
         self.mesh.point_data.active_normals_name = "Normals"
-        self.mesh.point_data["agent"] = np.zeros(n_points, np.float32)
-        self._ids = None
+        self.mesh.point_data["value"] = np.zeros(n_points, np.float32)
+        self._values = None
         self.n_agents = k
 
     def _write_geometry(self, positions: np.ndarray) -> None:

@@ -50,6 +50,16 @@ def _ground_colormap():
     return ListedColormap(colormaps["gist_earth"](np.linspace(0.35, 0.8, 256)), "ground")
 
 
+def _planner_table(footsteps) -> tuple[list[str], tuple[np.ndarray, np.ndarray]]:
+    """Planner names (sorted, as the footprint codes) and, per agent, its planner code:
+    (sorted agent ids (m,), codes (m,) float), from the agents' foot placements."""
+    names = sorted(set(footsteps.planner.tolist()))
+    agents, first = np.unique(footsteps.agent, return_index=True)
+    lookup = {name: float(i) for i, name in enumerate(names)}
+    codes = np.array([lookup[p] for p in footsteps.planner[first]], dtype=float)
+    return names, (agents, codes)
+
+
 def _head_joint(names: list[str], first_positions: np.ndarray | None) -> int:
     """The joint that carries the head: by H-Anim name, else the highest joint."""
     lower = [n.lower() for n in names]
@@ -67,6 +77,16 @@ def _ground_colormap():
     from matplotlib.colors import ListedColormap
 
     return ListedColormap(colormaps["gist_earth"](np.linspace(0.35, 0.8, 256)), "ground")
+
+
+def _planner_table(footsteps) -> tuple[list[str], tuple[np.ndarray, np.ndarray]]:
+    """Planner names (sorted, as the footprint codes) and, per agent, its planner code:
+    (sorted agent ids (m,), codes (m,) float), from the agents' foot placements."""
+    names = sorted(set(footsteps.planner.tolist()))
+    agents, first = np.unique(footsteps.agent, return_index=True)
+    lookup = {name: float(i) for i, name in enumerate(names)}
+    codes = np.array([lookup[p] for p in footsteps.planner[first]], dtype=float)
+    return names, (agents, codes)
 
 
 def _head_joint(names: list[str], first_positions: np.ndarray | None) -> int:
@@ -107,6 +127,8 @@ class SceneView:
         self.agent_ids = np.zeros(0, dtype=int)
         self.agent_roots = np.zeros((0, 3))
         self._framed: int | None = None
+        self.figures_positions = np.zeros((0, 0, 3))
+        self._planner_names, self._planner_of = _planner_table(scene.footsteps)
         plotter.set_background("white", top="#dde6ee")
         bounds = self._add_world()
         self._add_agents()
@@ -196,10 +218,25 @@ class SceneView:
         kwargs = dict(interpolation="gouraud", name="agents", show_scalar_bar=False,
                       culling="back")
         if self.color == "agent":
-            kwargs.update(scalars="agent", cmap="tab20", clim=[0, AGENT_HUES])
+            kwargs.update(scalars="value", cmap="tab20", clim=[0, AGENT_HUES])
+        elif self.color == "planner":
+            n = max(len(self._planner_names), 1)
+            kwargs.update(scalars="value", cmap="Set1", clim=[-0.5, n - 0.5], n_colors=n,
+                          nan_color=FIGURE_COLOR)
         else:
             kwargs.update(color=FIGURE_COLOR, scalars=None)
         self._figures_actor = self.plotter.add_mesh(self.figures.mesh, **kwargs)
+
+    def _figure_values(self, ids: np.ndarray) -> np.ndarray | None:
+        """Per-agent colour values (k,) for the current colour mode (None: one colour)."""
+        if self.color == "agent":
+            return np.mod(ids, AGENT_HUES).astype(float)
+        if self.color == "planner":
+            agents, codes = self._planner_of
+            i = np.clip(np.searchsorted(agents, ids), 0, max(len(agents) - 1, 0))
+            known = (agents[i] == ids) if len(agents) else np.zeros(len(ids), bool)
+            return np.where(known, codes[i] if len(agents) else 0.0, np.nan)
+        return None
 
     def _add_footprints(self) -> None:
         if not len(self.scene.footsteps):
@@ -223,11 +260,7 @@ class SceneView:
                       scalar_bar_args=bar, show_scalar_bar=True)
         if self.color == "planner":
             n = max(len(fp.planners), 1)
-            kwargs.update(
-                clim=[-0.5, n - 0.5], n_colors=n,
-                annotations={float(i): name for i, name in enumerate(fp.planners)},
-            )
-            bar.update(n_labels=0)
+            kwargs.update(clim=[-0.5, n - 0.5], n_colors=n, show_scalar_bar=False)
         elif self.color == "agent":
             kwargs.update(clim=[0, AGENT_HUES], show_scalar_bar=False)
         else:
@@ -245,33 +278,46 @@ class SceneView:
         self.plotter.add_mesh(fp.mesh, **kwargs)
 
     def _add_legend(self) -> None:
-        """Legend in the top right corner: each entry's label written in its colour.
+        """Legend in the top right corner: each entry's label written in its colour; in
+        planner mode also one entry per planner (figures and footprints share them).
 
         (VTK's legend box clips long labels at some window sizes; plain text does not.)
         """
+        for name in getattr(self, "_legend_names", []):
+            self.plotter.remove_actor(name)
         entries = []
-        if self.figures is not None:
+        if self.figures is not None and self.color != "planner":
             entries.append(("agents", FIGURE_COLOR))
         if self.scene.walkable_area is not None:
             entries.append(("walkable area", WALKABLE_COLOR))
         if getattr(self.scene.routes, "graph", None) is not None:
             entries.append(("route graph", ROUTE_COLOR))
+        if self.color == "planner" and "footprints" in self.plotter.actors:
+            table = self.plotter.actors["footprints"].mapper.lookup_table
+            for i, name in enumerate(self._planner_names):
+                rgb = table.map_value(float(i))[:3]
+                entries.append((f"planner {name}", tuple(c / 255 for c in rgb)
+                                if max(rgb) > 1 else tuple(rgb)))
         size = self._font(8, minimum=4)  # pyvista doubles the size of positioned text
         line = 2.6 * size / self.plotter.window_size[1] * 1.3
+        self._legend_names = []
         for i, (label, color) in enumerate(entries):
+            name = f"legend {label}"
             text = self.plotter.add_text(
                 f"{label} —", position=(0.985, 0.96 - i * line), viewport=True,
-                font_size=size, color=color, name=f"legend {label}",
+                font_size=size, color=color, name=name,
             )
             text.GetTextProperty().SetJustificationToRight()
             text.GetTextProperty().SetVerticalJustificationToTop()
+            self._legend_names.append(name)
 
     # --- animation ------------------------------------------------------------------
 
     def _show_time(self, t: float) -> None:
         index, ids, positions = self._timeline.at_time(t)
-        self.figures.update(positions, np.mod(ids, AGENT_HUES))
+        self.figures.update(positions, self._figure_values(np.asarray(ids)))
         self.agent_ids = np.asarray(ids)
+        self.figures_positions = positions
         self.agent_roots = np.asarray(positions)[:, self._root] if len(ids) else np.zeros((0, 3))
         self.frame = index
         self._shown_time = t
@@ -312,6 +358,11 @@ class SceneView:
             raise invalid("SceneView", "color", f"one of {', '.join(COLOR_FIELDS)}", color)
         self.color = color
         self._add_footprint_actor()
+        self._add_legend()
+        if self.figures is not None:
+            values = self._figure_values(self.agent_ids)
+            if values is not None:
+                self.figures.update(self.figures_positions, values)
         self._add_figures_actor()
 
     # --- interaction ----------------------------------------------------------------

@@ -53,12 +53,12 @@ def test_translating_the_poses_translates_the_mesh(positions, shift):
 def test_same_agent_count_updates_the_same_mesh_in_place():
     figures = StickFigures(SKELETON_PARENTS, head_joint=13)
     first = walking_pose(np.zeros(3))
-    mesh = figures.update(first, agent_ids=[4, 5, 6])
+    mesh = figures.update(first, values=[4, 5, 6])
     cells, vtk_points = mesh.n_cells, mesh.GetPoints()
-    moved = figures.update(first + [1.0, 0.0, 0.0], agent_ids=[4, 5, 6])
+    moved = figures.update(first + [1.0, 0.0, 0.0])  # values kept
     assert moved is mesh and mesh.GetPoints() is vtk_points and mesh.n_cells == cells
     assert np.isclose(mesh.bounds[0], figures.mesh.bounds[0])
-    assert np.all(mesh.point_data["agent"].reshape(3, -1) == [[4], [5], [6]])
+    assert np.all(mesh.point_data["value"].reshape(3, -1) == [[4], [5], [6]])
     # a different agent count rebuilds the cells of the same mesh object
     again = figures.update(walking_pose(np.zeros(5)))
     assert again is mesh and mesh.n_cells == cells // 3 * 5

@@ -36,6 +36,16 @@ def _pixels(image, points_px):
     return image[c[inside, 1], c[inside, 0]].astype(int), inside
 
 
+def _red(colours):
+    """Set1's first colour (planner "best_first") under any shading."""
+    return (colours[:, 0] > colours[:, 1] + 60) & (colours[:, 0] > colours[:, 2] + 60)
+
+
+def _grey(colours):
+    """Set1's last colour (planner "fixed") under any shading."""
+    return np.ptp(colours, axis=1) < 25
+
+
 @pytest.fixture
 def planner_view(offscreen, crowd):
     poses, steps = crowd
@@ -72,7 +82,11 @@ def test_agents_appear_where_the_run_puts_them(planner_view, crowd):
     heads = positions[:, 13] + [0.0, 0.0, view.figures.head_radius]
     colours, inside = _pixels(image, project_to_pixels(view.plotter, heads))
     assert inside.sum() >= 10
-    assert np.mean(colours.mean(axis=1) < 110) >= 0.9  # dark figures on a light ground
+    # coloured by planner like their footprints: even ids plan (red), odd ids do not (grey)
+    best = (ids[inside] % 2 == 0)
+    assert best.sum() >= 4 and (~best).sum() >= 4
+    assert np.mean(_red(colours[best])) >= 0.9
+    assert np.mean(_grey(colours[~best]) & (colours[~best].mean(axis=1) < 170)) >= 0.9
     # ground far from every agent and footprint stays light: the test can fail
     rng = np.random.default_rng(3)
     probe = np.column_stack([rng.uniform(-1.5, 11.5, 400), rng.uniform(-1.5, 8.5, 400)])
@@ -100,8 +114,8 @@ def test_footprints_appear_in_planner_colours_until_now(planner_view, crowd):
     colours = np.full((len(steps), 3), -1)
     got, inside = _pixels(image, project_to_pixels(view.plotter, points))
     colours[inside] = got
-    red = (colours[:, 0] > colours[:, 1] + 60) & (colours[:, 0] > colours[:, 2] + 60)
-    grey = (np.ptp(colours, axis=1) < 25) & (colours.mean(axis=1) < 200)
+    red = _red(colours)
+    grey = _grey(colours) & (colours.mean(axis=1) < 200)
     placed = inside & (steps.time <= 1.2)
     best, fixed = placed & (steps.planner == "best_first"), placed & (steps.planner == "fixed")
     assert best.sum() >= 10 and fixed.sum() >= 10
@@ -129,7 +143,7 @@ def test_key_bindings_drive_playback_colour_and_follow(planner_view, crowd):
     keys["c"]()
     assert view.color == "agent"
     assert view.plotter.actors["footprints"].mapper.array_name == "agent"
-    assert view.plotter.actors["agents"].mapper.array_name == "agent"
+    assert view.plotter.actors["agents"].mapper.array_name == "value"
     keys["c"]()
     assert view.plotter.actors["footprints"].mapper.array_name == "energy"
     keys["f"]()
