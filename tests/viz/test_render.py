@@ -129,6 +129,10 @@ def test_footprints_appear_in_planner_colours_until_now(planner_view, crowd):
 def test_key_bindings_drive_playback_colour_and_follow(planner_view, crowd):
     _, view = planner_view
     keys = view.key_bindings()
+    legend = {name: view.plotter.actors[name] for name in view._legend_names}
+    assert {"legend planner best_first", "legend planner fixed"} <= set(legend)
+    red = legend["legend planner best_first"].GetTextProperty().GetColor()
+    assert red[0] > 0.8 and red[1] < 0.3  # the colour of best_first figures and footprints
     t0 = view.playback.time
     keys["space"]()
     assert view.playback.playing
@@ -142,6 +146,8 @@ def test_key_bindings_drive_playback_colour_and_follow(planner_view, crowd):
     assert view.playback.speed == 2.0
     keys["c"]()
     assert view.color == "agent"
+    assert not any("planner" in name for name in view._legend_names)
+    assert not any("planner" in name for name in view.plotter.actors if "legend" in name)
     assert view.plotter.actors["footprints"].mapper.array_name == "agent"
     assert view.plotter.actors["agents"].mapper.array_name == "value"
     keys["c"]()
