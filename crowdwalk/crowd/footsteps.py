@@ -5,10 +5,10 @@ Chen & Li (§4.2) plan the next n steps and walk them. In a crowd the simulation
 planned steps while the agent keeps its line, and re-plans at a heel strike when steering
 turns it (receding horizon). The planner is the cost centre, so identical planning
 problems are answered from a cache. The key is the planner, the leg, the speed, the
-trailing foot (1 cm) and the ground profile *relative to the stance foot* (s and z − z₀
-rounded to 1 mm): a reused plan's footholds lie within 0.5 mm of where the planner would
-put them. On level ground every step of
-an agent is the same problem, so an agent plans there only a few times.
+trailing foot (5 cm classes), the speed (5 cm/s classes) and the ground profile *relative
+to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged): a reused plan's
+footholds lie within 0.5 mm of where the planner would put them on that ground. On level
+ground every step of an agent is the same problem, so an agent plans there a few times.
 """
 
 from __future__ import annotations
@@ -51,6 +51,18 @@ class PlannedSteps:
     swing: np.ndarray
     energy: np.ndarray
     from_cache: np.ndarray
+
+
+def _simplify(s: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Drop profile vertices where the ground runs on straight (same slope on both sides,
+    no height jump): they do not change the ground, only the cache key."""
+    if s.size <= 2:
+        return s, z
+    ds0, ds1 = s[1:-1] - s[:-2], s[2:] - s[1:-1]
+    dz0, dz1 = z[1:-1] - z[:-2], z[2:] - z[1:-1]
+    straight = (ds0 > 0) & (ds1 > 0) & (np.abs(dz0 * ds1 - dz1 * ds0) <= 1e-9 * ds0 * ds1)
+    keep = np.concatenate([[True], ~straight, [True]])
+    return s[keep], z[keep]
 
 
 def _steps_of(plan, horizon: int) -> tuple:
@@ -148,8 +160,11 @@ class FootstepPlanner:
         cached = np.zeros(m, bool)
         if trailing is None:
             trailing = np.full(m, -0.6)
-        # the trailing foot only shapes the first swing curve: 1 cm is plenty
-        trailing = np.clip(np.round(np.asarray(trailing, float), 2), -2.9, -0.01)
+        # the trailing foot only shapes the first swing curve (the Animator lifts the foot
+        # where it really is): 5 cm classes
+        trailing = np.clip(np.round(np.asarray(trailing, float) / 0.05) * 0.05, -2.9, -0.02)
+        # speed classes of 5 cm/s for the planner (the walker keeps its own speed)
+        speed = np.round(np.asarray(speed, float) / 0.05) * 0.05
         keys: list[bytes] = []
         profiles = []
         lines = np.stack([stance - _BEHIND * direction, stance + self.lookahead * direction],
@@ -159,12 +174,15 @@ class FootstepPlanner:
         else:
             arrays = [self.terrain.profile_arrays(line) for line in lines]
         for i in range(m):  # cache keys and profile objects are per agent
-            s, z = arrays[i]
+            s, z = _simplify(*arrays[i])
             s = s - _BEHIND
             z = z - stance_z[i]
+            # on level ground the trailing foot changes only the first swing curve, which
+            # the Animator does not need there (nothing to clear): leave it out of the key
+            level = s.size == 2 and abs(z[1] - z[0]) < 1e-9
             key = b"|".join([
                 str(planner[i]).encode(), np.int64(leg[i]).tobytes(),
-                np.round(speed[i], 3).tobytes(), trailing[i].tobytes(),
+                np.round(speed[i], 3).tobytes(), b"" if level else trailing[i].tobytes(),
                 np.round(s / _S_QUANTUM).astype(np.int64).tobytes(),
                 np.round(z / _Z_QUANTUM).astype(np.int64).tobytes(),
             ])

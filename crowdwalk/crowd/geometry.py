@@ -14,12 +14,11 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance [m] from points ``p`` to segments ``a``–``b``; arrays (..., 2) broadcast,
     result (...)."""
-    ab = b - a
-    denom = np.einsum("...i,...i->...", ab, ab)
-    t = np.einsum("...i,...i->...", p - a, ab) / np.where(denom > 0, denom, 1.0)
-    t = np.clip(np.where(denom > 0, t, 0.0), 0.0, 1.0)
-    closest = a + t[..., None] * ab
-    return np.linalg.norm(p - closest, axis=-1)
+    abx, aby = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+    apx, apy = p[..., 0] - a[..., 0], p[..., 1] - a[..., 1]
+    denom = abx * abx + aby * aby
+    t = np.clip((apx * abx + apy * aby) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
+    return np.hypot(apx - t * abx, apy - t * aby)
 
 
 def segment_distance(

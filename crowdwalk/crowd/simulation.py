@@ -81,6 +81,9 @@ class CrowdParams:
         Steps the footstep planner looks ahead (Chen & Li §4.2: three or four) [-].
     min_step_ratio : float
         Shortest planned step as a fraction of the leg length [-].
+    replan_turn_deg : float
+        A walker that turns by more than this at a heel strike re-plans; otherwise it
+        takes the next step of its current plan [deg].
     steering : SteeringParams
     """
 
@@ -96,6 +99,7 @@ class CrowdParams:
     stair_rise: float = 0.05
     planning_horizon: int = 3
     min_step_ratio: float = 0.15
+    replan_turn_deg: float = 3.0
     steering: SteeringParams = field(default_factory=SteeringParams)
 
 
@@ -201,7 +205,8 @@ class CrowdSimulation:
         self.radius = params.radius_ratio * population.body_height
         self.min_step_time = 1.0 / cadence_at(population.free_speed)
         self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
-        heights, self.leg_index = np.unique(np.round(population.body_height, 2),
+        # planning legs in 2 cm body-height classes (about 1 % of leg length)
+        heights, self.leg_index = np.unique(np.round(population.body_height / 0.02) * 0.02,
                                             return_inverse=True)
         self.legs = [Leg.from_body_height(float(h)) for h in heights]
         self.planner_of = population.planner
@@ -336,21 +341,33 @@ class CrowdSimulation:
         xy = self.pop.spawn_xy[due]
         act = self.active
         free = np.ones(due.size, bool)
-        if act.size:
+        if act.size:  # clear of the walking agents' remaining sweeps (nearest 16)
             now, _ = st.position(t, act)
-            d = segment_distance(xy[:, None, :], xy[:, None, :], now[None, :, :],
-                                 st.pos1[act][None, :, :])
-            free = np.all(d >= self.radius[due][:, None] + self.radius[act][None, :], axis=1)
-        # spawn one at a time among the due ones that are close to each other
-        order = np.flatnonzero(free)
-        chosen: list[int] = []
-        for k in order:  # only agents spawning in this tick (few), not the whole crowd
-            if all(np.linalg.norm(xy[k] - xy[j]) >= self.radius[due[k]] + self.radius[due[j]]
-                   for j in chosen):
-                chosen.append(k)
-        if not chosen:
+            k = min(16, act.size)
+            reach = 1.0 + 2 * float(self.radius.max())
+            _, nb = cKDTree(0.5 * (now + st.pos1[act])).query(
+                xy, k=k, distance_upper_bound=reach)
+            nb = np.asarray(nb).reshape(due.size, k)
+            valid = nb < act.size
+            j = act[np.where(valid, nb, 0)]
+            d = segment_distance(xy[:, None, :], xy[:, None, :], now[np.where(valid, nb, 0)],
+                                 st.pos1[j])
+            free = np.all((d >= self.radius[due][:, None] + self.radius[j]) | ~valid, axis=1)
+        # among agents due together, one that overlaps an earlier one (lower index) waits
+        # for a later tick
+        cand = np.flatnonzero(free)
+        if cand.size > 1:
+            pairs = cKDTree(xy[cand]).query_pairs(2 * float(self.radius.max()),
+                                                  output_type="ndarray")
+            if len(pairs):
+                i, j = cand[pairs[:, 0]], cand[pairs[:, 1]]
+                clash = (np.linalg.norm(xy[i] - xy[j], axis=1)
+                         < self.radius[due[i]] + self.radius[due[j]])
+                free[np.maximum(i, j)[clash]] = False
+        chosen = np.flatnonzero(free)
+        if chosen.size == 0:
             return
-        idx = due[np.array(chosen)]
+        idx = due[chosen]
         p = self.pop.spawn_xy[idx]
         z = self.terrain.height(p)
         st.status[idx] = ACTIVE
@@ -442,7 +459,9 @@ class CrowdSimulation:
         if mv.size:
             a = idx[mv]
             q = st.queue_next[a]
-            along = (np.einsum("ij,ij->i", st.queue_dir[a], choice.direction[mv]) > 1 - 1e-9)
+            # a turn of up to 3° moves the plan's footholds by < 0.14 % of their distance
+            along = (np.einsum("ij,ij->i", st.queue_dir[a], choice.direction[mv])
+                     > np.cos(np.radians(prm.replan_turn_deg)))
             reuse = ((q < st.queue_len[a]) & along
                      & (np.linalg.norm(st.stance[a] - st.queue_anchor[a], axis=1) < 1e-9))
             ok = np.ones(mv.size, bool)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import segment_distance
+from crowdwalk.crowd.geometry import point_segment_distance
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -66,7 +66,7 @@ class SteeringParams:
 
     offsets_deg: tuple[float, ...] = (0.0, -12.0, 12.0, -25.0, 25.0, -40.0, 40.0, -60.0,
                                       60.0, -90.0, 90.0)
-    step_lengths: tuple[float, ...] = (0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 1.0)
+    step_lengths: tuple[float, ...] = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
     min_step: float = 0.15
     foot_clearance: float = 0.05
     personal_weight: float = 0.35
@@ -111,6 +111,18 @@ class StepChoice:
     direction: np.ndarray
     free_length: np.ndarray
     move: np.ndarray
+
+
+def _crossing(p0, p1, q0, q1) -> np.ndarray:
+    """Whether segments p0–p1 and q0–q1 cross (arrays (..., 2) broadcast)."""
+    r, s = p1 - p0, q1 - q0
+    qp = q0 - p0
+    denom = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    ok = np.abs(denom) > 1e-15
+    safe = np.where(ok, denom, 1.0)
+    t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / safe
+    u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / safe
+    return ok & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
 
 
 def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -186,16 +198,31 @@ def choose_steps(
     # the new foothold itself must lie inside the walkable area
     foot = stance[:, None, None, :] + lengths[None, None, :, None] * dirs[:, :, None, :]
     wall_ok &= clearance(foot) >= params.foot_clearance
-    # hard limits: swept bodies of neighbours
+    # hard limits: swept bodies of neighbours (only those a step could reach)
     ok = wall_ok
     if neighbours.valid.shape[1]:
-        d = segment_distance(
-            position[:, None, None, None, :], ends[:, :, :, None, :],
-            neighbours.now[:, None, None, :, :], neighbours.end[:, None, None, :, :],
-        )  # (m, C, L, K)
-        need = radius[:, None, None, None] + neighbours.radius[:, None, None, :]
-        clear = (d >= need) | ~neighbours.valid[:, None, None, :]
-        ok = ok & clear.all(axis=-1)
+        need = radius[:, None] + neighbours.radius  # (m, K)
+        gap0 = point_segment_distance(position[:, None, :], neighbours.now, neighbours.end)
+        reach = np.linalg.norm(ends - position[:, None, None, :], axis=-1).max(axis=(1, 2))
+        relevant = neighbours.valid & (gap0 - need < reach[:, None] + 1e-9)
+        k = int(relevant.sum(axis=1).max())
+        if k:
+            order = np.argsort(~relevant, axis=1, kind="stable")[:, :k]  # relevant first
+            take = np.take_along_axis
+            q0 = take(neighbours.now, order[..., None], axis=1)[:, None, None, :, :]
+            q1 = take(neighbours.end, order[..., None], axis=1)[:, None, None, :, :]
+            rel = take(relevant, order, axis=1)[:, None, None, :]
+            p0 = position[:, None, None, None, :]
+            p1 = ends[:, :, :, None, :]
+            d = np.minimum(
+                np.minimum(point_segment_distance(p1, q0, q1), point_segment_distance(
+                    q0, p0, p1)),
+                np.minimum(point_segment_distance(q1, p0, p1),
+                           take(gap0, order, axis=1)[:, None, None, :]),
+            )
+            d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (m, C, L, k)
+            clear = (d >= take(need, order, axis=1)[:, None, None, :]) | ~rel
+            ok = ok & clear.all(axis=-1)
     n_free = np.cumprod(ok, axis=2).sum(axis=2)  # (m, C) feasible lengths from the short end
     free = np.where(n_free > 0, lengths[np.maximum(n_free - 1, 0)], 0.0)
 
