@@ -280,13 +280,12 @@ def render(
         raise invalid("render", "start", "unset for a .png (use --time) [s]", (start, end))
     if suffix != ".png" and time is not None:
         raise invalid("render", "time", "unset for a movie (use --start/--end) [s]", time)
+    from crowdwalk.viz import Scene
     from crowdwalk.viz.headless import gl_available
 
+    scene = Scene.load(target, color=color, follow=follow, footprint_trail=trail)
     if not gl_available():
         _fail(_GL_MISSING, 2)
-    from crowdwalk.viz import Scene
-
-    scene = Scene.load(target, color=color, follow=follow, footprint_trail=trail)
     if suffix == ".png":
         scene.render_png(out, time=time, size=width_height)
     else:
