@@ -95,3 +95,20 @@ def test_help_lists_view_and_render_with_units():
     assert result.exit_code == 0
     assert "simulated time [s]" in result.output and "WIDTHxHEIGHT [px]" in result.output
     assert "view" in runner.invoke(app, ["--help"]).output
+
+
+def test_render_without_gl_stack_explains_what_to_install(monkeypatch, run_dir, tmp_path):
+    import crowdwalk.viz.headless as headless
+
+    monkeypatch.setattr(headless, "gl_available", lambda: False)
+    result = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "x.png")])
+    assert result.exit_code == 2
+    assert "libegl1 libegl-mesa0 libgl1-mesa-dri" in result.output
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_gl_probe_fails_cleanly_when_the_child_cannot_render(monkeypatch):
+    import crowdwalk.viz.headless as headless
+
+    monkeypatch.setattr(headless, "_PROBE", "import sys; sys.exit(139)")  # as a segfault
+    assert headless.gl_available.__wrapped__(timeout=30) is False
