@@ -27,6 +27,9 @@ __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_prof
 
 #: Cell of the conservative height raster used for swing collision checks [m].
 RASTER_CELL = 0.005
+#: Compute swing curves only for pairs a legal sequence of steps can use (False: for
+#: every pair of supported footholds; the results are the same, only slower).
+PRUNE_SWINGS = True
 #: Fewer swing curves than this are checked against the exact profile instead.
 RASTER_FROM = 128
 
@@ -81,6 +84,35 @@ class Structure:
     @cached_property
     def _swing_strides(self) -> np.ndarray:
         return np.array(self.swing_strides, dtype=np.int64)
+
+    @cached_property
+    def pair_steps(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per swing pair and middle step length j_{k-1}: the two step indices (Np, J)
+        (lift-off -> stance, stance -> touch-down) and whether they exist. Depth 1 pairs
+        have one step (the second), the first is a copy of it."""
+        J = self.J
+        first = np.zeros((self.swing_back.size, J), dtype=np.int64)
+        second = np.zeros_like(first)
+        valid = np.zeros(first.shape, dtype=bool)
+        depth = self.node_depth[self.swing_front]
+        jp = np.arange(J)[None, :]
+        for k in range(1, self.n + 1):
+            rows = np.flatnonzero(depth == k)
+            if k == 1:
+                j = self.node_m[self.swing_front[rows]]
+                second[rows] = (self.step_offset[0] + j)[:, None]
+                first[rows] = second[rows]
+                valid[rows, 0] = True
+                continue
+            m2 = self.node_m[self.swing_back[rows]][:, None]
+            stride = self.swing_stride[rows][:, None]
+            jc = stride - jp
+            ok = (jc >= 0) & (jc < J)
+            first_k = (self.step_offset[k - 2] + (m2 if k > 2 else 0) * J + jp)
+            second[rows] = self.step_offset[k - 1] + (m2 + jp) * J + np.clip(jc, 0, J - 1)
+            first[rows] = np.broadcast_to(first_k, ok.shape)
+            valid[rows] = ok
+        return first, second, valid
 
     @cached_property
     def all_configs(self) -> np.ndarray:
@@ -402,10 +434,20 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)
     reason |= np.where(reachable, 0, int(Reason.KNEE_REACH))
 
-    # Swings: lift-off node -> touch-down node, only where the touch-down is supported.
+    # Swings: lift-off node -> touch-down node, only for pairs some legal sequence of
+    # steps (from the start, through a stance foothold between them) can use.
     back, front = st.swing_back, st.swing_front
-    needed = (support[:, front] == 0) & (support[:, back] == 0) & (
-        np.abs(node_z[:, front] - node_z[:, back]) <= 2 * config.max_step_rise)
+    step_ok = reason == 0
+    reach = np.zeros(node_s.shape, dtype=bool)
+    reach[:, :2] = True
+    for k in range(1, st.n + 1):
+        sl = slice(st.step_offset[k - 1], st.step_offset[k] if k < st.n else None)
+        arrive = step_ok[:, sl] & reach[:, st.step_stance[sl]]
+        np.logical_or.at(reach, (slice(None), st.step_front[sl]), arrive)
+    first, second, valid = st.pair_steps
+    through = (valid & step_ok[:, first] & step_ok[:, second]).any(axis=-1)
+    needed = through & reach[:, back] if PRUNE_SWINGS else (
+        (support[:, front] == 0) & (support[:, back] == 0))
     P = back.size
     controls = np.zeros((A, P, 4, 2))
     rounds = np.full((A, P), -1)

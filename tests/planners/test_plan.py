@@ -144,3 +144,19 @@ def test_batches_larger_than_a_chunk(leg):
     plans = plan_batch(profiles, leg, 1.34, "fixed")
     assert len(plans) == 70 and all(p.ok for p in plans)
     assert np.allclose(plans[-1].footholds_s, plans[1].footholds_s)
+
+
+@settings(max_examples=10, deadline=None)
+@given(terrain_profiles())
+def test_pruning_swing_pairs_does_not_change_the_optimum(leg, profile):
+    import planners.lattice as lattice
+
+    pruned = plan(profile, leg, 1.34, "optimal")
+    lattice.PRUNE_SWINGS = False
+    try:
+        full = plan(profile, leg, 1.34, "optimal")
+    finally:
+        lattice.PRUNE_SWINGS = True
+    assert pruned.status == full.status
+    assert pruned.efficiency == pytest.approx(full.efficiency, rel=1e-12)
+    assert pruned.stats["swing_curves"] <= full.stats["swing_curves"]
