@@ -192,7 +192,8 @@ def run_scenario(
         if steps is not None:
             writer.write_footsteps(steps)
         wall = time.perf_counter() - wall0
-        timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering)
+        timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
+                      step_commands_s=sim.wall_commands)
         summary = summarise(sim, sc, timing, max_overlap=max_overlap,
                             interrupted=interrupted, poses=pose_note)
         writer.write_summary(summary)

@@ -231,6 +231,7 @@ class CrowdSimulation:
         self.tick = 0
         self.wall_planning = 0.0
         self.wall_steering = 0.0
+        self.wall_commands = 0.0  # gait Animator step commands
         self.max_overlap = 0.0
         self._step_rows: list[dict[str, np.ndarray]] = []
 
@@ -616,9 +617,11 @@ class CrowdSimulation:
         st.climb[a] += np.maximum(H, 0.0)
         st.stuck[a] = 0.0
         if self.animator is not None:
+            w0 = _time.perf_counter()
             self._animate(a, t0, duration, foot, st.stance_foot[a].copy(),
                           np.column_stack([foothold, new_z]), L, H, swing[go], d,
                           side)
+            self.wall_commands += _time.perf_counter() - w0
         st.stance_foot[a] = np.column_stack([foothold, new_z])
         kind = self.terrain.kind(foothold)
         self._step_rows.append({

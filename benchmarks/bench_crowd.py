@@ -1,0 +1,127 @@
+"""Crowd simulation speed on the stadium egress (the performance reference).
+
+Prints a table for 100, 1,000 and 5,000 agents: simulated seconds per wall second (and
+per CPU second of this process, which is what the machine's other load does not change)
+with the ``best_first`` planner,
+
+- ``traj+steps``: trajectories (10 fps) and footsteps written, no poses;
+- ``full poses``: trajectories, footsteps and full-body poses at 25 fps;
+
+the share of planning, steering, poses and writing, and how the cost grows with n.
+
+Usage: ``python benchmarks/bench_crowd.py [--agents 100 1000 5000] [--seconds S]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from crowdwalk.crowd.run import RunOverrides, run_scenario
+
+ROOT = Path(__file__).parents[1]
+STADIUM = ROOT / "scenarios" / "stadium_egress.yaml"
+
+
+def stadium(n: int, out: Path) -> Path:
+    """The stadium scenario with n agents (n/4 per section), stands deep enough to seat
+    them at about 1.3 /m²."""
+    sc = yaml.safe_load(STADIUM.read_text())
+    per = n // 4
+    depth = max(20.0, per / 1.3 / 18.0)  # stand section 18 m wide
+    top = 28.0 + depth
+    sc["terrain"]["extent"][3] = top + 2.0
+    sc["terrain"]["features"][0]["footprint"] = [[0, 25], [80, 25], [80, top + 2], [0, top + 2]]
+    for node in sc["routes"]["nodes"]:
+        if node["name"].startswith("stand_"):
+            x = node["xy"][0]
+            node["xy"] = [x, 28.0 + depth / 2]
+            node["area"] = [[x - 9, 28], [x + 9, 28], [x + 9, top], [x - 9, top]]
+    for g in sc["groups"]:
+        g["count"] = per
+    path = out / f"stadium_{n}.yaml"
+    path.write_text(yaml.safe_dump(sc, sort_keys=False))
+    return path
+
+
+def measure(path: Path, out: Path, seconds: float, poses: bool) -> dict:
+    started: list[float] = []
+
+    def first_frame(*_):  # CPU time when the loop starts (after the setup)
+        if not started:
+            started.append(time.process_time())
+
+    summary = run_scenario(path, out, progress=first_frame, overrides=RunOverrides(
+        planner="best_first", duration=seconds, poses=poses, fps=25.0 if poses else 10.0))
+    cpu = time.process_time() - started[0]
+    tm = summary["timing"]
+    steps = sum(a["steps"] for a in summary["agents"])
+    return {
+        "sim": summary["simulated_time_s"], "wall": tm["wall_s"], "cpu": cpu,
+        "setup": tm["setup_s"], "planning": tm["planning_s"], "steering": tm["steering_s"],
+        "poses": tm["poses_s"] + tm["step_commands_s"], "writing": tm["writing_s"],
+        "steps": steps,
+        "runs": summary["planning"]["planner_runs"], "requests": summary["planning"]["requests"],
+        "size": sum(f.stat().st_size for f in out.iterdir()) / 1e6,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--agents", type=int, nargs="+", default=[100, 1000, 5000])
+    parser.add_argument("--seconds", type=float, default=None,
+                        help="simulated seconds per run (default: 20, 20, 10 without poses; "
+                             "10, 6, 2 with poses)")
+    args = parser.parse_args()
+    plain = {100: 20.0, 1000: 20.0, 5000: 10.0}
+    posed = {100: 10.0, 1000: 6.0, 5000: 2.0}
+    tmp = Path(tempfile.mkdtemp(prefix="bench_crowd_"))
+    rows = []
+    try:
+        for n in args.agents:
+            path = stadium(n, tmp)
+            for poses in (False, True):
+                seconds = args.seconds or (posed if poses else plain).get(n, 5.0)
+                out = tmp / f"run_{n}_{int(poses)}"
+                r = measure(path, out, seconds, poses)
+                r.update(n=n, output="full poses 25 fps" if poses else "traj+steps")
+                rows.append(r)
+                shutil.rmtree(out)
+                print(f"  done: {n} agents, {r['output']}", flush=True)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+    head = (f"{'agents':>6} {'output':<18} {'sim s':>6} {'wall s':>7} {'sim/wall':>8} "
+            f"{'sim/CPU':>8} {'plan':>5} {'steer':>5} {'poses':>5} {'write':>5} "
+            f"{'plans run/asked':>16} {'µs/agent-step':>13} {'MB':>7}")
+    print()
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        run = r["wall"] - r["setup"]
+        share = {k: 100 * r[k] / run for k in ("planning", "steering", "poses", "writing")}
+        print(f"{r['n']:>6} {r['output']:<18} {r['sim']:>6.1f} {r['wall']:>7.1f} "
+              f"{r['sim'] / run:>8.2f} {r['sim'] / max(r['cpu'], 1e-9):>8.2f} "
+              f"{share['planning']:>4.0f}% {share['steering']:>4.0f}% {share['poses']:>4.0f}% "
+              f"{share['writing']:>4.0f}% {r['runs']:>7}/{r['requests']:<8} "
+              f"{1e6 * run / max(r['steps'], 1):>13.0f} {r['size']:>7.1f}")
+    print("\nsim/wall and sim/CPU exclude setup (world, population, distance field); 'poses'"
+          " includes the Animator's step commands.")
+    for output in ("traj+steps", "full poses 25 fps"):
+        sel = [r for r in rows if r["output"] == output]
+        if len(sel) >= 2:
+            n = np.array([r["n"] for r in sel], float)
+            cost = np.array([(r["wall"] - r["setup"]) / r["sim"] for r in sel])
+            slope = np.polyfit(np.log(n), np.log(cost), 1)[0]
+            print(f"{output}: wall seconds per simulated second grow as n^{slope:.2f} "
+                  f"({', '.join(f'{c:.2f} s at {int(k)}' for k, c in zip(n, cost, strict=True))})")
+
+
+if __name__ == "__main__":
+    main()
