@@ -162,7 +162,7 @@ class Scene:
     def show(self, time: float | None = None, size: tuple[int, int] = (1280, 800)) -> None:
         """Open an interactive window (needs a display). Keys: space play/pause,
         Right/Left one frame, Up/Down speed, c colour, f follow on/off."""
-        plotter = pv.Plotter(window_size=size, title=f"crowdwalk — {self.title}")
+        plotter = pv.Plotter(off_screen=False, window_size=size, title=f"crowdwalk — {self.title}")
         view = self.attach(plotter)
         view.set_time(self.time_range[0] if time is None else time)
         view.install_controls()

@@ -234,6 +234,7 @@ def test_show_wires_slider_keys_and_timer_into_the_window(offscreen, crowd, monk
 
     class Window(pv.Plotter):  # the interactive window, off-screen, never blocking
         def __init__(self, **kwargs):
+            assert kwargs.pop("off_screen") is False  # a window even after off-screen renders
             super().__init__(off_screen=True, **kwargs)
 
         def show(self, *args, **kwargs):
