@@ -26,7 +26,8 @@ def _rings(n: int, J: int, centre: int):
     return grid[order], ends
 
 
-def find_init(tables: StepTables, centres: np.ndarray | None = None) -> SearchResult:
+def find_init(tables: StepTables, centres: np.ndarray | None = None,
+              agents: np.ndarray | None = None) -> SearchResult:
     """FIND_INIT (Fig. 3): the legal configuration nearest to (s_init, ..., s_init).
 
     Breadth-first search on the grid from ``q_init`` expands illegal configurations until
@@ -40,22 +41,30 @@ def find_init(tables: StepTables, centres: np.ndarray | None = None) -> SearchRe
     Parameters
     ----------
     tables : StepTables
-    centres : ndarray of int, shape (A,), optional
-        Step-length index of ``q_init`` per agent; default the neutral step.
+    centres : ndarray of int, shape (B,), optional
+        Step-length index of ``q_init`` per search; default the neutral step.
+    agents : ndarray of int, shape (B,), optional
+        Table row of each search (rows may repeat); default every agent once.
+
+    Returns
+    -------
+    SearchResult
+        One entry per search (B).
     """
-    A = tables.neutral.size
     st = tables.struct
     n, J = st.n, st.J
-    centres = tables.neutral if centres is None else centres
+    agents = np.arange(tables.neutral.size) if agents is None else agents
+    centres = tables.neutral[agents] if centres is None else centres
+    A = agents.size
     configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
-    legal, _ = tables.evaluate(np.arange(A), configs)
+    legal, _ = tables.evaluate(agents, configs)
     found = legal.copy()
     checks = np.ones(A, dtype=np.int64)
     blocked = np.flatnonzero(~legal)
     if blocked.size:
         dist = np.abs(st.step_j[None, :] - centres[blocked, None])
-        cost = dist + 1e-7 * tables.E[blocked]
-        best, ok = cheapest(tables, cost, blocked)
+        cost = dist + 1e-7 * tables.E[agents[blocked]]
+        best, ok = cheapest(tables, cost, agents[blocked])
         configs[blocked[ok]] = best[ok]
         found[blocked] = ok
         d = np.abs(best - centres[blocked, None]).sum(axis=1)
@@ -149,7 +158,6 @@ def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
     steps spread over the grid -- keeping the best local optimum; ``starts = 1`` is the
     paper's single search.
     """
-    A = tables.neutral.size
     J = tables.struct.J
     starts = tables.config.search_starts if starts is None else starts
     seeds = [find_init(tables)]
@@ -162,12 +170,21 @@ def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
     # Where the first starts disagree the terrain is hard: climb from the extra starts too.
     hard = np.flatnonzero(spread_out & found) if extra.size else np.zeros(0, dtype=int)
     if hard.size:
-        sub = [find_init(tables, np.full(A, c)) for c in extra]
-        more, more_eff, _, exp, chk, _ = _climb_all(tables, sub, hard)
-        expanded[hard] += exp[hard]
-        checks[hard] += chk[hard]
-        better = more_eff[hard] > eff[hard]
-        configs[hard[better]] = more[hard[better]]
+        rows = np.repeat(hard, extra.size)
+        sub = find_init(tables, np.tile(extra, hard.size), rows)
+        start = sub.found
+        local, more_eff, exp, chk = hill_climb(tables, rows[start], sub.configs[start])
+        np.add.at(expanded, rows, sub.expanded)
+        np.add.at(checks, rows, sub.checks)
+        np.add.at(expanded, rows[start], exp)
+        np.add.at(checks, rows[start], chk)
+        order = np.lexsort((-more_eff, rows[start]))
+        firsts = np.ones(order.size, dtype=bool)
+        firsts[1:] = rows[start][order][1:] != rows[start][order][:-1]
+        winners = rows[start][order][firsts]
+        win_eff = more_eff[order][firsts]
+        better = win_eff > eff[winners]
+        configs[winners[better]] = local[order][firsts][better]
     return SearchResult(configs, found, expanded, checks)
 
 
