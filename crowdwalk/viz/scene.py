@@ -168,28 +168,37 @@ class Scene:
         view.install_controls()
         plotter.show()
 
-    def render_png(
-        self, out: str | Path, time: float | None = None, size: tuple[int, int] = (1280, 800)
-    ) -> Path:
-        """Render one instant off-screen to a PNG file.
+    def image(self, time: float | None = None, size: tuple[int, int] = (1280, 800)):
+        """Render one instant off-screen and return it (e.g. to show in a notebook).
 
         Parameters
         ----------
-        out : path
-            PNG file to write.
         time : float, optional
             Simulated time [s]; the end of the run when omitted.
         size : (int, int)
             Image width and height [px].
+
+        Returns
+        -------
+        (height, width, 3) uint8
+            RGB image.
         """
-        out = Path(out)
         t = self.time_range[1] if time is None else float(time)
         with offscreen_plotter(size) as plotter:
-            view = self.attach(plotter)
-            view.set_time(t)
-            out.parent.mkdir(parents=True, exist_ok=True)
+            self.attach(plotter).set_time(t)
             plotter.render()
-            plotter.screenshot(str(out))
+            return plotter.screenshot(return_img=True)
+
+    def render_png(
+        self, out: str | Path, time: float | None = None, size: tuple[int, int] = (1280, 800)
+    ) -> Path:
+        """Render one instant off-screen to a PNG file (see :meth:`image`); returns its path."""
+        import imageio.v3 as iio
+
+        out = Path(out)
+        image = self.image(time, size)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        iio.imwrite(out, image)
         return out
 
     def render_movie(
