@@ -6,6 +6,7 @@ CLI (``crowdwalk view``, ``crowdwalk render``) and notebooks::
     from crowdwalk.viz import Scene
     scene = Scene.from_run("runs/quickstart", color="energy")
     scene.render_png("frame.png", time=10.0, size=(1280, 800))
+    rgb = scene.image(time=10.0)  # (800, 1280, 3) uint8, e.g. for a notebook
     scene.render_movie("walk.mp4", start=0.0, end=20.0)
     scene.show()  # interactive window (needs a display)
 
