@@ -232,6 +232,7 @@ class CrowdSimulation:
         self.wall_planning = 0.0
         self.wall_steering = 0.0
         self.wall_commands = 0.0  # gait Animator step commands
+        self._pending: list[dict] = []  # step commands not yet sent to the Animator
         self.max_overlap = 0.0
         self._step_rows: list[dict[str, np.ndarray]] = []
 
@@ -617,11 +618,9 @@ class CrowdSimulation:
         st.climb[a] += np.maximum(H, 0.0)
         st.stuck[a] = 0.0
         if self.animator is not None:
-            w0 = _time.perf_counter()
             self._animate(a, t0, duration, foot, st.stance_foot[a].copy(),
                           np.column_stack([foothold, new_z]), L, H, swing[go], d,
                           side)
-            self.wall_commands += _time.perf_counter() - w0
         st.stance_foot[a] = np.column_stack([foothold, new_z])
         kind = self.terrain.kind(foothold)
         self._step_rows.append({
@@ -640,10 +639,8 @@ class CrowdSimulation:
     # -- poses ---------------------------------------------------------------------
 
     def _animate(self, a, t0, duration, foot, start, target, L, H, swing, d, side) -> None:
-        """Send the new steps to the gait Animator (MetaGait step parameters: step length
+        """Queue the new steps for the gait Animator (MetaGait step parameters: step length
         and height, heading, footholds, the planner's swing Bezier in world xyz)."""
-        from crowdwalk.gait.animator import StepCommand
-
         st = self.state
         stance_c = st.trail[a]  # centre-line point of the stance ankle (before this step)
         stance_z = st.trail_z[a]
@@ -655,19 +652,34 @@ class CrowdSimulation:
             bez[has, :, :2] = (stance_c[has, None, :] + s_[..., None] * d[has, None, :]
                                + lat[:, None, :])
             bez[has, :, 2] = stance_z[has, None] + z_
-        self.animator.command(StepCommand(
+        if self._pending and np.isin(a, np.concatenate([c["agent"] for c in self._pending])).any():
+            self._flush_commands()  # an agent's earlier step must reach the Animator first
+        self._pending.append(dict(
             agent=a, time=t0, duration=duration, swing_foot=foot.astype(int),
             start=start, target=target, heading=np.arctan2(d[:, 1], d[:, 0]),
-            step_length=np.maximum(L, 0.05),
-            step_height=H, swing_bezier=bez,
+            step_length=np.maximum(L, 0.05), step_height=H, swing_bezier=bez,
         ))
         st.animated[a] = True
+
+    def _flush_commands(self) -> None:
+        """Send the buffered step commands in one batch (the Animator has a fixed cost per
+        call, so the steps decided between two output frames go together)."""
+        if not self._pending:
+            return
+        from crowdwalk.gait.animator import StepCommand
+
+        w0 = _time.perf_counter()
+        fields = {k: np.concatenate([c[k] for c in self._pending]) for k in self._pending[0]}
+        self._pending = []
+        self.animator.command(StepCommand(**fields))
+        self.wall_commands += _time.perf_counter() - w0
 
     def poses(self):
         """Poses of the walking agents that have taken a step, at the current time
         (a ``gait.animator.PoseFrame``), or None without an Animator."""
         if self.animator is None:
             return None
+        self._flush_commands()
         idx = self.active
         idx = idx[self.state.animated[idx]]
         if idx.size == 0:
