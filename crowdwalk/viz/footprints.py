@@ -15,13 +15,20 @@ import pyvista as pv
 
 from crowdwalk.errors import invalid
 
-__all__ = ["Footsteps", "FootprintMesh", "foot_outline", "walking_headings"]
+__all__ = ["COARSE_ABOVE", "Footsteps", "FootprintMesh", "foot_outline", "walking_headings"]
 
 COLOR_FIELDS = ("energy", "planner", "agent")
 
 
-def foot_outline(heel: float = 0.06, toe: float = 0.20, width: float = 0.10) -> np.ndarray:
-    """Sole outline (V,2) in the foot frame [m]: x forward from the ankle, y to the left.
+COARSE_ABOVE = 20_000
+"""Footprint count above which each outline is a 2-triangle quad instead of 6 triangles."""
+
+
+def foot_outline(
+    heel: float = 0.06, toe: float = 0.20, width: float = 0.10, coarse: bool = False
+) -> np.ndarray:
+    """Sole outline (V,2) in the foot frame [m]: x forward from the ankle, y to the left;
+    a convex polygon starting at the heel.
 
     Parameters
     ----------
@@ -29,7 +36,13 @@ def foot_outline(heel: float = 0.06, toe: float = 0.20, width: float = 0.10) -> 
         Distance of the heel behind and the toe ahead of the ankle [m].
     width : float
         Width across the ball of the foot [m].
+    coarse : bool
+        A tapered quad (4 vertices) instead of the 8-vertex sole, for very many footprints.
     """
+    if coarse:
+        x = np.array([-heel, 0.85 * toe, 0.85 * toe, -heel])
+        y = 0.5 * width * np.array([0.7, 0.95, -0.95, -0.7])
+        return np.column_stack([x, y])
     x = np.array([-heel, -0.8 * heel, 0.3 * toe, 0.8 * toe, toe, 0.8 * toe, 0.3 * toe, -0.8 * heel])
     y = 0.5 * width * np.array([0.0, 0.75, 0.95, 0.8, 0.0, -0.8, -0.95, -0.75])
     return np.column_stack([x, y])
@@ -158,16 +171,21 @@ class FootprintMesh:
         The run's foot placements.
     lift : float
         Height of the outline above the foothold, against z-fighting [m].
+    coarse : bool, optional
+        Quad outlines; by default when there are more than ``COARSE_ABOVE`` footprints.
     """
 
     steps: Footsteps
     lift: float = 0.006
+    coarse: bool | None = None
     mesh: pv.PolyData = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         order = np.argsort(self.steps.time, kind="stable")
         self.times = self.steps.time[order]
-        outline = foot_outline()
+        if self.coarse is None:
+            self.coarse = len(self.steps) > COARSE_ABOVE
+        outline = foot_outline(coarse=self.coarse)
         v = len(outline)
         heading = self.steps.heading[order]
         c, s = np.cos(heading)[:, None], np.sin(heading)[:, None]

@@ -90,3 +90,17 @@ def test_missing_columns_and_ragged_arrays_are_rejected():
         Footsteps.from_table({"agent": [1], "time": [0.0]})
     with pytest.raises(InputError, match=r"Footsteps\.energy must be of length 2"):
         Footsteps(np.zeros(2), np.zeros(2), np.zeros((2, 3)), np.zeros(3), np.array(["a", "b"]))
+
+
+@pytest.mark.parametrize("coarse", [False, True])
+def test_outlines_are_convex_and_contain_the_foothold(coarse):
+    import shapely
+
+    outline = foot_outline(coarse=coarse)
+    polygon = shapely.Polygon(outline)
+    assert polygon.is_valid and polygon.convex_hull.area == pytest.approx(polygon.area)
+    assert polygon.contains(shapely.Point(0.0, 0.0))  # the ankle foothold is on the sole
+    steps = _steps(n=4)
+    fp = FootprintMesh(steps, coarse=coarse)
+    assert fp.mesh.n_cells == 4 * (len(outline) - 2)
+    assert fp.mesh.area == pytest.approx(4 * polygon.area, rel=1e-5)
