@@ -77,6 +77,11 @@ def main() -> None:
                      Scene(poses=poses, footsteps=steps, walkable_area=area, footprint_trail=2.0)))
         rows.append(("synthetic, all footprints", n,
                      Scene(poses=poses, footsteps=steps, walkable_area=area)))
+    if 1000 in args.agents:  # a long run: every footprint of 30 s stays on the ground
+        poses, steps = synthetic_crowd(1000, duration=30.0, fps=2.0, area=(63.0, 63.0), seed=0)
+        area = shapely.box(-3, -3, 66, 66)
+        rows.append((f"synthetic, 30 s: all {len(steps) // 1000}k footprints", 1000,
+                     Scene(poses=poses, footsteps=steps, walkable_area=area)))
     if args.run:
         scene = Scene.from_run(args.run)
         n = max(len(scene.poses.at(i)[0]) for i in range(len(scene.poses.times)))
