@@ -55,7 +55,8 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
 
     Returns
     -------
-    (scenario, world, simulation, want_poses, scenario_text)
+    (scenario, world, simulation, pose_note, scenario_text)
+        ``pose_note`` says whether poses are written ("written") or why not.
     """
     import yaml
 
@@ -90,12 +91,16 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
     duration = overrides.duration if overrides.duration is not None else sc.simulation.duration
     fps = overrides.fps if overrides.fps is not None else sc.simulation.fps
     want_poses = sc.outputs.poses if overrides.poses is None else overrides.poses
-    animator = None
+    animator, pose_note = None, "disabled (outputs.poses is false)"
     if want_poses:
-        animator = _make_animator(pop.body_height, world.terrain)
+        try:
+            animator = _make_animator(pop.body_height, world.terrain)
+            pose_note = "written"
+        except ImportError as exc:  # a build without the gait package: say so, go on
+            pose_note = f"not available in this build ({exc})"
     sim = CrowdSimulation(world, pop, dt=sc.simulation.dt, fps=fps, duration=duration,
                           params=params, animator=animator)
-    return sc, world, sim, want_poses, text
+    return sc, world, sim, pose_note, text
 
 
 def _make_animator(heights: np.ndarray, terrain):
@@ -133,8 +138,8 @@ def run_scenario(
     from crowdwalk.record import RunWriter
 
     wall0 = time.perf_counter()
-    sc, world, sim, want_poses, text = prepare(scenario, overrides, params)
-    pose_note = "written" if want_poses else "disabled (outputs.poses is false)"
+    sc, world, sim, pose_note, text = prepare(scenario, overrides, params)
+    want_poses = sim.animator is not None
     skeleton = sim.animator.skeleton if sim.animator is not None else None
     writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
                        fps=sim.fps, skeleton=skeleton)

@@ -233,7 +233,6 @@ class CrowdSimulation:
         self.wall_steering = 0.0
         self.wall_commands = 0.0  # gait Animator step commands
         self._pending: list[dict] = []  # step commands not yet sent to the Animator
-        self.max_overlap = 0.0
         self._step_rows: list[dict[str, np.ndarray]] = []
 
     # -- setup ---------------------------------------------------------------------
