@@ -593,11 +593,11 @@ class Animator:
             target = _bezier(self._bezier[a], tau)
             pinned = self._has_trail[a] & (tau < t_off)
             goal = np.full((a.size, 3), np.nan)
-            toes = None
+            push = self._stance_fraction[a] - 0.5 + 0.05
+            toes = 1.0 - np.clip(phase / push, 0.0, 1.0) ** 2
+            toes[self._has_trail[a]] = 0.0  # rigid after toe-off
             if pinned.any():
                 goal[pinned], flat = self._pinned_ankle(a[pinned], phase[pinned], sw[pinned])
-                push = self._stance_fraction[a] - 0.5 + 0.05
-                toes = 1.0 - np.clip(phase / push, 0.0, 1.0) ** 2
                 toes[pinned] = flat
             if lift is not None:
                 offset[:, 2] += lift
