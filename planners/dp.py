@@ -39,6 +39,21 @@ def _depth_indices(struct: Structure):
     return out
 
 
+def dp_penalties(tables: StepTables) -> list[np.ndarray]:
+    """Per depth, 0 where a transition (m_{k-1}, j_{k-1}) -> j_k is legal, else +inf.
+
+    Shapes (A, M, P, J); computed once per set of tables and cached on it.
+    """
+    cached = tables.__dict__.get("_dp_penalties")
+    if cached is None:
+        rows = np.arange(tables.neutral.size)[:, None, None, None]
+        cached = [np.where(valid & tables.step_legal[rows, step] & tables.swing_ok[rows, swing],
+                           0.0, np.inf)
+                  for step, swing, valid, _, _ in _depth_indices(tables.struct)]
+        tables.__dict__["_dp_penalties"] = cached
+    return cached
+
+
 def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | None = None):
     """The legal configuration of least total ``step_cost`` for each agent.
 
@@ -59,14 +74,14 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     J, n = st.J, st.n
     agents = np.arange(tables.neutral.size) if agents is None else agents
     B = agents.size
-    rows = agents[:, None, None, None]
     step_cost = np.round(step_cost, 10)  # ties broken alike whatever the offsets
     value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
     choices = []
-    for k, (step, swing, valid, m_next, j_next) in enumerate(_depth_indices(st), start=1):
-        legal = valid & tables.step_legal[rows, step] & tables.swing_ok[rows, swing]
-        total = np.where(legal, value[..., None] + step_cost[np.arange(B)[:, None, None, None],
-                                                             step], np.inf)
+    penalty = dp_penalties(tables)
+    for k, (step, _, _, m_next, j_next) in enumerate(_depth_indices(st), start=1):
+        # illegal transitions carry +inf; the step cost broadcasts over j_{k-1}
+        total = (value[..., None] + penalty[k - 1][agents]
+                 + step_cost[:, step[:, :1, :].reshape(step.shape[0], -1)][:, :, None, :])
         best_prev = np.argmin(total, axis=2)  # over j_{k-1}: (B, M, J)
         best = np.take_along_axis(total, best_prev[:, :, None, :], axis=2)[:, :, 0, :]
         M = step.shape[0]

@@ -26,12 +26,10 @@ __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_prof
 
 
 #: Cell of the conservative height raster used for swing collision checks [m].
-RASTER_CELL = 0.005
+RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 #: Compute swing curves only for pairs a legal sequence of steps can use (False: for
 #: every pair of supported footholds; the results are the same, only slower).
 PRUNE_SWINGS = True
-#: Fewer swing curves than this are checked against the exact profile instead.
-RASTER_FROM = 128
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,22 +170,28 @@ def structure(n: int, J: int) -> Structure:
                      a(swing_stride))
 
 
-def combine_profiles(profiles, lo: np.ndarray, hi: np.ndarray):
+def combine_profiles(profiles, lo: np.ndarray, hi: np.ndarray, origins: np.ndarray,
+                     cell: float):
     """One profile holding every agent's profile side by side.
 
-    Agent a's profile, padded flat to cover ``[lo[a], hi[a]]`` [m], is shifted by
-    ``offset[a]`` so that queries of different agents never meet. Returns the combined
-    :class:`GroundProfile` and the offsets (A,) [m].
+    Agent a's profile, cropped (or padded flat) to ``[lo[a] - 1, hi[a] + 1]`` [m], is
+    shifted by ``offset[a]`` so that queries of different agents never meet and every
+    stance foot ``origins[a] + offset[a]`` lies on a multiple of ``cell`` [m] (rasters
+    then align with each agent's origin, whatever the batch or a translation). Returns the
+    combined :class:`GroundProfile` and the offsets (A,) [m].
     """
     if len(profiles) == 1:
-        return profiles[0], np.zeros(1)
+        offset = np.floor(origins[0] / cell) * cell - origins[0]
+        p = profiles[0]
+        return (p if offset == 0 else GroundProfile(p.s + offset, p.z)), np.array([offset])
     s_parts, z_parts, offsets = [], [], []
     cursor = 0.0
-    for p, a, b in zip(profiles, lo, hi, strict=True):
-        start, end = min(p.s[0], a) - 1.0, max(p.s[-1], b) + 1.0
-        offset = cursor - start
-        s_parts.append(np.concatenate([[start], p.s, [end]]) + offset)
-        z_parts.append(np.concatenate([[p.z[0]], p.z, [p.z[-1]]]))
+    for p, a, b, o in zip(profiles, lo, hi, origins, strict=True):
+        start, end = a - 1.0, b + 1.0  # cropped to the part that can be queried
+        inside = (p.s > start) & (p.s < end)
+        offset = np.ceil((cursor - start + o) / cell) * cell - o
+        s_parts.append(np.concatenate([[start], p.s[inside], [end]]) + offset)
+        z_parts.append(np.concatenate([p.height([start]), p.z[inside], p.height([end])]))
         offsets.append(offset)
         cursor = end + offset + 1.0
     return GroundProfile(np.concatenate(s_parts), np.concatenate(z_parts)), np.array(offsets)
@@ -405,7 +409,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     if trailing is None:
         trailing = -(lo + delta * neutral)
     reach = config.n_steps * (lo + delta * config.intervals)
-    profile, shift = combine_profiles(profiles, origins + trailing - 1.0, origins + reach + 1.0)
+    profile, shift = combine_profiles(profiles, origins + trailing - 1.0, origins + reach + 1.0,
+                                      origins, RASTER_CELL)
     base = (origins + shift)[:, None]  # (A, 1) absolute s of each stance foot
     legs_col = _LegArrays(legs)
 
@@ -494,9 +499,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         rest = ~flat
         if rest.any():
             margin = 2 * float(legs_col.foot_length.max())
-            ground = profile if rest.sum() < RASTER_FROM else profile.raster(
-                float(start[rest].min()) - margin, float(end[rest].max()) + margin,
-                RASTER_CELL)
+            lo_s = np.floor((float(start[rest].min()) - margin) / RASTER_CELL) * RASTER_CELL
+            ground = profile.raster(lo_s, float(end[rest].max()) + margin, RASTER_CELL)
             ag = agent_of[rest]
             swing = adjust_swings(start[rest], z_start[rest], end[rest], z_end[rest], ground,
                                   legs_col.take(ag), config)

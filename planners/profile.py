@@ -191,14 +191,15 @@ class HeightRaster:
     heights : ndarray, shape (c,)
         Highest ground in each cell [m].
     vertex_s : ndarray, shape (m,)
-        Arc lengths of the profile's vertices [m].
+        Arc lengths of the profile's vertices [m] (outside ones count in the end cells).
     """
 
     def __init__(self, start: float, cell: float, heights: np.ndarray, vertex_s: np.ndarray):
-        self.vertex_s = vertex_s
         self.start = float(start)
         self.cell = float(cell)
         c = heights.size
+        cells = np.clip(((vertex_s - self.start) / self.cell).astype(np.intp), 0, c - 1)
+        self._vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
         levels = int(np.floor(np.log2(c))) + 1
         table = np.empty((levels, c))
         table[0] = heights
@@ -213,9 +214,13 @@ class HeightRaster:
         self._log2[2:] = np.floor(np.log2(np.arange(2, c + 1))).astype(np.intp)
 
     def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Number of profile vertices in the closed intervals ``[a, b]`` [m]."""
-        s = self.vertex_s
-        return np.searchsorted(s, b, side="right") - np.searchsorted(s, a, side="left")
+        """Number of profile vertices in the cells covering ``[a, b]`` [m] (>= the number
+        in the interval itself: a conservative count)."""
+        c = self._vertex_cum.size - 1
+        scale = 1.0 / self.cell
+        ia = np.clip(((np.asarray(a) - self.start) * scale).astype(np.intp), 0, c - 1)
+        ib = np.clip(((np.asarray(b) - self.start) * scale).astype(np.intp), ia, c - 1)
+        return self._vertex_cum[ib + 1] - self._vertex_cum[ia]
 
     def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Highest ground [m] over ``[a, b]`` [m] (same shapes), never underestimated.
