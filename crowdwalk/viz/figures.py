@@ -167,7 +167,9 @@ class StickFigures:
         faces = np.column_stack([np.full(len(tris), 3), tris]).ravel()
         n_points = k * self.points_per_agent
         self.mesh.copy_from(pv.PolyData(np.zeros((n_points, 3), np.float32), faces=faces))
-        self.mesh.point_data["Normals"] = np.zeros((n_points, 3), np.float32)
+        normals = np.zeros((k, self.points_per_agent, 3), np.float32)
+        normals[:, 2 * self.sides * len(self.bones):] = self._sphere_points  # heads: radial
+        self.mesh.point_data["Normals"] = normals.reshape(-1, 3)
         self.mesh.point_data.active_normals_name = "Normals"
         self.mesh.point_data["value"] = np.zeros(n_points, np.float32)
         self._values = None
@@ -186,16 +188,14 @@ class StickFigures:
         # bones shorter than 1 µm (coincident joints) get a vertical axis
         axis = np.divide(axis, length, out=np.tile([0.0, 0.0, 1.0], (len(axis), 1)),
                          where=length > 1e-6)
-        u, v = _perpendicular_frames(axis)
-        radial = normals[:, :n_bone].reshape(k, b, 2, s, 3)
+        u, v = (w.astype(np.float32) for w in _perpendicular_frames(axis))
         ring = (u[:, None, :] * self._cos[None, :, None]
-                + v[:, None, :] * self._sin[None, :, None]).reshape(k, b, 1, s, 3)
-        radial[:] = ring
-        bone_points = points[:, :n_bone].reshape(k, b, 2, s, 3)
-        np.multiply(ring, self.radius, out=bone_points[:, :, :1])
-        bone_points[:, :, 1:] = bone_points[:, :, :1]
-        bone_points[:, :, 0] += child[:, :, None, :]
-        bone_points[:, :, 1] += parent[:, :, None, :]
+                + v[:, None, :] * self._sin[None, :, None]).reshape(k, b, s, 3)
+        normals[:, :n_bone].reshape(k, b, 2, s, 3)[:] = ring[:, :, None]
+        ring *= self.radius
+        bone = np.empty((k, b, 2, s, 3), dtype=np.float32)
+        np.add(ring, child[:, :, None, :], out=bone[:, :, 0], casting="unsafe")
+        np.add(ring, parent[:, :, None, :], out=bone[:, :, 1], casting="unsafe")
+        points[:, :n_bone] = bone.reshape(k, n_bone, 3)
         head_centre = positions[:, self.head_joint] + [0.0, 0.0, self.head_radius]
         points[:, n_bone:] = head_centre[:, None, :] + self._sphere_points[None] * self.head_radius
-        normals[:, n_bone:] = self._sphere_points[None]
