@@ -26,6 +26,10 @@ def _rings(n: int, J: int, centre: int):
     return grid[order], ends
 
 
+#: Local optima within this relative efficiency of each other count as the same.
+AGREE = 1e-3
+
+
 def find_init(tables: StepTables, centres: np.ndarray | None = None,
               agents: np.ndarray | None = None) -> SearchResult:
     """FIND_INIT (Fig. 3): the legal configuration nearest to (s_init, ..., s_init).
@@ -218,5 +222,5 @@ def _climb_all(tables: StepTables, seeds: list[SearchResult], only: np.ndarray |
         best_eff[winners] = eff[order][first]
         worst = np.full(A, np.inf)
         np.minimum.at(worst, rows, eff)
-        differ = worst < best_eff
+        differ = worst < best_eff * (1 - AGREE)
     return configs, best_eff, found, expanded, checks, differ

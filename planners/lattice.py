@@ -10,7 +10,7 @@ agents together; the searches then only look tables up.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
@@ -27,6 +27,8 @@ __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_prof
 
 #: Cell of the conservative height raster used for swing collision checks [m].
 RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
+#: Extra clearance of the reusable curves for straight sloped spans [m].
+SLOPE_EXTRA = 0.03
 #: Compute swing curves only for pairs a legal sequence of steps can use (False: for
 #: every pair of supported footholds; the results are the same, only slower).
 PRUNE_SWINGS = True
@@ -295,16 +297,19 @@ class StepTables:
 _FLAT_CACHE: dict = {}
 
 
-def flat_swings(legs, config: PlannerConfig):
+def flat_swings(legs, config: PlannerConfig, extra: float = 0.0):
     """Swing curves over flat ground for every stride ``2 L_min + s dL`` (s = 0..2J-2).
 
     Returns control points (A, 2J-1, 4, 2) relative to the lift-off foothold [m], ok
     flags (A, 2J-1) and the sole's clearance slack (A, 2J-1) [m] (how much more than
     the required clearance the curve keeps away from the footholds' zones). Curves are
-    computed once per distinct (leg, config), all missing legs in one vectorised call.
+    computed once per distinct (leg, config, extra), all missing legs in one vectorised
+    call. ``extra`` [m] is added to the clearance the curves are adjusted for, so that
+    their slack covers sloped ground; the slack is reported against the real clearance.
     """
     S = 2 * config.intervals + 1
-    missing = list({leg: None for leg in legs if (leg, config) not in _FLAT_CACHE})
+    key = (config, extra)
+    missing = list({leg: None for leg in legs if (leg, key) not in _FLAT_CACHE})
     if missing:
         lo, delta = grid(missing, config)
         strides = (2 * lo[:, None] + delta[:, None] * np.arange(S)).ravel()
@@ -312,7 +317,8 @@ def flat_swings(legs, config: PlannerConfig):
         flat = GroundProfile.flat(2 * span, 0.0, -span / 2)
         zero = np.zeros_like(strides)
         feet = _LegArrays(missing).take(np.repeat(np.arange(len(missing)), S))
-        swing = adjust_swings(zero, zero, strides, zero, flat, feet, config)
+        lifted = replace(config, clearance=config.clearance + extra)
+        swing = adjust_swings(zero, zero, strides, zero, flat, feet, lifted)
         pts = bezier_points(swing.controls, config.bezier_samples)
         deficit = sole_clearance(pts, zero, strides, flat, feet, config)
         zone = 0.5 * feet.foot_length[:, None]
@@ -324,8 +330,8 @@ def flat_swings(legs, config: PlannerConfig):
             _FLAT_CACHE.clear()
         for i, leg in enumerate(missing):
             rows = slice(i * S, (i + 1) * S)
-            _FLAT_CACHE[(leg, config)] = (swing.controls[rows], swing.ok[rows], slack[rows])
-    entries = [_FLAT_CACHE[(leg, config)] for leg in legs]
+            _FLAT_CACHE[(leg, key)] = (swing.controls[rows], swing.ok[rows], slack[rows])
+    entries = [_FLAT_CACHE[(leg, key)] for leg in legs]
     return tuple(np.stack([e[i] for e in entries]) for i in range(3))
 
 
@@ -482,9 +488,13 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         nominal = 2 * lo[agent_of] + np.maximum(stride, 0) * delta[agent_of]
         flat = ((stride >= 0) & (vertices == 0) & (np.abs(grade) <= config.max_foot_slope)
                 & (np.abs(end - start - nominal) <= 1e-9))  # snapped footholds differ
-        if flat.any():
-            flat_ctrl, flat_ok, flat_slack = flat_swings(legs, config)
-            ag, rows = agent_of[flat], np.flatnonzero(flat)
+        # Level spans use the flat curves; sloped ones the curves with SLOPE_EXTRA more
+        # clearance (enough for grades up to about 15 %).
+        for extra, subset in ((0.0, flat & (grade == 0)), (SLOPE_EXTRA, flat & (grade != 0))):
+            if not subset.any():
+                continue
+            flat_ctrl, flat_ok, flat_slack = flat_swings(legs, config, extra)
+            ag, rows = agent_of[subset], np.flatnonzero(subset)
             fits = flat_ok[ag, stride[rows]] & (
                 np.abs(grade[rows]) * np.maximum(heel[rows], toe[rows])
                 <= flat_slack[ag, stride[rows]])
