@@ -115,7 +115,7 @@ class PlannerConfig:
     swing_lift: float = 0.15
     max_swing_lift: float = 0.60
     bezier_samples: int = 20
-    max_adjustments: int = 25
+    max_adjustments: int = 10
     knee_max_flexion: float = math.radians(130.0)
     pelvis_height_ratio: float = 0.96
     turn_threshold: float = math.radians(45.0)
