@@ -81,6 +81,12 @@ class Scene:
             raise invalid("Scene", "color", f"one of {', '.join(COLOR_FIELDS)}", self.color)
         if self.footprint_trail is not None and not self.footprint_trail > 0:
             raise invalid("Scene", "footprint_trail", "> 0 [s]", self.footprint_trail)
+        if self.follow is not None and self.poses is not None:
+            ids = np.asarray(self.poses.agent_ids)
+            if self.follow not in ids:
+                shown = f"{ids.min()}..{ids.max()}" if len(ids) else "none"
+                raise invalid("Scene", "follow", f"an agent id of the run ({shown})",
+                              self.follow)
         if self.walkable_area is None and self.routes is not None:
             self.walkable_area = getattr(self.routes, "walkable_area", None)
 

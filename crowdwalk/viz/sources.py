@@ -1,9 +1,9 @@
 """Where the viewer gets poses from: a run's ``poses.sqlite``, its trajectories (when no
 poses were stored), or arrays in memory. All expose the same small interface:
 
-``names`` (J,), ``parents`` (J,) int, ``times`` (F,) [s], ``n_agents`` (how many
-distinct agents appear) and ``at(i) -> (ids (k,), positions (k, J, 3) [m])`` for output
-frame ``i``.
+``names`` (J,), ``parents`` (J,) int, ``times`` (F,) [s], ``agent_ids`` (sorted ids of
+every agent that appears), ``n_agents`` and ``at(i) -> (ids (k,), positions (k, J, 3)
+[m])`` for output frame ``i``.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ class PoseSource(Protocol):
     names: list[str]
     parents: np.ndarray
     times: np.ndarray
+    agent_ids: np.ndarray
     n_agents: int
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
@@ -78,7 +79,8 @@ class ArrayPoses:
         self.parents = np.asarray(parents, dtype=int)
         self.names = list(names) if names is not None else [f"j{j}" for j in range(len(parents))]
         self._ids = [np.asarray(i, dtype=int) for i in ids]
-        self.n_agents = len(np.unique(np.concatenate(self._ids))) if self._ids else 0
+        self.agent_ids = np.unique(np.concatenate(self._ids)) if self._ids else np.zeros(0, int)
+        self.n_agents = len(self.agent_ids)
         self._positions = [np.asarray(p, dtype=float) for p in positions]
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
@@ -95,7 +97,11 @@ class RunPoses:
         self.parents = np.asarray(poses.parents, dtype=int)
         self.times = np.asarray(poses.times, dtype=float)
         self._frames = np.asarray(poses.frames, dtype=int)
-        self.n_agents = len(poses.body_heights) or (len(self.at(0)[0]) if len(self.times) else 0)
+        known = np.array(sorted(poses.body_heights), dtype=int)
+        if not len(known) and len(self.times):
+            known = np.unique(self.at(0)[0])
+        self.agent_ids = known
+        self.n_agents = len(known)
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         """Ids (k,) and joint positions (k, J, 3) [m] of stored frame ``index``."""
@@ -127,7 +133,8 @@ class TrajectoryPoses:
         ground = np.column_stack([trajectories.x, trajectories.y, trajectories.z])
         self._positions = np.stack([ground, ground + [0.0, 0.0, height]], axis=1)
         self._ids = np.asarray(trajectories.id, dtype=int)
-        self.n_agents = len(np.unique(self._ids))
+        self.agent_ids = np.unique(self._ids)
+        self.n_agents = len(self.agent_ids)
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         """Ids (k,) and pole end points (k, 2, 3) [m] of frame ``index``."""

@@ -112,3 +112,10 @@ def test_gl_probe_fails_cleanly_when_the_child_cannot_render(monkeypatch):
 
     monkeypatch.setattr(headless, "_PROBE", "import sys; sys.exit(139)")  # as a segfault
     assert headless.gl_available.__wrapped__(timeout=30) is False
+
+
+def test_follow_needs_an_agent_of_the_run(run_dir, tmp_path):
+    result = runner.invoke(app, ["render", str(run_dir), "--out", str(tmp_path / "x.png"),
+                                 "--follow", "99"])
+    assert result.exit_code == 2
+    assert "Scene.follow must be an agent id of the run (0..11); got 99." in result.output
