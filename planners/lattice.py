@@ -16,7 +16,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from planners.config import PlannerConfig
-from planners.energy import step_energy
+from planners.energy import step_energy, total_energy, vertical_energy, walking_energy
 from planners.legality import Reason, foot_support, snap_to_support
 from planners.profile import GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
@@ -375,14 +375,21 @@ def _neutral(legs, config: PlannerConfig) -> None:
     leg = _LegArrays(missing)
     zero = np.zeros_like(L)
     summit = leg.ankle_height + 0.75 * config.swing_lift + zero
-    En, _, _, E, _ = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
+    En, _, Ej, E, reachable = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
     if len(_NEUTRAL_CACHE) > 4096:
         _NEUTRAL_CACHE.clear()
     best = np.argmax(L / E, axis=1)
     rows = np.arange(len(missing))
     rest = (E - config.weights.alpha * En)[rows, best] / L[rows, best]  # [J/(kg m)]
     for i, leg_i in enumerate(missing):
-        _NEUTRAL_CACHE[(leg_i, config)] = (int(best[i]), float(rest[i]))
+        _NEUTRAL_CACHE[(leg_i, config)] = (int(best[i]), float(rest[i]), Ej[i], reachable[i])
+
+
+def flat_joint_energy(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Ej [J/kg] and knee reach of level steps of every grid length, (A, J) each (cached)."""
+    _neutral(legs, config)
+    entries = [_NEUTRAL_CACHE[(leg, config)] for leg in legs]
+    return np.stack([e[2] for e in entries]), np.stack([e[3] for e in entries])
 
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
@@ -438,9 +445,24 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     stance_z, front_z = node_z[:, st.step_stance], node_z[:, st.step_front]
     rise = front_z - stance_z
     highest = profile.max_height(base + stance_s, base + front_s)
-    summit_z = highest + legs_col.ankle_height + 0.75 * config.swing_lift
-    En, Ev, Ej, E, reachable = step_energy(stance_s, stance_z, front_s, front_z, summit_z,
-                                           legs_col, speeds[:, None], config)
+    # Key frames of level steps on level ground depend only on the length: cached.
+    length = front_s - stance_s
+    nominal = lo[:, None] + delta[:, None] * st.step_j
+    level = (rise == 0) & (highest == stance_z) & (np.abs(length - nominal) <= 1e-12)
+    flat_Ej, flat_reach = flat_joint_energy(legs, config)
+    Ej = np.take_along_axis(flat_Ej, np.broadcast_to(st.step_j, rise.shape), axis=1)
+    reachable = np.take_along_axis(flat_reach, np.broadcast_to(st.step_j, rise.shape), axis=1)
+    other = np.nonzero(~level)
+    if other[0].size:
+        sub = legs_col.take(other[0])
+        summit_z = highest[other] + sub.ankle_height + 0.75 * config.swing_lift
+        _, _, Ej[other], _, reachable[other] = step_energy(
+            stance_s[other], stance_z[other], front_s[other], front_z[other], summit_z, sub,
+            speeds[other[0]], config)
+    w = config.weights
+    En = walking_energy(length, speeds[:, None])
+    Ev = vertical_energy(rise, w.down_ratio)
+    E = total_energy(En, Ev, Ej, w)
     reason = support[:, st.step_front].copy()
     reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)
     reason |= np.where(reachable, 0, int(Reason.KNEE_REACH))
@@ -520,5 +542,5 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             rounds[ag, which[rest]] = swing.rounds
             swing_ok[ag, which[rest]] = swing.ok
     return StepTables(st, lo, delta, neutral, neutral_energy_per_metre(legs, speeds, config),
-                      node_s, node_z, front_s - stance_s, rise, En, Ev, Ej, E, reason,
+                      node_s, node_z, length, rise, En, Ev, Ej, E, reason,
                       swing_ok, controls, rounds, config)
