@@ -407,6 +407,7 @@ class CrowdSimulation:
         vel = np.where(moving[..., None], (st.pos1[agent] - st.pos0[agent])
                        / np.where(span > 0, span, 1.0)[..., None], 0.0)
         return Neighbours(valid=valid, now=now[nb_safe], end=st.pos1[agent], velocity=vel,
+                          heading=st.heading[agent],
                           radius=self.radius[agent])
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
@@ -446,7 +447,8 @@ class CrowdSimulation:
         nbs = self._neighbours(idx, t)
         choice = choose_steps(pos, st.stance[idx], st.heading[idx], self.radius[idx], route_dir,
                               target, self.nominal_step[idx], nbs, self.clearance,
-                              prm.steering, speed=self.pop.free_speed[idx])
+                              prm.steering, speed=self.pop.free_speed[idx],
+                              stuck=st.stuck[idx])
         self.wall_steering += _time.perf_counter() - w0
 
         move = choice.move.copy()
@@ -570,6 +572,16 @@ class CrowdSimulation:
                 level = apart[even]
                 st.stance[level] = st.trail[level] = here[even]
                 st.stance_z[level] = st.trail_z[level] = z[1, even]
+                # where the feet cannot come together (the body over an edge), a walker
+                # held up for a while shifts its weight to the other foot, so that its
+                # next step may start from there (e.g. a step back off a curb)
+                swap = apart[~even & (st.stuck[apart] >= prm.steering.give_way_after)]
+                if swap.size:
+                    st.stance[swap], st.trail[swap] = st.trail[swap], st.stance[swap].copy()
+                    st.stance_z[swap], st.trail_z[swap] = (st.trail_z[swap],
+                                                           st.stance_z[swap].copy())
+                    st.foot[swap] = 1 - st.foot[swap]
+                    st.queue_len[swap] = 0
             dur = t + prm.wait_time - st.t0[wait]
             st.wait[wait] += dur
             st.stuck[wait] += dur

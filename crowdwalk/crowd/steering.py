@@ -62,6 +62,9 @@ class SteeringParams:
         Cost of stepping left of the route direction, ``w max(sin offset, 0)`` [m].
     wait_cost : float
         Cost of standing still for one decision [m].
+    give_way_after, give_way_weight : float
+        Standing face to face with another walker for longer than ``give_way_after`` [s]
+        adds ``give_way_weight`` [m/s] per further second to the cost of standing.
     """
 
     offsets_deg: tuple[float, ...] = (0.0, -12.0, 12.0, -25.0, 25.0, -40.0, 40.0, -60.0,
@@ -77,6 +80,8 @@ class SteeringParams:
     turn_weight: float = 0.05
     right_bias: float = 0.06
     wait_cost: float = 0.05
+    give_way_after: float = 1.0
+    give_way_weight: float = 0.3
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,8 @@ class Neighbours:
         Neighbour velocity [m/s].
     radius : (m, K) float
         Neighbour body radius [m].
+    heading : (m, K) float, optional
+        Neighbour walking direction [rad] (tells who faces whom when both stand).
     """
 
     valid: np.ndarray
@@ -101,6 +108,7 @@ class Neighbours:
     end: np.ndarray
     velocity: np.ndarray
     radius: np.ndarray
+    heading: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -142,6 +150,7 @@ def choose_steps(
     clearance: ClearanceField,
     params: SteeringParams = SteeringParams(),
     speed: np.ndarray | None = None,
+    stuck: np.ndarray | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -169,6 +178,8 @@ def choose_steps(
     params : SteeringParams
     speed : (m,), optional
         Walking speeds for the anticipation term [m/s] (default 2 nominal steps per s).
+    stuck : (m,), optional
+        How long each agent has been standing [s] (for giving way).
 
     Returns
     -------
@@ -258,6 +269,17 @@ def choose_steps(
     utility[:, :-1] += params.right_bias * np.maximum(np.sin(offsets), 0.0)
     utility[:, :-1] = np.where(np.abs(offsets) <= np.pi / 2 + 1e-9, utility[:, :-1], np.inf)
     utility[:, -1] += params.wait_cost
+    if stuck is not None and neighbours.heading is not None and neighbours.valid.shape[1]:
+        # two walkers standing face to face: after ``give_way_after`` seconds waiting gets
+        # dearer every second, so a side step (which gains nothing towards the target)
+        # wins and the pair passes; both have the same right-hand bias
+        own_dir = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
+        facing = ((np.cos(neighbours.heading - heading[:, None]) < -0.5)
+                  & (np.linalg.norm(neighbours.now - position[:, None, :], axis=-1) < 1.2)
+                  & (np.einsum("mkj,mj->mk", neighbours.now - position[:, None, :], own_dir) > 0)
+                  & neighbours.valid).any(axis=1)
+        late = np.maximum(np.asarray(stuck, dtype=float) - params.give_way_after, 0.0)
+        utility[:, -1] += np.where(facing, params.give_way_weight * late, 0.0)
     utility[:, :-1] = np.where(free >= params.min_step, utility[:, :-1], np.inf)
 
     n_dir = offsets.shape[1]
