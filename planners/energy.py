@@ -40,7 +40,8 @@ def walking_energy(step_length: np.ndarray, speed: np.ndarray | float) -> np.nda
     return (32.0 + 0.005 * v**2) * np.asarray(step_length, dtype=float) / v
 
 
-def vertical_energy(rise: np.ndarray, down_ratio: float = 1.0 / 3.0) -> np.ndarray:
+def vertical_energy(rise: np.ndarray, down_ratio: float = 1.0 / 3.0,
+                    model: str = "paper") -> np.ndarray:
     """Eq. (2): Ev = -0.18 h^2 + 7.14 h for a rise h [cm], in Eq. (2)'s unit.
 
     Parameters
@@ -49,10 +50,14 @@ def vertical_energy(rise: np.ndarray, down_ratio: float = 1.0 / 3.0) -> np.ndarr
         Signed height change of the step [m]; positive is up.
     down_ratio : float
         Cost of stepping down relative to stepping up the same height [-].
+    model : {"paper", "linear"}
+        ``"paper"``: Eq. 2 as printed (continued above its peak, see Notes);
+        ``"linear"``: 7.14 h, the quadratic's slope at h = 0 for every height (work
+        against gravity at a constant muscle efficiency).
 
     Notes
     -----
-    Deviation: the printed quadratic peaks at h = 19.8 cm and falls after it. Above the
+    ``"paper"``: the printed quadratic peaks at h = 19.8 cm and falls after it. Above the
     peak we continue linearly with the quadratic's slope at h = 0 (7.14 per cm), so Ev
     is continuous and increasing, and a rise beyond a normal stair riser (a climb with a
     deeply bent loaded knee) costs more per cm than a normal riser: one 34 cm step costs
@@ -61,8 +66,11 @@ def vertical_energy(rise: np.ndarray, down_ratio: float = 1.0 / 3.0) -> np.ndarr
     """
     h = 100.0 * np.asarray(rise, dtype=float)
     a = np.abs(h)
-    up = np.where(a <= EV_PEAK_CM, -0.18 * a**2 + 7.14 * a,
-                  _EV_PEAK + 7.14 * (a - EV_PEAK_CM))
+    if model == "linear":
+        up = 7.14 * a
+    else:
+        up = np.where(a <= EV_PEAK_CM, -0.18 * a**2 + 7.14 * a,
+                      _EV_PEAK + 7.14 * (a - EV_PEAK_CM))
     return np.where(h >= 0, up, down_ratio * up)
 
 
@@ -113,7 +121,7 @@ def step_energy(stance_s, stance_z, front_s, front_z, summit_z, leg, speed,
                     leg.ankle_height + 0.75 * config.swing_lift)
     w = config.weights
     En = walking_energy(front_s - stance_s, speed)
-    Ev = vertical_energy(front_z - stance_z, w.down_ratio)
+    Ev = vertical_energy(front_z - stance_z, w.down_ratio, w.vertical)
     Ej = joint_energy(kf.thigh_rotation, kf.calf_rotation, w)
     return En, Ev, Ej, total_energy(En, Ev, Ej, w), kf.reachable
 

@@ -461,7 +461,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             speeds[other[0]], config)
     w = config.weights
     En = walking_energy(length, speeds[:, None])
-    Ev = vertical_energy(rise, w.down_ratio)
+    Ev = vertical_energy(rise, w.down_ratio, w.vertical)
     E = total_energy(En, Ev, Ej, w)
     reason = support[:, st.step_front].copy()
     reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)

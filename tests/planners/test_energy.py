@@ -55,3 +55,30 @@ def test_bad_weights_are_rejected():
         EnergyWeights(beta=-1.0)
     with pytest.raises(ValueError, match="PlannerConfig.n_steps"):
         PlannerConfig(n_steps=0)
+
+
+def test_linear_vertical_energy_is_work_at_constant_efficiency():
+    h = np.linspace(0, 0.4, 41)
+    w = EnergyWeights()
+    assert w.vertical == "linear" and w.beta == pytest.approx(0.0549)
+    # beta * Ev = g h / 0.25 [J/kg]
+    assert w.beta * vertical_energy(h, model="linear") == pytest.approx(9.81 * h / 0.25,
+                                                                        rel=2e-3)
+    paper = EnergyWeights(vertical="paper")
+    assert paper.beta == pytest.approx(0.0961)
+    # both forms cost the same for a 17 cm riser
+    assert w.beta * vertical_energy(0.17, model="linear") == pytest.approx(
+        paper.beta * vertical_energy(0.17), rel=2e-3)
+
+
+def test_uphill_steps_shorten_with_the_linear_form_and_jump_with_the_printed_one():
+    from planners import GroundProfile, plan
+
+    leg = Leg.from_body_height(1.75)
+    ramp = GroundProfile(np.array([-2.0, -1.0, 8.0]), np.array([0.0, 0.0, 0.9]))  # 10 %
+    level = plan(GroundProfile.flat(), leg, 1.34, "optimal").step_lengths.mean()
+    linear = plan(ramp, leg, 1.34, "optimal").step_lengths.mean()
+    printed = plan(ramp, leg, 1.34, "optimal",
+                   PlannerConfig(weights=EnergyWeights(vertical="paper"))).step_lengths.mean()
+    assert linear < level < printed
+    assert printed == pytest.approx(1.05 * leg.length, rel=1e-6)  # the longest grid step
