@@ -60,9 +60,9 @@ def vertical_energy(rise: np.ndarray, down_ratio: float = 1.0 / 3.0,
     ``"paper"``: the printed quadratic peaks at h = 19.8 cm and falls after it. Above the
     peak we continue linearly with the quadratic's slope at h = 0 (7.14 per cm), so Ev
     is continuous and increasing, and a rise beyond a normal stair riser (a climb with a
-    deeply bent loaded knee) costs more per cm than a normal riser: one 34 cm step costs
-    more than two 17 cm steps, so walkers take stairs one tread at a time. Stepping
-    down costs ``down_ratio`` times stepping up the same height (negative work).
+    deeply bent loaded knee) costs more per cm than a normal riser (one 34 cm step costs
+    more than two 17 cm steps). With either model, stepping down costs ``down_ratio``
+    times stepping up the same height (negative work).
     """
     h = 100.0 * np.asarray(rise, dtype=float)
     a = np.abs(h)
