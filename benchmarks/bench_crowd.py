@@ -65,7 +65,7 @@ def measure(path: Path, out: Path, seconds: float, poses: bool) -> dict:
     return {
         "sim": summary["simulated_time_s"], "wall": tm["wall_s"], "cpu": cpu,
         "setup": tm["setup_s"], "planning": tm["planning_s"], "steering": tm["steering_s"],
-        "poses": tm["poses_s"] + tm["step_commands_s"], "writing": tm["writing_s"],
+        "poses": tm["poses_s"], "writing": tm["writing_s"],
         "steps": steps,
         "runs": summary["planning"]["planner_runs"], "requests": summary["planning"]["requests"],
         "size": sum(f.stat().st_size for f in out.iterdir()) / 1e6,

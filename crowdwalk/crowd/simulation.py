@@ -93,7 +93,7 @@ class CrowdParams:
     target_distance: float = 2.0
     centre_pull: float = 0.25
     arrive_distance: float = 0.6
-    neighbours: int = 16
+    neighbours: int = 32
     neighbour_range: float = 3.0
     reroute_after: float = 8.0
     stair_rise: float = 0.05
@@ -501,6 +501,16 @@ class CrowdSimulation:
             if short.size:
                 self._shorten(idx, short, choice, sl, sh, energy, swing, move)
                 st.queue_len[idx[short]] = 0
+            # the exact sweep of the step taken (steering tested sampled lengths only)
+            go = np.flatnonzero(move)
+            if go.size and nbs.valid.shape[1]:
+                end = st.stance[idx[go]] + 0.5 * sl[go, None] * choice.direction[go]
+                gap = segment_distance(pos[go, None, :], end[:, None, :], nbs.now[go],
+                                       nbs.end[go])
+                clash = ((gap < self.radius[idx[go], None] + nbs.radius[go])
+                         & nbs.valid[go]).any(axis=1)
+                move[go[clash]] = False
+                st.queue_len[idx[go[clash]]] = 0
         # 4. commit
         self._commit(idx, te, t, move, choice.direction, sl, sh, energy, swing)
 
