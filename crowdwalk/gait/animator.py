@@ -9,16 +9,16 @@ step length and height into an elevation-angle dataset for the agent's body (§5
 Around the walker the Animator adds what a crowd needs:
 
 - **Seamless footholds.** Until toe-off (the data's stance fraction) the trailing foot
-  rolls on its ball where it stood (the §4.1 model applied to the push-off, IK on the
-  swing leg); then the data-driven swing ankle is pulled, with IK, from there to where
-  the heel strikes the commanded foothold: offsets measured once per step (walker
-  evaluated at toe-off and at the end) blended with a smoothstep. The landing foot is the
-  next stance foot, so it neither slides nor jumps.
+  rolls on the ground where it stood, from its ball (the §4.1 model) to its toe tip (IK
+  on the swing leg); then the data-driven swing ankle is pulled, with IK, from there to
+  where the heel strikes the commanded foothold: offsets measured once per step (walker
+  evaluated at toe-off and at the end) blended with a smoothstep. The landing foot is
+  the next stance foot, so it neither slides nor jumps.
 - **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
-  Bezier swing curve and the data-driven swing foot would come within 5 mm of the ground
-  somewhere along the step (stair nosings, blocks), the swing ankle follows the Bezier
-  instead (blended in and out over 10 % of the swing). Every frame, a swing foot that
-  still dips below the ground is lifted by the depth (IK again).
+  Bezier swing curve and the data-driven swing foot would come within 2 mm of the ground
+  between toe-off and landing (stair nosings, blocks), the swing ankle follows the
+  Bezier instead (blended in after toe-off, out before the landing). Every frame, a
+  swing foot that still dips below the ground is lifted by the depth (IK again).
 - **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
   the stance hip starts where the previous step left the root and rejoins the data over
   the first half of the step (sagittal two-link IK of the stance leg).
@@ -59,8 +59,8 @@ __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
 GroundHeight = Callable[[np.ndarray], np.ndarray]
 """Ground height ``z (n,)`` [m] at points ``xy (n, 2)`` [m], e.g. ``Terrain.height``."""
 
-_CLEARANCE = 0.005  # swing foot closer to the ground than this [m] → follow the Bezier
-_CHECK_TAUS = np.array([0.15, 0.3, 0.45, 0.6, 0.75, 0.9])  # swing samples for the check
+_CLEARANCE = 0.002  # swing foot closer to the ground than this [m] → follow the Bezier
+_CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off → 0.95
 _PHASE_END = 0.5 - 1e-6
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
 _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
@@ -407,21 +407,27 @@ class Animator:
         self._hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
         self._d1[a] = ankle_land - ankle1 - self._hip_drop[a]
 
-        # Swing clearance: would the corrected data-driven foot touch the ground?
+        # Swing clearance: would the corrected data-driven foot touch the ground? Only
+        # steps over uneven ground (something above the line between the footholds) are
+        # sampled, from toe-off to just before the landing.
         if cmd.swing_bezier is not None:
             has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
+            self._bezier[a[has]] = cmd.swing_bezier[has]
+            if has.any():
+                has[has] = self._bumpy(cmd.start[has], cmd.target[has])
             if has.any():
                 ab = a[has]
-                self._bezier[ab] = cmd.swing_bezier[has]
                 k = ab.size
-                idx = np.tile(ab, _CHECK_TAUS.size)
-                ph = np.repeat(0.5 * _CHECK_TAUS, k)
+                idx = np.tile(ab, _CHECK_SPAN.size)
+                t_off = np.tile(self._toe_off[ab], _CHECK_SPAN.size)
+                ph = 0.5 * (t_off + np.repeat(_CHECK_SPAN, k) * (0.95 - t_off))
                 check = self._walk(idx, ph, corrected=True)
                 pts = foot_points(self.body.take(idx), check.positions, check.rotations)
                 side = np.where(self._stance_left[idx], 1, 0)
-                feet = pts[np.arange(idx.size), side]  # (p, 3, 3) swing-foot points
-                gap = feet[:, :, 2] - self._ground_at(idx, feet)
-                clearance = gap.min(axis=1).reshape(_CHECK_TAUS.size, k).min(axis=0)
+                feet = pts[np.arange(idx.size), side]  # (p, 3, 3) heel, ball, toe tip
+                sole = np.concatenate([feet, 0.5 * (feet[:, :2] + feet[:, 1:])], axis=1)
+                gap = sole[:, :, 2] - self._ground_at(idx, sole)
+                clearance = gap.min(axis=1).reshape(_CHECK_SPAN.size, k).min(axis=0)
                 self._use_bezier[ab] = clearance < _CLEARANCE
                 self.stats["bezier_steps"] += int(self._use_bezier[ab].sum())
         self.stats["commands"] += m
@@ -540,6 +546,16 @@ class Animator:
                         np.column_stack([heel_xy, zh]) + hb[:, None] * d)  # fmt: skip
         return StanceFoot(ball, yaw, slope)
 
+    def _bumpy(self, start: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """(m,) bool: the ground between two footholds (m, 3) rises more than 1 cm above
+        the straight line joining them (a step, a block, a nosing in between)."""
+        if self.ground is None:
+            return np.abs(target[:, 2] - start[:, 2]) > 0.01
+        s = np.linspace(0.0, 1.0, 16)
+        line = start[:, None, :] + s[None, :, None] * (target - start)[:, None, :]
+        z = np.asarray(self.ground(line[..., :2].reshape(-1, 2)), dtype=float)
+        return (z.reshape(line.shape[:2]) - line[..., 2]).max(axis=1) > 0.01
+
     def _ground_at(self, a: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Ground height [m] below points (p, q, 3) of agents a (p,)."""
         p, q = points.shape[:2]
@@ -588,7 +604,7 @@ class Animator:
             t_off = self._toe_off[a]
             s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._d0[a] + s * self._d1[a]
-            ramp = _smoothstep(tau / 0.1) * _smoothstep((1.0 - tau) / 0.1)
+            ramp = _smoothstep((tau - t_off) / 0.15) * _smoothstep((1.0 - tau) / 0.15)
             blend = np.where(self._use_bezier[a], ramp, 0.0)
             target = _bezier(self._bezier[a], tau)
             pinned = self._has_trail[a] & (tau < t_off)
