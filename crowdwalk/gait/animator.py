@@ -609,12 +609,10 @@ class Animator:
             target = _bezier(self._bezier[a], tau)
             pinned = self._has_trail[a] & (tau < t_off)
             goal = np.full((a.size, 3), np.nan)
-            push = self._stance_fraction[a] - 0.5 + 0.05
-            toes = 1.0 - np.clip(phase / push, 0.0, 1.0) ** 2
-            toes[self._has_trail[a]] = 0.0  # rigid after toe-off
+            toes = np.where(self._has_trail[a], 0.0, np.nan)  # rigid after toe-off
             if pinned.any():
-                goal[pinned], flat = self._pinned_ankle(a[pinned], phase[pinned], sw[pinned])
-                toes[pinned] = flat
+                goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
+                                                                sw[pinned])  # fmt: skip
             if lift is not None:
                 offset[:, 2] += lift
                 target[:, 2] += lift
@@ -630,34 +628,37 @@ class Animator:
             body, self._stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
             self.style, self._stance_fraction[a], swing_offset=offset, swing_target=target,
             swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
-            swing_toe_flat=toes,
+            swing_toe_angle=toes,
         )  # fmt: skip
 
     def _pinned_ankle(self, a: np.ndarray, phase: np.ndarray, swing_angles: np.ndarray):
-        """Ankle (k, 3) [m] of the trailing foot in push-off, and how flat its toes lie.
+        """Ankle (k, 3) [m] and toe angle (k,) [rad] of the trailing foot in push-off.
 
-        The foot keeps the swing data's elevation and rolls on the ground where it stood:
-        at the step's start on its ball with the toes flat (the §4.1 stance model, so the
-        swap is seamless), by toe-off on its rigid toe tip (the foot model of ElevInterp's
-        step measure, so the data's leg reaches it); the pivot blends between the two.
+        The foot keeps the swing data's elevation and its toe tip stays where it stood;
+        the toes straighten from lying flat (at the step's start: the §4.1 stance model
+        rolling on the ball, so the swap is seamless) to rigid (at toe-off: the foot model
+        of ElevInterp's step measure, so the data's leg reaches it).
         """
         psi = self._heading(a, phase)
         yaw = self._trail_yaw[a]
         slope = self._trail_slope[a]
         pitch = np.arctan(np.tan(swing_angles[:, 0]) * np.cos(yaw - psi))
         body = self.body.take(a)
-        foot = StanceFoot(self._trail_ball[a], yaw, slope)
-        on_ball = _stance_foot_pose(body, foot, pitch)[1]
-        along = np.stack([np.cos(yaw) * np.cos(slope), np.sin(yaw) * np.cos(slope),
-                          np.sin(slope)], axis=1)  # fmt: skip
-        tip = self._trail_ball[a] + (body.toe_offset - body.ball_offset)[:, None] * along
-        c, s_ = np.cos(pitch), np.sin(pitch)
-        fwd = -body.toe_offset * c - body.ankle_height * s_  # tip → ankle, pitched foot
-        up = -body.toe_offset * s_ + body.ankle_height * c
-        flat = np.stack([np.cos(yaw), np.sin(yaw), np.zeros_like(yaw)], axis=1)
-        on_tip = tip + fwd[:, None] * flat + up[:, None] * np.array([0.0, 0.0, 1.0])
+        ch, sh = np.cos(yaw), np.sin(yaw)
+        flat = np.stack([ch, sh, np.zeros_like(yaw)], axis=1)
+        up = np.array([0.0, 0.0, 1.0])
+        along = flat * np.cos(slope)[:, None] + up * np.sin(slope)[:, None]
+        toe_len = body.toe_offset - body.ball_offset
+        tip = self._trail_ball[a] + toe_len[:, None] * along
         w = _smoothstep(2.0 * phase / np.maximum(self._toe_off[a], 1e-9))
-        return (1.0 - w)[:, None] * on_ball + w[:, None] * on_tip, 1.0 - w
+        toe_angle = (1.0 - w) * np.minimum(pitch - slope, 0.0)
+        toe_pitch = pitch - toe_angle
+        c, s_ = np.cos(pitch), np.sin(pitch)
+        ankle_to_ball = (flat * (body.ball_offset * c + body.ankle_height * s_)[:, None]
+                         + up * (body.ball_offset * s_ - body.ankle_height * c)[:, None])
+        ball_to_tip = toe_len[:, None] * (flat * np.cos(toe_pitch)[:, None]
+                                          + up * np.sin(toe_pitch)[:, None])  # fmt: skip
+        return tip - ball_to_tip - ankle_to_ball, toe_angle
 
     def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked):
         """Re-solve agents whose swing foot dips below the ground, ankle raised by the

@@ -403,7 +403,7 @@ def elevwalker_pose(
     swing_blend: np.ndarray | None = None,
     stance_hip_offset: np.ndarray | None = None,
     swing_goal: np.ndarray | None = None,
-    swing_toe_flat: np.ndarray | None = None,
+    swing_toe_angle: np.ndarray | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -441,9 +441,9 @@ def elevwalker_pose(
     swing_goal : (k, 3), optional
         Absolute swing-ankle goal [m] overriding the above where finite (NaN rows: none);
         the Animator pins the trailing foot with it during push-off.
-    swing_toe_flat : (k,), optional
-        How far [0, 1] the swing foot's toes bend to lie flat while it pushes off
-        (default: 1 at the swing leg's t = 0.5, fading out by toe-off).
+    swing_toe_angle : (k,), optional
+        Swing-foot toe (metatarsal) angle [rad] where finite; default: toes bent to lie
+        flat at the swing leg's t = 0.5, straightening by toe-off.
 
     Returns
     -------
@@ -573,9 +573,10 @@ def elevwalker_pose(
     pitch_sw = np.arcsin(np.clip(r_foot_sw[:, 2, 0], -1.0, 1.0))
     push = np.asarray(stance_fraction, dtype=float) - 0.5 + 0.05
     flat = 1.0 - np.clip((phase / push), 0.0, 1.0) ** 2
-    if swing_toe_flat is not None:
-        flat = np.clip(np.asarray(swing_toe_flat, dtype=float), 0.0, 1.0)
     toe_sw = flat * np.minimum(pitch_sw, 0.0)
+    if swing_toe_angle is not None:
+        given = np.asarray(swing_toe_angle, dtype=float)
+        toe_sw = np.where(np.isfinite(given), given, toe_sw)
 
     # Assemble local rotations.
     nj = len(JOINT_NAMES)

@@ -268,7 +268,7 @@ def test_same_datasets_drive_all_body_sizes_and_step_length_scales_with_leg(flat
 def test_trailing_foot_stays_on_the_ground_until_toe_off(flat_walk):
     """In double support the trailing foot rolls on the ground where it stood (ball, then
     toe tip) instead of lifting early; the contact flag says so. Where the data's hip is
-    too far for the toe-tip pivot the foot gives way slightly (measured: at most 3.5 mm
+    too far for the toe-tip pivot the foot gives way slightly (measured: at most 1.6 mm
     per 20 ms frame). An agent's first step has no trailing foot and is skipped."""
     body, frames, _ = flat_walk
     previous = None
@@ -287,5 +287,5 @@ def test_trailing_foot_stays_on_the_ground_until_toe_off(flat_walk):
                 worst_slip = max(worst_slip, float(slip[both].max()))
                 worst_height = max(worst_height, float(np.abs(tips[..., 2])[both].max()))
         previous = (tips, trailing)
-    assert worst_slip < 5e-3  # the toe tip barely slides
+    assert worst_slip < 3e-3  # the toe tip barely slides
     assert worst_height < 2e-3  # and stays on the ground
