@@ -74,7 +74,10 @@ class CrowdParams:
     neighbour_range : float
         Search radius for neighbours [m].
     reroute_after : float
-        Standing time after which an agent looks for another route [s].
+        Time without ``progress_step`` of progress along the route after which an agent
+        looks for another route [s].
+    progress_step : float
+        Progress along the route that counts as getting on [m].
     stair_rise : float
         A step with a larger height change is a stair step (Weidmann speed) [m].
     planning_horizon : int
@@ -96,6 +99,7 @@ class CrowdParams:
     neighbours: int = 32
     neighbour_range: float = 3.0
     reroute_after: float = 8.0
+    progress_step: float = 0.5
     stair_rise: float = 0.05
     planning_horizon: int = 3
     min_step_ratio: float = 0.15
@@ -134,6 +138,8 @@ class AgentState:
         self.route = np.zeros(n, dtype=np.int64)
         self.segment = np.zeros(n, dtype=np.int64)
         self.progress = np.zeros(n)  # global route arc length [m]
+        self.best_progress = np.full(n, -np.inf)  # furthest route arc length reached [m]
+        self.progress_time = np.zeros(n)  # when it last grew by ``progress_step`` [s]
         self.steps = np.zeros(n, dtype=np.int64)
         self.distance = np.zeros(n)  # walked by the body [m]
         self.energy = np.zeros(n)  # [J/kg]
@@ -379,6 +385,7 @@ class CrowdSimulation:
         st.foot[idx] = 0  # the left foot swings first; the right one stands
         st.t0[idx] = st.t1[idx] = t
         st.start_time[idx] = t
+        st.progress_time[idx] = t
         seg, s, _ = self.table.project(st.route[idx], st.segment[idx], p)
         st.segment[idx], st.progress[idx] = seg, s
         ahead = self.table.point_at(st.route[idx], s + 1.0)
@@ -418,6 +425,9 @@ class CrowdSimulation:
         # 1. route ahead and arrival
         seg, s, _ = self.table.project(st.route[idx], st.segment[idx], pos)
         st.segment[idx], st.progress[idx] = seg, s
+        gained = s >= st.best_progress[idx] + prm.progress_step
+        st.best_progress[idx[gained]] = s[gained]
+        st.progress_time[idx[gained]] = te[gained]
         end = self.table.xy[self.table.stop[st.route[idx]]]
         arrived = ((self.table.s1[st.route[idx]] - s <= prm.arrive_distance)
                    | (np.linalg.norm(end - pos, axis=1) <= prm.arrive_distance))
@@ -442,7 +452,11 @@ class CrowdSimulation:
         heading_dir = np.column_stack([np.cos(st.heading[idx]), np.sin(st.heading[idx])])
         route_dir[still] = heading_dir[still]
 
-        # 2. steering
+        # 2. steering; a walker held up for long looks backwards on every other decision
+        # (the candidate fan turned around), so that clogs can loosen
+        clogged = st.stuck[idx] >= prm.steering.clog_after
+        back = clogged & (np.round(st.stuck[idx] / prm.wait_time).astype(int) % 2 == 1)
+        route_dir = np.where(back[:, None], -route_dir, route_dir)
         w0 = _time.perf_counter()
         nbs = self._neighbours(idx, t)
         choice = choose_steps(pos, st.stance[idx], st.heading[idx], self.radius[idx], route_dir,
@@ -595,9 +609,12 @@ class CrowdSimulation:
             dur = t + prm.wait_time - st.t0[wait]
             st.wait[wait] += dur
             st.stuck[wait] += dur
-            blocked = wait[st.stuck[wait] >= prm.reroute_after]
-            if blocked.size:
-                self._reroute(blocked, t)
+
+        # blocked: no progress along the route for ``reroute_after`` seconds (side steps and
+        # steps back in a jam do not count)
+        blocked = idx[t - st.progress_time[idx] >= prm.reroute_after]
+        if blocked.size:
+            self._reroute(blocked, t)
 
         go = np.flatnonzero(move)
         if go.size == 0:
@@ -710,7 +727,7 @@ class CrowdSimulation:
     # -- re-routing ---------------------------------------------------------------
 
     def _reroute(self, blocked: np.ndarray, t: float) -> None:
-        """Agents standing for ``reroute_after`` seconds look for a cheaper route from the
+        """Agents without progress for ``reroute_after`` seconds look for a cheaper route from the
         last route node they passed, with every corridor's cost raised by the time its
         current occupants need to get through it (queue length over a specific flow of
         1.3 persons/(s·m), Weidmann 1993; converted to metres at 1.34 m/s). The agent
@@ -737,7 +754,7 @@ class CrowdSimulation:
             return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)
 
         for i in blocked:
-            st.stuck[i] = 0.0
+            st.progress_time[i] = t  # look again only after another ``reroute_after``
             nodes, at = self._route_nodes.get(int(st.route[i]), ([], np.zeros(0)))
             if len(nodes) < 2:
                 continue
@@ -757,4 +774,5 @@ class CrowdSimulation:
             st.route[i] = rid
             st.segment[i] = self.table.start[rid]
             st.progress[i] = self.table.s0[rid]
+            st.best_progress[i] = -np.inf
             st.reroutes[i] += 1

@@ -65,6 +65,8 @@ class SteeringParams:
     give_way_after, give_way_weight : float
         Standing face to face with another walker for longer than ``give_way_after`` [s]
         adds ``give_way_weight`` [m/s] per further second to the cost of standing.
+    clog_after : float
+        Standing longer than this [s] (whoever the neighbours are) adds the same cost.
     """
 
     offsets_deg: tuple[float, ...] = (0.0, -12.0, 12.0, -25.0, 25.0, -40.0, 40.0, -60.0,
@@ -82,6 +84,7 @@ class SteeringParams:
     wait_cost: float = 0.05
     give_way_after: float = 1.0
     give_way_weight: float = 0.3
+    clog_after: float = 2.5
 
 
 @dataclass(frozen=True)
@@ -280,6 +283,12 @@ def choose_steps(
                   & neighbours.valid).any(axis=1)
         late = np.maximum(np.asarray(stuck, dtype=float) - params.give_way_after, 0.0)
         utility[:, -1] += np.where(facing, params.give_way_weight * late, 0.0)
+    if stuck is not None:
+        # a clog (walkers wedged against each other and the walls in front of a narrow
+        # opening): after ``clog_after`` seconds every standing walker grows impatient,
+        # so that steps aside or back (see CrowdSimulation: the backward fan) loosen it
+        late = np.maximum(np.asarray(stuck, dtype=float) - params.clog_after, 0.0)
+        utility[:, -1] += params.give_way_weight * late
     utility[:, :-1] = np.where(free >= params.min_step, utility[:, :-1], np.inf)
 
     n_dir = offsets.shape[1]
