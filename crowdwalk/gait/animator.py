@@ -599,6 +599,19 @@ class Animator:
         tau = 2.0 * phase
         spin = self._spin[a] * _smoothstep(tau / 0.3)
         foot = StanceFoot(self._ball[a], self._yaw[a] + spin, self._slope[a])
+        spinning = np.flatnonzero(spin != 0.0)
+        if spinning.size and self.ground is not None:
+            # The heel swings round the ball; where it would enter higher ground (a curb)
+            # the foot spins on its raised forefoot instead.
+            sub = StanceFoot(foot.ball[spinning], foot.yaw[spinning], foot.slope[spinning])
+            b = body.take(spinning)
+            heel = sub.heel(b)
+            g = np.asarray(self.ground(heel[:, :2]), dtype=float)
+            hb = b.heel_offset + b.ball_offset
+            p_max = np.arcsin(np.clip((sub.ball[:, 2] - g) / hb, -1.0, 1.0))
+            slope = foot.slope.copy()
+            slope[spinning] = np.minimum(sub.slope, p_max)
+            foot = StanceFoot(foot.ball, foot.yaw, slope)
         offset = target = blend = goal = toes = None
         if corrected:
             t_off = self._toe_off[a]
