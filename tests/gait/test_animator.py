@@ -206,3 +206,28 @@ def test_a_foot_placed_against_a_curb_rests_on_its_edge_instead_of_entering_it()
         stance = foot_points(body, frame.positions, rot)[0, 1]  # right foot
         worst = max(worst, float((curb(stance[:, :2]) - stance[:, 2]).max()))
     assert worst < 5e-3
+
+
+def test_sharp_corners_spin_on_the_stance_foot_without_fallbacks():
+    """A 90° corner (MetaGait §6.1 toe-out and spin turns, plus the Animator's own spin
+    when a command twists the stance hip by more than 30°)."""
+    from crowdwalk.gait.metagait import animate_paths
+
+    body = Body.from_heights([1.6, 1.9])
+    paths = np.tile(np.array([[[0.0, 0.0], [2.0, 0.0], [2.0, 6.0]]]), (2, 1, 1))
+    animator = Animator(body, ground=_flat)
+    seen = {"spin": 0.0, "toe_out": 0.0}
+
+    def watch(frame, animator):
+        seen["spin"] = max(seen["spin"], float(np.abs(animator._spin).max()))
+        seen["toe_out"] = max(seen["toe_out"], float(np.abs(animator._toe_out).max()))
+
+    frames = animate_paths(body, paths, _flat, 1.2, 5.0, 25.0, animator=animator,
+                           on_frame=watch)  # fmt: skip
+    assert not any(f.fallback.any() for f in frames)
+    assert seen["spin"] > np.radians(5.0) or seen["toe_out"] > np.radians(15.0)
+    end = frames[-1].root_position
+    assert np.all(np.abs(end[:, 0] - 2.0) < 0.3) and np.all(end[:, 1] > 2.0)  # turned north
+    yaw = [np.arctan2(*quaternion_to_matrix(f.root_quaternion)[:, :, 0][:, 1::-1].T)
+           for f in frames]  # fmt: skip
+    assert np.abs(np.diff(np.unwrap(np.array(yaw), axis=0), axis=0)).max() < np.radians(15)
