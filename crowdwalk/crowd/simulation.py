@@ -7,9 +7,19 @@ of a wait) falls in the tick decides, all of them in one batch:
    ``target_distance`` ahead (:mod:`crowdwalk.crowd.navigation`);
 2. local steering with the neighbours from one ``cKDTree`` query per tick
    (:mod:`crowdwalk.crowd.steering`): a step direction and the longest clear step;
-3. ground profile along the local path and ``planners.plan_batch`` for all deciding
-   agents at once (:mod:`crowdwalk.crowd.footsteps`); the first planned step is taken;
-4. the step's duration from the speed model (below) and the MetaGait/Animator command.
+3. footsteps: the next step of the agent's current plan while it keeps its line (Chen &
+   Li plan n steps and walk them), else the ground profile along the local path and
+   ``planners.plan_batch`` for all re-planning agents at once
+   (:mod:`crowdwalk.crowd.footsteps`); a step longer than the clear length is shortened
+   where the whole foot lands on even ground, else the agent waits; the exact sweep of
+   the step is verified against the neighbours, then against the other agents deciding
+   in the same tick;
+4. the step's duration from the speed model (below) and the MetaGait/Animator command
+   (batched per output frame).
+
+Waiting agents bring their feet together (on even ground) or shift their weight to the
+other foot; standing face to face, or wedged in a clog, they grow impatient and step
+aside or back; without progress along the route for a while they re-route.
 
 Between heel strikes the body (the midpoint between the two feet's centre-line
 footholds) moves linearly from its position at the heel strike to the midpoint after the
