@@ -71,35 +71,6 @@ def _head_joint(names: list[str], first_positions: np.ndarray | None) -> int:
     return len(names) - 1
 
 
-def _ground_colormap():
-    """Greens to browns of matplotlib's ``gist_earth`` (no deep-water blue for low ground)."""
-    from matplotlib import colormaps
-    from matplotlib.colors import ListedColormap
-
-    return ListedColormap(colormaps["gist_earth"](np.linspace(0.35, 0.8, 256)), "ground")
-
-
-def _planner_table(footsteps) -> tuple[list[str], tuple[np.ndarray, np.ndarray]]:
-    """Planner names (sorted, as the footprint codes) and, per agent, its planner code:
-    (sorted agent ids (m,), codes (m,) float), from the agents' foot placements."""
-    names = sorted(set(footsteps.planner.tolist()))
-    agents, first = np.unique(footsteps.agent, return_index=True)
-    lookup = {name: float(i) for i, name in enumerate(names)}
-    codes = np.array([lookup[p] for p in footsteps.planner[first]], dtype=float)
-    return names, (agents, codes)
-
-
-def _head_joint(names: list[str], first_positions: np.ndarray | None) -> int:
-    """The joint that carries the head: by H-Anim name, else the highest joint."""
-    lower = [n.lower() for n in names]
-    for name in _HEAD_NAMES:
-        if name in lower:
-            return lower.index(name)
-    if first_positions is not None and len(first_positions):
-        return int(np.argmax(first_positions[:, :, 2].mean(axis=0)))
-    return len(names) - 1
-
-
 class SceneView:
     """A scene's actors on one plotter, animated by :meth:`set_time`.
 
