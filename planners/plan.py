@@ -240,6 +240,12 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
     st = tables.struct
     A = speeds.size
     rows = np.arange(A)[:, None]
+    failed = np.flatnonzero(~result.found)
+    messages = {}
+    for a, (message, prefix, depth) in zip(failed.tolist(),
+                                           _diagnose(tables, failed, origins), strict=True):
+        messages[a] = message, depth
+        result.configs[a] = prefix  # a failed agent keeps its longest legal prefix
     steps, swings = st.indices(result.configs)
     front = st.step_front[steps]
     foot_nodes = np.concatenate([np.ones((A, 1), dtype=np.int64), front], axis=1)
@@ -255,24 +261,6 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
     efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
     used_rounds = np.clip(tables.rounds, 0, None).sum(axis=1)
     curves = (tables.rounds >= 0).sum(axis=1)
-    failed = np.flatnonzero(~result.found)
-    messages = {}
-    for a, (message, prefix, depth) in zip(failed.tolist(),
-                                           _diagnose(tables, failed, origins), strict=True):
-        messages[a] = message, depth
-        result.configs[a] = prefix
-    if failed.size:  # re-gather the longest legal prefixes of failed agents
-        steps, swings = st.indices(result.configs)
-        front = st.step_front[steps]
-        foot_nodes = np.concatenate([np.ones((A, 1), dtype=np.int64), front], axis=1)
-        foot_s = tables.node_s[rows, foot_nodes] + origins[:, None]
-        foot_z = tables.node_z[rows, foot_nodes]
-        lengths = tables.length[rows, steps]
-        rises = tables.rise[rows, steps]
-        controls = tables.controls[rows, swings].copy()
-        controls[..., 0] += origins[:, None, None]
-        durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
-        terms = {name: getattr(tables, name)[rows, steps] for name in ("En", "Ev", "Ej", "E")}
     plans = []
     for a in range(A):
         stats = {
