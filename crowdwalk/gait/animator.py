@@ -50,6 +50,7 @@ from crowdwalk.gait.elevwalker import (
     StanceFoot,
     WarmStart,
     _stance_foot_pose,
+    _wrap,
     elevwalker_pose,
     foot_points,
 )
@@ -73,10 +74,6 @@ _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + s
 def _smoothstep(x: np.ndarray) -> np.ndarray:
     x = np.clip(x, 0.0, 1.0)
     return x * x * (3.0 - 2.0 * x)
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:

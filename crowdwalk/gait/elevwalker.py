@@ -210,6 +210,7 @@ def _direction(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
+    """Angles [rad] wrapped to [-π, π)."""
     return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 

@@ -30,6 +30,7 @@ import numpy as np
 
 from crowdwalk.errors import invalid
 from crowdwalk.gait.animator import StepCommand
+from crowdwalk.gait.elevwalker import _wrap
 
 __all__ = [
     "MetaGaitConfig",
@@ -143,10 +144,6 @@ def path_point(path: np.ndarray, s: np.ndarray) -> np.ndarray:
 def _direction(path: np.ndarray, s_from: np.ndarray, s_to: np.ndarray) -> np.ndarray:
     d = path_point(path, s_to) - path_point(path, s_from)
     return np.arctan2(d[:, 1], d[:, 0])
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
 class MetaGait:
