@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args
 
 import numpy as np
 import yaml
@@ -46,7 +46,8 @@ __all__ = [
     "PLANNER_NAMES",
 ]
 
-PLANNER_NAMES = ("best_first", "fixed", "optimal")
+PlannerName = Literal["best_first", "fixed", "optimal"]
+PLANNER_NAMES: tuple[str, ...] = get_args(PlannerName)
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
@@ -375,7 +376,7 @@ class Group(_Model):
     destinations: list[str] = Field(min_length=1, description="route nodes, visited in order")
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
-    planner: Literal["best_first", "fixed", "optimal"] = "best_first"
+    planner: PlannerName = "best_first"
 
     @field_validator("body_height")
     @classmethod
