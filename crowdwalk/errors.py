@@ -7,7 +7,10 @@ the field, the constraint and the value. Valid input that has no solution raises
 
 from __future__ import annotations
 
-__all__ = ["InputError", "InfeasibleError", "invalid"]
+import errno
+from pathlib import Path
+
+__all__ = ["InputError", "InfeasibleError", "invalid", "existing_file"]
 
 
 class InputError(ValueError):
@@ -21,3 +24,11 @@ class InfeasibleError(RuntimeError):
 def invalid(owner: str, field: str, constraint: str, value: object) -> InputError:
     """Build an :class:`InputError` in the project's message format."""
     return InputError(f"{owner}.{field} must be {constraint}; got {value!r}.")
+
+
+def existing_file(path) -> Path:
+    """``path`` as a :class:`~pathlib.Path`; ``FileNotFoundError`` naming it if absent."""
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(errno.ENOENT, "No such file", str(path))
+    return path

@@ -28,14 +28,13 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from pathlib import Path
 
 import networkx as nx
 import numpy as np
 import shapely
 from shapely.geometry import LineString, Point, Polygon
 
-from crowdwalk.errors import InfeasibleError, invalid
+from crowdwalk.errors import InfeasibleError, existing_file, invalid
 
 __all__ = ["Place", "Corridor", "RouteCosts", "RouteGraph", "spawn_points"]
 
@@ -268,9 +267,7 @@ class RouteGraph:
         """Read places and corridors from GraphML written by :meth:`to_graphml` (or any
         GraphML with node attributes ``x``, ``y`` [m] and edge attribute ``width`` [m];
         optional ``area`` and ``geometry`` as WKT, ``oneway`` bool)."""
-        path = Path(path)
-        if not path.exists():
-            raise FileNotFoundError(2, "No such file", str(path))
+        path = existing_file(path)
         try:
             g = nx.read_graphml(path)
         except Exception as exc:  # noqa: BLE001 - parser errors of several kinds

@@ -29,7 +29,7 @@ from pydantic import (
     model_validator,
 )
 
-from crowdwalk.errors import InputError
+from crowdwalk.errors import InputError, existing_file
 
 __all__ = [
     "Scenario",
@@ -192,9 +192,7 @@ class RoughSpec(_Model):
         if self.heights is not None:
             h = np.asarray(self.heights, dtype=float)
         else:
-            path = Path(self.heights_file)
-            if not path.exists():
-                raise FileNotFoundError(2, "No such file", str(path))
+            path = existing_file(self.heights_file)
             h = np.load(path) if path.suffix == ".npy" else np.loadtxt(path, delimiter=",")
         return Heightfield(self.origin, self.cell, self.base + h)
 
@@ -284,10 +282,7 @@ class RoutesSpec(_Model):
             return [n.name for n in self.nodes]
         import networkx as nx
 
-        path = Path(self.graphml)
-        if not path.exists():
-            raise FileNotFoundError(2, "No such file", str(path))
-        return [str(n) for n in nx.read_graphml(path).nodes]
+        return [str(n) for n in nx.read_graphml(existing_file(self.graphml)).nodes]
 
     def build(self, terrain=None):
         """The :class:`crowdwalk.routes.RouteGraph` this section describes."""
@@ -646,9 +641,7 @@ def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scen
 
 def load_scenario(path) -> Scenario:
     """Read and validate a scenario YAML file (paths inside are relative to it)."""
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(2, "No such file", str(path))
+    path = existing_file(path)
     return parse_scenario(path.read_text(encoding="utf-8"), str(path), path.parent)
 
 

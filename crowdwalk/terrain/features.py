@@ -11,14 +11,13 @@ from __future__ import annotations
 import enum
 import functools
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import shapely
 import trimesh
 from shapely.geometry import Polygon
 
-from crowdwalk.errors import invalid
+from crowdwalk.errors import existing_file, invalid
 
 __all__ = [
     "TerrainKind",
@@ -459,9 +458,7 @@ class MeshFeature:
         """Read OBJ/STL/PLY/GLB/... from ``path``; turn a ``up="y"`` file (the glTF
         convention, most DCC exports) to z up, scale, rotate about z by ``rotate_z``
         [rad], then translate (3,) [m]."""
-        path = Path(path)
-        if not path.exists():
-            raise FileNotFoundError(2, "No such file", str(path))
+        path = existing_file(path)
         if not scale > 0:
             raise invalid("MeshFeature", "scale", "> 0", scale)
         if up not in ("y", "z"):
