@@ -494,13 +494,6 @@ class Animator:
                 phase)  # fmt: skip
 
     # -- internals --------------------------------------------------------------------
-    def _foot_pitch(self, a: np.ndarray, phase: np.ndarray, stance: bool) -> np.ndarray:
-        """Pitch of the stance foot [rad] (exact for the sagittal elevation, §4.1)."""
-        t = phase if stance else phase + 0.5
-        phi = sample(self._angles[a], t)[:, 0]
-        psi = self._heading(a, phase)
-        return np.arctan(np.tan(phi) * np.cos(self._yaw[a] + self._spin[a] - psi))
-
     def _heading(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         s = _smoothstep(2.0 * phase)
         return self._psi0[a] + _wrap(self._psi1[a] - self._psi0[a]) * s
