@@ -24,6 +24,7 @@ import json
 import sqlite3
 import zlib
 from collections.abc import Sequence
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -325,6 +326,19 @@ def _jsonable(value):
 # --- reading --------------------------------------------------------------------------
 
 
+def _connect(path: Path) -> sqlite3.Connection:
+    """Open a run database for reading. Read-only when possible; a database left with a
+    hot rollback journal by a killed writer is opened normally so that SQLite rolls the
+    unfinished transaction back (the state of the last flush)."""
+    con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+    try:
+        con.execute("SELECT count(*) FROM sqlite_master").fetchone()
+        return con
+    except sqlite3.OperationalError:
+        con.close()
+        return sqlite3.connect(path)
+
+
 @dataclass(frozen=True)
 class Trajectories:
     """All trajectory rows, struct-of-arrays (n rows): frame (n,), id (n,), x, y, z (n,)
@@ -375,7 +389,7 @@ class Poses:
     ``times`` (F,) [s], ``body_heights`` {id: m}; :meth:`frame` and :meth:`agent_track`."""
 
     def __init__(self, path: Path) -> None:
-        self._con = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        self._con = _connect(path)
         rows = self._con.execute("SELECT name, parent FROM skeleton ORDER BY joint").fetchall()
         self.names = [r[0] for r in rows]
         self.parents = np.array([r[1] for r in rows], dtype=int)
@@ -457,12 +471,12 @@ class Run:
     @property
     def fps(self) -> float:
         """Output frame rate [1/s]."""
-        with sqlite3.connect(f"file:{self.trajectory_path}?mode=ro", uri=True) as con:
+        with closing(_connect(self.trajectory_path)) as con:
             return float(con.execute("SELECT value FROM metadata WHERE key='fps'").fetchone()[0])
 
     def trajectories(self) -> Trajectories:
         """All trajectory rows with heights, sorted by frame and id."""
-        with sqlite3.connect(f"file:{self.trajectory_path}?mode=ro", uri=True) as con:
+        with closing(_connect(self.trajectory_path)) as con:
             fps = float(con.execute("SELECT value FROM metadata WHERE key='fps'").fetchone()[0])
             rows = con.execute(
                 "SELECT t.frame, t.id, t.pos_x, t.pos_y, COALESCE(z.pos_z, 0.0), t.ori_x, t.ori_y "
@@ -479,7 +493,7 @@ class Run:
         """The walkable area (shapely geometry) [m]."""
         import shapely
 
-        with sqlite3.connect(f"file:{self.trajectory_path}?mode=ro", uri=True) as con:
+        with closing(_connect(self.trajectory_path)) as con:
             wkts = [r[0] for r in con.execute("SELECT wkt FROM geometry")]
         return shapely.union_all([shapely.from_wkt(w) for w in wkts])
 

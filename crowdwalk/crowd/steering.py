@@ -52,6 +52,8 @@ class SteeringParams:
         Least distance of a new foothold's centre line from the walls [m].
     personal_weight, personal_range : float
         Neighbour repulsion ``w exp(-(d - r_i - r_j) / range)`` [m], [m].
+    soft_neighbours : int
+        Nearest neighbours in the repulsion and anticipation terms [-].
     anticipation : float
         How far ahead oncoming neighbours are extrapolated [s].
     wall_weight, wall_range : float
@@ -76,6 +78,7 @@ class SteeringParams:
     foot_clearance: float = 0.05
     personal_weight: float = 0.35
     personal_range: float = 0.2
+    soft_neighbours: int = 12
     anticipation: float = 1.5
     wall_weight: float = 0.3
     wall_range: float = 0.1
@@ -246,25 +249,31 @@ def choose_steps(
     cand = np.concatenate([end, position[:, None, :]], axis=1)  # (m, C+1, 2); last = wait
     utility = np.linalg.norm(target[:, None, :] - cand, axis=-1)
     if neighbours.valid.shape[1]:
-        rr = radius[:, None, None] + neighbours.radius[:, None, :]
-        gap_end = np.linalg.norm(cand[:, :, None, :] - neighbours.end[:, None, :, :], axis=-1)
+        # soft terms from the nearest ``soft_neighbours`` (sorted nearest first); the hard
+        # limit above used every neighbour a step could reach
+        ks = params.soft_neighbours
+        nb = Neighbours(*(None if a is None else a[:, :ks] for a in (
+            neighbours.valid, neighbours.now, neighbours.end, neighbours.velocity,
+            neighbours.radius, neighbours.heading)))
+        rr = radius[:, None, None] + nb.radius[:, None, :]
+        gap_end = np.linalg.norm(cand[:, :, None, :] - nb.end[:, None, :, :], axis=-1)
         rep = params.personal_weight * np.exp(-(gap_end - rr) / params.personal_range)
         # anticipation: the closest approach within ``anticipation`` seconds if this agent
         # walked the candidate direction at its speed and the oncoming neighbour kept its
         # velocity (the time-to-collision idea of Karamouzas et al. 2014)
         own_dir = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-        oncoming = np.einsum("mkj,mj->mk", neighbours.velocity, own_dir) < -0.1
+        oncoming = np.einsum("mkj,mj->mk", nb.velocity, own_dir) < -0.1
         mine = speed[:, None, None] * dirs  # (m, C, 2) candidate velocities
         mine = np.concatenate([mine, np.zeros((m, 1, 2))], axis=1)  # waiting stands
-        rel_p = (neighbours.now - position[:, None, :])[:, None, :, :]  # (m, 1, K, 2)
-        rel_v = neighbours.velocity[:, None, :, :] - mine[:, :, None, :]  # (m, C+1, K, 2)
+        rel_p = (nb.now - position[:, None, :])[:, None, :, :]  # (m, 1, K, 2)
+        rel_v = nb.velocity[:, None, :, :] - mine[:, :, None, :]  # (m, C+1, K, 2)
         vv = np.einsum("mckj,mckj->mck", rel_v, rel_v)
         t_close = np.clip(-np.einsum("mckj,mckj->mck", np.broadcast_to(rel_p, rel_v.shape),
                                      rel_v) / np.maximum(vv, 1e-12), 0.0, params.anticipation)
         closest = np.linalg.norm(rel_p + t_close[..., None] * rel_v, axis=-1)
         rep = rep + (oncoming[:, None, :] * params.personal_weight
                      * np.exp(-(closest - rr) / params.personal_range))
-        utility += np.where(neighbours.valid[:, None, :], rep, 0.0).sum(axis=-1)
+        utility += np.where(nb.valid[:, None, :], rep, 0.0).sum(axis=-1)
     wall_gap = clearance(cand) - radius[:, None]  # soft term uses the full radius
     utility += params.wall_weight * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)
     cand_heading = np.arctan2(dirs[..., 1], dirs[..., 0])  # (m, C)
