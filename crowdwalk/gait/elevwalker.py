@@ -480,7 +480,7 @@ def elevwalker_pose(
         phi_st = phi_st.copy()
         offset = np.asarray(stance_hip_offset, dtype=float)
         phi_st[:, 1], phi_st[:, 2] = _shifted_stance_leg(
-            body, ankle, phi_st[:, 1], phi_st[:, 2], heading, offset
+            body, phi_st[:, 1], phi_st[:, 2], heading, offset
         )
         w_stance = w_stance - _dot(offset, normal)
 
@@ -522,10 +522,10 @@ def elevwalker_pose(
         r_shank = r_thigh @ rotation_y(knee_angle)
         knee = hip_sw[rows] - body.thigh[rows, None] * r_thigh[:, :, 2]
         ank = knee - body.shank[rows, None] * r_shank[:, :, 2]
-        return r_thigh, knee_angle, ok, r_shank, knee, ank
+        return r_thigh, knee_angle, ok, r_shank, ank
 
     def swing_residual(x, rows):
-        r_thigh, _, _, _, _, ank = swing_chain(x, rows)
+        r_thigh, _, _, _, ank = swing_chain(x, rows)
         nrm, fw = normal[rows], fwd[rows]
         e = _wrap(sagittal_elevation(-r_thigh[:, :, 2], heading[rows]) - phi_sw[rows, 2])
         width = _dot(ank - hip_sw[rows], nrm) - w_swing[rows]
@@ -536,9 +536,7 @@ def elevwalker_pose(
     x_hip, ok_hip, _, jac_hip = _gauss_newton(
         swing_residual, warm.hip, style.tolerance, style.max_iterations, warm.hip_jacobian
     )
-    r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, knee_pos_sw, ankle_sw = swing_chain(
-        x_hip, all_rows
-    )
+    r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = swing_chain(x_hip, all_rows)
 
     # Optional swing-ankle target with two-link IK on the swing leg.
     if (swing_offset is not None or swing_goal is not None
@@ -558,7 +556,7 @@ def elevwalker_pose(
             pinned = np.isfinite(absolute).all(axis=1)
             goal = np.where(pinned[:, None], absolute, goal)
             use |= pinned
-        r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, knee_pos_sw, goal, r_thigh_sw)
+        r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, goal, r_thigh_sw)
         r_thigh_sw = np.where(use[:, None, None], r_thigh_ik, r_thigh_sw)
         knee_sw = np.where(use, knee_ik, knee_sw)
         r_shank_sw = r_thigh_sw @ rotation_y(knee_sw)
@@ -628,7 +626,7 @@ def elevwalker_pose(
     )
 
 
-def _shifted_stance_leg(body: Body, ankle, phi_shank, phi_thigh, heading, offset):
+def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
     in the sagittal plane: two-link IK from the ankle, knee forward."""
     ch, sh = np.cos(heading), np.sin(heading)
@@ -645,16 +643,14 @@ def _shifted_stance_leg(body: Body, ankle, phi_shank, phi_thigh, heading, offset
     return line - at_ankle, line + at_hip
 
 
-def _two_link_ik(body: Body, hip, knee, goal, r_thigh):
+def _two_link_ik(body: Body, hip, goal, r_thigh):
     """Thigh orientation and knee flexion that put the ankle at ``goal`` (k, 3) [m].
 
     The knee hinge axis (the thigh's local y) keeps its direction as far as possible: it
     is the current axis made perpendicular to the hip→goal line, and the knee bends
     forward in the plane normal to it. So the leg's toe-out is kept even when the knee
-    is nearly straight. ``knee`` (the current knee position) is not needed by this
-    construction and only kept for the signature.
+    is nearly straight.
     """
-    del knee
     l1, l2 = body.thigh, body.shank
     to_goal = goal - hip
     dist = np.linalg.norm(to_goal, axis=1)
