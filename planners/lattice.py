@@ -345,7 +345,7 @@ def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
 _NEUTRAL_CACHE: dict = {}
 
 
-def neutral_index(legs, speeds: np.ndarray, config: PlannerConfig) -> np.ndarray:
+def neutral_index(legs, config: PlannerConfig) -> np.ndarray:
     """Grid index (A,) of the most efficient step on flat ground (s_init of §4.2).
 
     With En proportional to the step length at a given speed (Eq. 1 with cadence
@@ -418,7 +418,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     A = len(profiles)
     st = structure(config.n_steps, config.intervals + 1)
     lo, delta = grid(legs, config)
-    neutral = neutral_index(legs, speeds, config)
+    neutral = neutral_index(legs, config)
     if trailing is None:
         trailing = -(lo + delta * neutral)
     reach = config.n_steps * (lo + delta * config.intervals)
