@@ -4,6 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+from shapely.geometry import Polygon
+
+from crowdwalk.errors import invalid
 from crowdwalk.routes import RouteGraph
 from crowdwalk.scenario import Scenario
 from crowdwalk.terrain import Terrain
@@ -29,12 +33,8 @@ def build_world(scenario: Scenario) -> World:
     """
     terrain = scenario.terrain.build()
     routes = scenario.routes.build(terrain)
-    from crowdwalk.errors import invalid
-
     for i, g in enumerate(scenario.groups):
         if not isinstance(g.spawn, str):
-            from shapely.geometry import Polygon
-
             poly = Polygon(g.spawn)
             if not poly.is_valid or poly.area <= 0:
                 raise invalid(f"Scenario.groups[{i}]", "spawn",
@@ -48,11 +48,6 @@ def build_world(scenario: Scenario) -> World:
 
 def _check_reachable(scenario: Scenario, routes: RouteGraph) -> None:
     """Every group can walk from its spawn through its destinations, in order."""
-    import numpy as np
-    from shapely.geometry import Polygon
-
-    from crowdwalk.errors import invalid
-
     names = list(routes.graph.nodes)
     xy = np.array([routes.node_xy(n) for n in names]).reshape(-1, 2)
     for i, g in enumerate(scenario.groups):
