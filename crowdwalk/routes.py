@@ -341,6 +341,13 @@ class RouteGraph:
         shapely.prepare(geom)
         return geom
 
+    @functools.cached_property
+    def _walkable_tolerant(self):
+        """:attr:`walkable_area` grown by 1 nm, prepared (covers a path along its edge)."""
+        geom = self.walkable_area.buffer(1e-9)
+        shapely.prepare(geom)
+        return geom
+
     # -- routing --
 
     def _check_node(self, name, field_name: str) -> None:
@@ -408,7 +415,7 @@ class RouteGraph:
         if len(raw) < 3:
             return raw
         r_max = width / 2 if radius is None else float(radius)
-        area = self.walkable_area.buffer(1e-9)
+        area = self._walkable_tolerant
         out = [raw[0]]
         t = np.linspace(0.0, 1.0, 9)[:, None]
         for i in range(1, len(raw) - 1):
