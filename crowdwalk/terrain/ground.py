@@ -21,6 +21,7 @@ from crowdwalk.terrain.features import (
 
 __all__ = ["Terrain"]
 
+
 class _EdgeIndex:
     """Break segments (k, 2, 2) [m] with a bounding-box test, or an STRtree when many."""
 
@@ -145,9 +146,9 @@ class Terrain:
         object.__setattr__(self, "features", tuple(self.features))
         if not np.isfinite(self.base):
             raise invalid("Terrain", "base", "a finite height [m]", self.base)
-        area = shapely.box(*ext)
+        inside = self.area.buffer(1e-9)
         for i, f in enumerate(self.features):
-            if not area.buffer(1e-9).covers(shapely.box(*f.bbox)):
+            if not inside.covers(shapely.box(*f.bbox)):
                 raise invalid("Terrain", f"features[{i}]", f"inside the extent {ext} [m]",
                               tuple(round(v, 3) for v in f.bbox))
 
