@@ -26,6 +26,7 @@ def height_steps(terrain, min_height: float = 0.0) -> np.ndarray:
     height varies (a slope's side) is kept only where it exceeds ``min_height``."""
     a, b, zla, zlb, zra, zrb, _, _ = _edge_steps(terrain, terrain._arrangement)
     ja, jb = zla - zra, zlb - zrb  # the step height varies linearly along an edge
+    d = b - a
     out = []
     for sign in (1.0, -1.0):  # where sign·j(t) > min_height, t ∈ [0, 1]
         fa, fb = sign * ja - min_height, sign * jb - min_height
@@ -34,7 +35,6 @@ def height_steps(terrain, min_height: float = 0.0) -> np.ndarray:
         lo = np.where(fa > 0, 0.0, np.clip(t0, 0, 1))
         hi = np.where(fb > 0, 1.0, np.clip(t0, 0, 1))
         keep = ((fa > 0) | (fb > 0)) & (hi - lo > 1e-12)
-        d = b - a
         out.append(np.stack([a + lo[:, None] * d, a + hi[:, None] * d], axis=1)[keep])
     return np.concatenate(out)
 
@@ -119,12 +119,11 @@ def _edge_steps(terrain, noded):
     a, b = segs[:, 0], segs[:, 1]
     d = b - a
     length = np.linalg.norm(d, axis=1)
-    segs, a, b, d, length = (x[length > 1e-6] for x in (segs, a, b, d, length))
+    a, b, d, length = (x[length > 1e-6] for x in (a, b, d, length))
     nrm = np.column_stack([-d[:, 1], d[:, 0]]) / length[:, None]
     mid = 0.5 * (a + b)
     left, right = mid + 1e-6 * nrm, mid - 1e-6 * nrm
-    x0, y0, x1, y1 = terrain.extent
-    inside = ((_in_bbox(left, (x0, y0, x1, y1))) & (_in_bbox(right, (x0, y0, x1, y1))))
+    inside = _in_bbox(left, terrain.extent) & _in_bbox(right, terrain.extent)
     a, b, left, right = a[inside], b[inside], left[inside], right[inside]
     ol, orr = terrain.owner(left), terrain.owner(right)
     ab = np.concatenate([a, b])
