@@ -244,9 +244,9 @@ class StairFlight:
 
     def __post_init__(self):
         object.__setattr__(self, "start", tuple(float(v) for v in self.start))
-        for name, lo in (("width", 0), ("going", 0), ("rise", 0)):
+        for name in ("width", "going", "rise"):
             v = getattr(self, name)
-            if not (np.isfinite(v) and v > lo):
+            if not (np.isfinite(v) and v > 0):
                 raise invalid("StairFlight", name, "> 0 [m]", v)
         if int(self.steps) != self.steps or self.steps < 1:
             raise invalid("StairFlight", "steps", "an integer ≥ 1", self.steps)
