@@ -141,6 +141,14 @@ def path_point(path: np.ndarray, s: np.ndarray) -> np.ndarray:
     return path[rows, seg] + u[:, None] * (path[rows, seg + 1] - path[rows, seg])
 
 
+def _landing_xy(stance: np.ndarray, heading: np.ndarray, length: np.ndarray,
+                lateral: np.ndarray) -> np.ndarray:
+    """Points (n, 2) [m] ``length`` [m] ahead along ``heading`` [rad] and ``lateral`` [m]
+    to the left of the stance footholds (n, 3) [m]."""
+    c, s = np.cos(heading), np.sin(heading)
+    return stance[:, :2] + np.stack([c * length - s * lateral, s * length + c * lateral], axis=1)
+
+
 def _direction(path: np.ndarray, s_from: np.ndarray, s_to: np.ndarray) -> np.ndarray:
     d = path_point(path, s_to) - path_point(path, s_from)
     return np.arctan2(d[:, 1], d[:, 0])
@@ -216,15 +224,14 @@ class MetaGait:
         Eq. 11 the preferred length, ``SL = min(SL_pref, SL_max)``; repeated
         ``terrain_iterations`` times. Returns SL (n,), SH (n,), target (n, 3).
         """
-        c, s = np.cos(heading), np.sin(heading)
         sl = np.minimum(level_step, max_step)
         for _ in range(self.config.terrain_iterations):
-            xy = stance[:, :2] + np.stack([c * sl - s * lateral, s * sl + c * lateral], axis=1)
+            xy = _landing_xy(stance, heading, sl, lateral)
             h = np.asarray(ground(xy), dtype=float) - stance[:, 2]
             rho = np.arctan2(h, sl)
             sl = np.maximum(np.minimum(preferred_step_for_slope(level_step, rho), max_step),
                             self.config.min_step_length)  # fmt: skip
-        xy = stance[:, :2] + np.stack([c * sl - s * lateral, s * sl + c * lateral], axis=1)
+        xy = _landing_xy(stance, heading, sl, lateral)
         z = np.asarray(ground(xy), dtype=float)
         return sl, z - stance[:, 2], np.column_stack([xy, z])
 
@@ -283,8 +290,7 @@ class MetaGait:
             pl = np.asarray(planned_length, dtype=float)
             ph = np.asarray(planned_height, dtype=float)
             use = np.isfinite(pl) & np.isfinite(ph) & (pl > 0)
-            c, s = np.cos(psi), np.sin(psi)
-            xy = stance[:, :2] + np.stack([c * pl - s * lateral, s * pl + c * lateral], axis=1)
+            xy = _landing_xy(stance, psi, pl, lateral)
             planned_target = np.column_stack([xy, stance[:, 2] + ph])
             sl = np.where(use, pl, sl)
             sh = np.where(use, ph, sh)
