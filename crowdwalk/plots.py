@@ -7,6 +7,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
+from crowdwalk.errors import invalid
+
 
 def _pyplot():
     """Import matplotlib's pyplot with a file-only backend."""
@@ -31,10 +35,6 @@ def _save(fig, out: str | Path) -> Path:
 
 def _as_curves(values, n_points: int, owner: str, field: str):
     """(c, m) float array from one curve (m,) or several (c, m)."""
-    import numpy as np
-
-    from crowdwalk.errors import invalid
-
     arr = np.atleast_2d(np.asarray(values, dtype=float))
     if arr.ndim != 2 or arr.shape[1] != n_points:
         raise invalid(owner, field, f"shaped ({n_points},) or (curves, {n_points})", arr.shape)
@@ -51,8 +51,6 @@ def best_step_length(step_length, efficiency):
     efficiency : (m,) or (c, m) float
         Chen & Li's efficiency ``step length / E`` (Eq. 5) of each step length.
     """
-    import numpy as np
-
     x = np.asarray(step_length, dtype=float)
     eff = _as_curves(efficiency, len(x), "plot_efficiency_curve", "efficiency")
     return x[np.nanargmax(eff, axis=1)]
@@ -89,10 +87,6 @@ def plot_efficiency_curve(
     -------
     pathlib.Path
     """
-    import numpy as np
-
-    from crowdwalk.errors import invalid
-
     x = np.asarray(step_length, dtype=float)
     eff = _as_curves(efficiency, len(x), "plot_efficiency_curve", "efficiency")
     if labels is not None and len(labels) != len(eff):
@@ -135,10 +129,6 @@ def plot_planner_comparison(metrics, out, *, units=None, title="Planned against 
     -------
     pathlib.Path
     """
-    import numpy as np
-
-    from crowdwalk.errors import invalid
-
     if not metrics:
         raise invalid("plot_planner_comparison", "metrics", "a non-empty mapping", metrics)
     units = units or {}
@@ -188,10 +178,6 @@ def plot_gait_curves(stride, generated, measured, out, *, measured_stride=None,
     -------
     pathlib.Path
     """
-    import numpy as np
-
-    from crowdwalk.errors import invalid
-
     t = np.asarray(stride, dtype=float)
     tm = t if measured_stride is None else np.asarray(measured_stride, dtype=float)
     if not generated:
@@ -242,10 +228,7 @@ def plot_footstep_map(x, y, values, out, *, walkable_area=None, label="step ener
     -------
     pathlib.Path
     """
-    import numpy as np
     import shapely
-
-    from crowdwalk.errors import invalid
 
     x, y, values = (np.asarray(a, dtype=float) for a in (x, y, values))
     if not (x.shape == y.shape == values.shape) or x.ndim != 1:
@@ -280,8 +263,6 @@ def plot_elevation_datasets(datasets, out, *, title="Sagittal elevation angles")
     out : str or Path
         PNG file to write.
     """
-    import numpy as np
-
     plt = _pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     for ax, k, name in zip(axes.flat, range(4), ("foot", "shank", "thigh", "pelvis"),
@@ -315,8 +296,6 @@ def plot_elevinterp_region(interp, leg, out, *, requests=None, title=None):
     out : str or Path
         PNG file to write.
     """
-    import numpy as np
-
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 5))
     region = interp.legal_region(leg)
@@ -365,8 +344,6 @@ def plot_gait_validation(generated, reference, metrics, out,
     -------
     pathlib.Path
     """
-    import numpy as np
-
     plt = _pyplot()
     joints = ("Hip", "Knee", "Ankle")
     fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.2))
@@ -413,8 +390,6 @@ def plot_plan(profile, plans, out, *, labels=None, title: str | None = None):
     -------
     pathlib.Path
     """
-    import numpy as np
-
     from planners import Plan
     from planners.swing import bezier_points
 
@@ -477,10 +452,6 @@ def plot_by_terrain(values, out, *, ylabel: str, title: str):
     -------
     pathlib.Path
     """
-    import numpy as np
-
-    from crowdwalk.errors import invalid
-
     if not values:
         raise invalid("plot_by_terrain", "values", "a non-empty mapping", values)
     planners = list(values)
