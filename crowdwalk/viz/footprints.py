@@ -3,7 +3,7 @@
 The outlines are built with numpy (one small polygon per placement, turned to the
 walking direction), sorted by time, so the footprints placed in a time window are a
 contiguous run of triangles: moving the time slider only re-slices the cell array.
-Point scalars ``energy`` [J], ``planner`` (category code) and ``agent`` colour them.
+Point scalars ``energy`` [J/kg], ``planner`` (category code) and ``agent`` colour them.
 """
 
 from __future__ import annotations
@@ -97,7 +97,7 @@ class Footsteps:
     position : (n, 3) float
         Foothold (ground point below the ankle), world frame [m].
     energy : (n,) float
-        Energy of the step that ends here [J].
+        Energy of the step that ends here [J/kg] (Eq. 4).
     planner : (n,) str
         Planner that chose the foothold.
     heading : (n,) float, optional
