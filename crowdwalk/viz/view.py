@@ -352,7 +352,7 @@ class SceneView:
             return run
 
         def cycle_color():
-            self.set_color(COLOR_FIELDS[(COLOR_FIELDS.index(self.color) + 1) % 3])
+            self.set_color(COLOR_FIELDS[(COLOR_FIELDS.index(self.color) + 1) % len(COLOR_FIELDS)])
 
         def toggle_follow():
             if self.follow is not None:
@@ -394,7 +394,7 @@ class SceneView:
         t0, t1 = self.scene.time_range
         if t1 > t0:
             self._slider = self.plotter.add_slider_widget(
-                lambda value: self.set_time(value), rng=[t0, t1], value=self.playback.time,
+                self.set_time, rng=[t0, t1], value=self.playback.time,
                 title="time [s]", pointa=(0.3, 0.93), pointb=(0.7, 0.93), style="modern",
                 interaction_event="always", fmt="%.1f",
             )
