@@ -46,7 +46,8 @@ class Scene:
     terrain : crowdwalk.terrain.Terrain, optional
         Ground (``mesh()``, ``height(xy)``).
     routes : crowdwalk.routes.RouteGraph, optional
-        Route graph (``graph`` with node attribute ``pos`` [m]) and walkable area.
+        Route graph (``graph`` with node attributes ``x``, ``y`` or ``pos`` [m]) and
+        walkable area.
     walkable_area : shapely geometry, optional
         Overrides ``routes.walkable_area`` [m].
     poses : PoseSource, optional
