@@ -114,17 +114,8 @@ class GroundProfile:
 
     @cached_property
     def _range_max_table(self) -> np.ndarray:
-        """Sparse table (levels, m): max of vertex heights over runs of 2**k vertices."""
-        m = self.z.size
-        levels = max(1, int(np.floor(np.log2(m))) + 1)
-        table = np.full((levels, m), -np.inf)
-        table[0] = self.z
-        width = 1
-        for k in range(1, levels):
-            table[k, : m - 2 * width + 1] = np.maximum(
-                table[k - 1, : m - 2 * width + 1], table[k - 1, width: m - width + 1])
-            width *= 2
-        return table
+        """:func:`_range_max_table` of the vertex heights."""
+        return _range_max_table(self.z)
 
     def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Highest ground [m] over the closed intervals ``[a, b]`` [m] (same shapes).
@@ -165,6 +156,22 @@ class GroundProfile:
                 f"z=[{self.z.min():g}, {self.z.max():g}] m)")
 
 
+def _range_max_table(values: np.ndarray) -> np.ndarray:
+    """Sparse table (levels, n) for range-maximum queries: row k holds the maximum of
+    ``values`` (n,) over the 2**k entries from each index (fewer at the end)."""
+    n = values.size
+    levels = int(np.floor(np.log2(n))) + 1
+    table = np.empty((levels, n))
+    table[0] = values
+    width = 1
+    for k in range(1, levels):
+        table[k, : n - 2 * width + 1] = np.maximum(
+            table[k - 1, : n - 2 * width + 1], table[k - 1, width: n - width + 1])
+        table[k, n - 2 * width + 1:] = table[k - 1, n - 2 * width + 1:]
+        width *= 2
+    return table
+
+
 def _as_vector(values, field: str) -> np.ndarray:
     try:
         arr = np.array(values, dtype=float).reshape(-1) if np.ndim(values) <= 1 else None
@@ -200,16 +207,7 @@ class HeightRaster:
         c = heights.size
         cells = np.clip(((vertex_s - self.start) / self.cell).astype(np.intp), 0, c - 1)
         self._vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
-        levels = int(np.floor(np.log2(c))) + 1
-        table = np.empty((levels, c))
-        table[0] = heights
-        width = 1
-        for k in range(1, levels):
-            table[k, : c - 2 * width + 1] = np.maximum(
-                table[k - 1, : c - 2 * width + 1], table[k - 1, width: c - width + 1])
-            table[k, c - 2 * width + 1:] = table[k - 1, c - 2 * width + 1:]
-            width *= 2
-        self._table = table
+        self._table = _range_max_table(heights)
         self._log2 = np.zeros(c + 1, dtype=np.intp)
         self._log2[2:] = np.floor(np.log2(np.arange(2, c + 1))).astype(np.intp)
 
