@@ -499,9 +499,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         behind = (-trailing - lo) / delta
         on_grid = ((np.abs(behind - np.round(behind)) < 1e-9) & (behind > -0.5)
                    & (behind < config.intervals + 0.5))
-        first = (stride < 0) & on_grid[agent_of]
-        stride[first] = (np.round(behind[agent_of[first]]).astype(np.int64)
-                         + st.node_m[f_node[first]])
+        depth_one = (stride < 0) & on_grid[agent_of]
+        stride[depth_one] = (np.round(behind[agent_of[depth_one]]).astype(np.int64)
+                             + st.node_m[f_node[depth_one]])
         heel = legs_col.heel_offset[agent_of, 0]
         toe = legs_col.toe_offset[agent_of, 0]
         vertices = (np.searchsorted(profile.s, end + toe, side="left")
