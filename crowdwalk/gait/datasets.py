@@ -30,7 +30,7 @@ import json
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -49,9 +49,9 @@ __all__ = [
 ANGLE_NAMES: tuple[str, ...] = ("foot", "shank", "thigh", "pelvis")
 """Column order of :attr:`ElevationDataset.angles`."""
 
-DATASET_KINDS: tuple[str, ...] = ("level", "stairs_up", "stairs_down")
-
 DatasetKind = Literal["level", "stairs_up", "stairs_down"]
+
+DATASET_KINDS: tuple[str, ...] = get_args(DatasetKind)
 
 
 @dataclass(frozen=True, eq=False)
