@@ -49,6 +49,7 @@ from crowdwalk.gait.elevwalker import (
     GaitStyle,
     StanceFoot,
     WarmStart,
+    _direction,
     _stance_foot_pose,
     _wrap,
     elevwalker_pose,
@@ -288,9 +289,8 @@ class Animator:
         stance_left = ~swing_left
         side_sw = np.where(swing_left, 1.0, -1.0)
 
-        # Where the swing foot lifts off and the root is: the previous step at its end.
+        # Where the root and the landed foot are: the previous step at its end.
         had = ~first
-        liftoff = np.zeros((a.size, 3))
         root_end = np.zeros((a.size, 3))
         landed_heel = np.zeros((a.size, 3))
         landed_yaw = np.zeros(a.size)
@@ -300,7 +300,6 @@ class Animator:
             k = ah.size
             end = self._walk(ah, np.full(k, _PHASE_END), corrected=True)
             old_st = np.where(self._stance_left[ah], 0, 1)
-            liftoff[had] = end.positions[np.arange(k), LEG_JOINTS[old_st, 2]]
             root_end[had] = end.root_position
             feet = foot_points(self.body.take(ah), end.positions, end.rotations)
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
@@ -326,9 +325,8 @@ class Animator:
 
         # The step ElevInterp must produce is the one between the footholds the feet
         # really use: the stance foot where it landed, the commanded target.
-        d = np.stack([np.cos(stance.yaw) * np.cos(stance.slope),
-                      np.sin(stance.yaw) * np.cos(stance.slope), np.sin(stance.slope)], axis=1)
-        stance_foothold = stance.ball - body.ball_offset[:, None] * d  # fmt: skip
+        d = _direction(stance.yaw, stance.slope)
+        stance_foothold = stance.ball - body.ball_offset[:, None] * d
         rel = cmd.target - stance_foothold
         length = rel[:, 0] * np.cos(cmd.heading) + rel[:, 1] * np.sin(cmd.heading)
         length = np.maximum(length, _MIN_STEP)
@@ -394,7 +392,6 @@ class Animator:
         pin = self._pinned_ankle(a, toe_off_phase, sample(data.angles, toe_off_phase + 0.5))[0]
         self._d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
         self._has_trail[a] = had
-        del liftoff
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
