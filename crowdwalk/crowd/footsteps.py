@@ -4,11 +4,13 @@ batched ``planners.plan_batch`` calls, plan caching.
 Chen & Li (§4.2) plan the next n steps and walk them. In a crowd the simulation walks the
 planned steps while the agent keeps its line, and re-plans at a heel strike when steering
 turns it (receding horizon). The planner is the cost centre, so identical planning
-problems are answered from a cache. The key is the planner, the leg, the speed, the
-trailing foot (5 cm classes), the speed (5 cm/s classes) and the ground profile *relative
-to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged): a reused plan's
-footholds lie within 0.5 mm of where the planner would put them on that ground. On level
-ground every step of an agent is the same problem, so an agent plans there a few times.
+problems are answered from a cache. The key is the planner, the leg (2 cm body-height
+classes), the speed (5 cm/s classes), the trailing foot (1 mm; left out on level ground,
+where it only shapes a swing curve that has nothing to clear) and the ground profile
+*relative to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged): a
+reused plan's footholds lie within 0.5 mm of where the planner would put them on that
+ground. On level ground every step of an agent is the same problem, so an agent plans
+there a few times.
 """
 
 from __future__ import annotations
@@ -107,11 +109,14 @@ class FootstepPlanner:
         Planner configuration (None: the planners' defaults).
     horizon : int
         Steps kept per plan (the planner's ``n_steps``).
+    clearance : crowdwalk.crowd.clearance.ClearanceField, optional
+        Walkable area; local paths end where they leave it.
     """
 
     def __init__(self, terrain, legs, lookahead: float = 3.0, config=None,
-                 horizon: int = 3) -> None:
+                 horizon: int = 3, clearance=None) -> None:
         self.terrain = terrain
+        self.clearance = clearance
         self.legs = list(legs)
         self.lookahead = float(lookahead)
         self.config = config
@@ -119,6 +124,7 @@ class FootstepPlanner:
         self._cache: dict[bytes, tuple] = {}
         self.calls = 0
         self.hits = 0
+        self.retries = 0
 
     def plan(
         self,
@@ -160,14 +166,25 @@ class FootstepPlanner:
         cached = np.zeros(m, bool)
         if trailing is None:
             trailing = np.full(m, -0.6)
-        # the trailing foot only shapes the first swing curve (the Animator lifts the foot
-        # where it really is): 5 cm classes
-        trailing = np.clip(np.round(np.asarray(trailing, float) / 0.05) * 0.05, -2.9, -0.02)
+        # where the trailing foot is shapes the first swing curve, which must clear the
+        # ground: planned at 1 mm (in the key only off level ground, see below)
+        trailing = np.clip(np.round(np.asarray(trailing, float), 3), -2.9, -0.01)
         # speed classes of 5 cm/s for the planner (the walker keeps its own speed)
         speed = np.round(np.asarray(speed, float) / 0.05) * 0.05
         keys: list[bytes] = []
         profiles = []
-        lines = np.stack([stance - _BEHIND * direction, stance + self.lookahead * direction],
+        ahead = np.full(m, self.lookahead)
+        if self.clearance is not None:
+            # the local path ends where it leaves the walkable area: the walker turns
+            # before a wall, so the ground beyond (a drop, a wall top) is not its plan's;
+            # past the end the profile continues level (planners.GroundProfile)
+            probe = np.arange(0.1, self.lookahead + 1e-9, 0.1)  # (P,)
+            pts = stance[:, None, :] + probe[None, :, None] * direction[:, None, :]
+            outside = self.clearance(pts) < 0.0  # (m, P)
+            first = np.where(outside.any(axis=1), np.argmax(outside, axis=1), probe.size)
+            ahead = np.maximum(np.where(first < probe.size, probe[np.minimum(
+                first, probe.size - 1)] - 0.1, self.lookahead), 0.3)
+        lines = np.stack([stance - _BEHIND * direction, stance + ahead[:, None] * direction],
                          axis=1)  # (m, 2, 2): one straight local path per agent
         if hasattr(self.terrain, "profiles"):
             arrays = self.terrain.profiles(lines)  # one batched terrain pass
@@ -202,14 +219,26 @@ class FootstepPlanner:
                 for i in idx:
                     unique.setdefault(keys[i], i)
                 first = list(unique.values())
-                plans = plan_batch(
-                    [GroundProfile(*profiles[i]) for i in first],
-                    [self.legs[leg[i]] for i in first],
-                    [float(speed[i]) for i in first],
-                    planner=name,
-                    config=self.config,
-                    trailing=[float(trailing[i]) for i in first],
-                )
+                grounds = [GroundProfile(*profiles[i]) for i in first]
+                legs = [self.legs[leg[i]] for i in first]
+                speeds = [float(speed[i]) for i in first]
+                behind = [float(trailing[i]) for i in first]
+                plans = plan_batch(grounds, legs, speeds, planner=name, config=self.config,
+                                   trailing=behind)
+                # a long stride's first swing curve (the trailing foot more than half a leg
+                # behind) can fail the planner's clearance test even on near-level
+                # ground; such steps are planned again from half a leg behind (the
+                # Animator swings the real foot from where it is)
+                retry = [k for k, p in enumerate(plans)
+                         if not p.ok and behind[k] < -0.5 * legs[k].length]
+                if retry:
+                    self.retries += len(retry)
+                    again = plan_batch([grounds[k] for k in retry], [legs[k] for k in retry],
+                                       [speeds[k] for k in retry], planner=name,
+                                       config=self.config,
+                                       trailing=[-0.5 * legs[k].length for k in retry])
+                    for k, p in zip(retry, again, strict=True):
+                        plans[k] = p
                 for i, plan in zip(first, plans, strict=True):
                     self._cache[keys[i]] = _steps_of(plan, H)
         planned_now = set(todo)

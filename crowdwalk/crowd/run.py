@@ -285,6 +285,7 @@ def summarise(sim: CrowdSimulation, scenario, timing: dict, *, max_overlap: floa
         "poses": poses,
         "planning": {"requests": sim.footsteps.calls, "cache_hits": sim.footsteps.hits,
                      "planner_runs": sim.footsteps.calls - sim.footsteps.hits,
+                     "retries_half_leg_trailing": sim.footsteps.retries,
                      "failures": int(st.plan_failures.sum()),
                      "shortened_steps": int(st.shortened.sum()),
                      "reroutes": int(st.reroutes.sum())},

@@ -237,7 +237,8 @@ class CrowdSimulation:
             planner_config = PlannerConfig(n_steps=params.planning_horizon,
                                            min_step_ratio=params.min_step_ratio)
         self.footsteps = FootstepPlanner(self.terrain, self.legs, config=planner_config,
-                                         horizon=planner_config.n_steps)
+                                         horizon=planner_config.n_steps,
+                                         clearance=self.clearance)
         self.state = AgentState(n, planner_config.n_steps)
         self.table = RouteTable()
         self._route_nodes: dict[int, list[str]] = {}
