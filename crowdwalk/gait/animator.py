@@ -528,7 +528,7 @@ class Animator:
         front = np.maximum(rel.max(axis=1), 0.0)
         heel_drop = (zh < z_front - 0.01) & (front < slope)
         slope = np.where(heel_drop, front, slope)
-        d = np.column_stack([along * np.cos(slope)[:, None], np.sin(slope)])
+        d = _direction(yaw, slope)
         ball = np.where(heel_drop[:, None], np.column_stack([ball_xy, zb]),
                         np.column_stack([heel_xy, zh]) + hb[:, None] * d)  # fmt: skip
         return StanceFoot(ball, yaw, slope)
@@ -647,7 +647,7 @@ class Animator:
         ch, sh = np.cos(yaw), np.sin(yaw)
         flat = np.stack([ch, sh, np.zeros_like(yaw)], axis=1)
         up = np.array([0.0, 0.0, 1.0])
-        along = flat * np.cos(slope)[:, None] + up * np.sin(slope)[:, None]
+        along = _direction(yaw, slope)
         toe_len = body.toe_offset - body.ball_offset
         tip = self._trail_ball[a] + toe_len[:, None] * along
         w = _smoothstep(2.0 * phase / np.maximum(self._toe_off[a], 1e-9))
