@@ -29,7 +29,8 @@ def phase_fractions(rise: np.ndarray, leg_length) -> np.ndarray:
     """
     x = 0.30 * np.abs(np.asarray(rise, dtype=float)) / np.asarray(leg_length, dtype=float)
     x = np.minimum(x, 0.30)  # keep T1 >= 14 %
-    return np.stack([0.44 - x, 0.28 + 0.5 * x, 0.28 + 0.5 * x], axis=-1)
+    t1, t2, t3 = FLAT_FRACTIONS
+    return np.stack([t1 - x, t2 + 0.5 * x, t3 + 0.5 * x], axis=-1)
 
 
 def phase_durations(step_length, speed, rise, leg_length) -> np.ndarray:
