@@ -180,7 +180,6 @@ class SceneView:
         self._root = int(np.flatnonzero(np.asarray(poses.parents) < 0)[0])
         self._timeline = PoseTimeline(poses, interpolate=self.scene.interpolate)
         self._show_time(float(poses.times[0]))
-        self._figures_actor = None
         self._add_figures_actor()
 
     def _add_figures_actor(self) -> None:
@@ -196,7 +195,7 @@ class SceneView:
                           nan_color=FIGURE_COLOR)
         else:
             kwargs.update(color=FIGURE_COLOR, scalars=None)
-        self._figures_actor = self.plotter.add_mesh(self.figures.mesh, **kwargs)
+        self.plotter.add_mesh(self.figures.mesh, **kwargs)
 
     def _figure_values(self, ids: np.ndarray) -> np.ndarray | None:
         """Per-agent colour values (k,) for the current colour mode (None: one colour)."""
