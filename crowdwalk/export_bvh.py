@@ -104,7 +104,8 @@ def write_bvh(
 def frames_to_bvh(
     frames: Sequence, agent: int, body_height: float, out: str | Path, scale: float = 100.0
 ) -> Path:
-    """Write one agent's poses from a sequence of ``PoseFrame`` (uniform time steps)."""
+    """Write one agent's poses from a sequence of ``PoseFrame`` (uniform time steps) for a
+    body ``body_height`` [m]; ``scale`` BVH units per metre."""
     rows = []
     for frame in frames:
         hit = np.flatnonzero(np.asarray(frame.agents) == agent)
@@ -119,7 +120,8 @@ def frames_to_bvh(
 
 
 def export_bvh(run_dir: str | Path, agent: int, out: str | Path, scale: float = 100.0) -> Path:
-    """Write the BVH file of one agent of a run folder (its ``poses.sqlite``).
+    """Write the BVH file of one agent of a run folder (its ``poses.sqlite``); ``scale``
+    BVH units per metre.
 
     Raises
     ------

@@ -299,6 +299,8 @@ class StairFlight:
         return np.zeros((len(xy), 2))
 
     def breaks(self, overshoot: float = 0.0):
+        """Footprint sides and inner risers (m, 2, 2) [m]; risers reach ``overshoot`` [m]
+        beyond the sides."""
         p, d, lat = self._axes
         u = np.arange(1, self.steps)[:, None] * self.going
         half = self.width / 2 + overshoot

@@ -167,8 +167,9 @@ class Scene:
         return SceneView(self, plotter)
 
     def show(self, time: float | None = None, size: tuple[int, int] = (1280, 800)) -> None:
-        """Open an interactive window (needs a display). Keys: space play/pause,
-        Right/Left one frame, Up/Down speed, c colour, f follow on/off."""
+        """Open an interactive window of ``size`` [px] at ``time`` [s] (default: the start;
+        needs a display). Keys: space play/pause, Right/Left one frame, Up/Down speed,
+        c colour, f follow on/off."""
         plotter = pv.Plotter(off_screen=False, window_size=size, title=f"crowdwalk — {self.title}")
         view = self.attach(plotter)
         view.set_time(self.time_range[0] if time is None else time)
@@ -199,7 +200,8 @@ class Scene:
     def render_png(
         self, out: str | Path, time: float | None = None, size: tuple[int, int] = (1280, 800)
     ) -> Path:
-        """Render one instant off-screen to a PNG file (see :meth:`image`); returns its path."""
+        """Render ``time`` [s] off-screen at ``size`` [px] to a PNG file (see :meth:`image`);
+        returns its path."""
         import imageio.v3 as iio
 
         out = Path(out)
