@@ -198,8 +198,8 @@ def dataset_step(angles: ElevationDataset | np.ndarray, leg: LegLike) -> np.ndar
     """
     curves = angles.angles if isinstance(angles, ElevationDataset) else np.asarray(angles)
     if curves.ndim == 3:
-        half = np.full(curves.shape[0], 0.5)
-        return step_of(sample(curves, half), sample(curves, half * 0.0), leg)
+        n = curves.shape[0]
+        return step_of(sample(curves, np.full(n, 0.5)), sample(curves, np.zeros(n)), leg)
     return step_of(sample(curves, 0.5), sample(curves, 0.0), leg)
 
 
@@ -290,6 +290,11 @@ class StepDatasets:
     double_support: np.ndarray
 
 
+def _key_rows(curves: np.ndarray) -> np.ndarray:
+    """Angles (n, 2, 4) [rad] of curves (n, N, 4) at t = 0.5 (stance) and t = 0 (swing)."""
+    return np.stack([sample(curves, np.full(len(curves), 0.5)), curves[:, 0]], axis=1)
+
+
 def _leg_of(props: np.ndarray) -> SagittalLeg:
     """SagittalLeg from an (..., 5) array of dimensions in LEG_FIELDS order."""
     ball = props[..., 4]
@@ -331,8 +336,7 @@ class _ShapeSpace:
         self.phases = np.empty((self.capacity, 2))
         self.phases[:n] = phases
         self.keys = np.empty((self.capacity, 2, 4))  # rows at t = 0.5 (stance) and t = 0
-        self.keys[:n, 0] = sample(curves, np.full(n, 0.5))
-        self.keys[:n, 1] = curves[:, 0]
+        self.keys[:n] = _key_rows(curves)
         self.count = n
         self.n_sources = n
         points = step_of(self.keys[:n, 0], self.keys[:n, 1], _leg_of(shape))
@@ -383,7 +387,7 @@ class _ShapeSpace:
         room = limit - (self.count - self.n_sources)
         if room <= 0 or len(curves) == 0:
             return 0
-        keys = np.stack([sample(curves, np.full(len(curves), 0.5)), curves[:, 0]], axis=1)
+        keys = _key_rows(curves)
         points = step_of(keys[:, 0], keys[:, 1], _leg_of(self.shape))
         far = self.tree.query(points)[0] > self.spacing
         grid = np.round(points / self.spacing).astype(np.int64)
