@@ -241,10 +241,7 @@ class Terrain:
         """Ground profile along ``polyline`` (k, 2) [m]: arc length s (m,) [m] from the first
         point and height z (m,) [m], piecewise linear; two rows with equal s are a vertical
         height change. Exact at every edge (floating-point precision)."""
-        p = _points(polyline, "Terrain", "polyline")
-        if len(p) < 2:
-            raise invalid("Terrain", "polyline", "at least 2 points [m]", len(p))
-        return self.profiles([p])[0]
+        return self.profiles([polyline])[0]
 
     def profiles(self, polylines) -> list[tuple[np.ndarray, np.ndarray]]:
         """:meth:`profile_arrays` for many polylines in one batched pass (one terrain query
