@@ -522,10 +522,22 @@ class CrowdSimulation:
             move[mv] = ok
             # a neighbour or wall closer than the planned step: a shorter step if the foot
             # lands on even ground, else wait
-            short = mv[ok & (sl[mv] > choice.free_length[mv] + 1e-9)]
+            free = choice.free_length
+            short = mv[ok & (sl[mv] > free[mv] + 1e-9)]
             if short.size:
-                self._shorten(idx, short, choice, sl, sh, energy, swing, move)
+                self._shorten(idx, short, free[short], choice.direction, sl, sh, energy,
+                              swing, move)
                 st.queue_len[idx[short]] = 0
+            # no legal plan from here (e.g. the stance foot just short of a riser, where
+            # no step of the planner's range lands fully on the tread): a short
+            # positioning step on even ground changes the approach, as people do
+            failed = mv[~ok]
+            for length in (0.3, 0.2):
+                if failed.size == 0:
+                    break
+                stepped = self._shorten(idx, failed, np.minimum(free[failed], length),
+                                        choice.direction, sl, sh, energy, swing, move)
+                failed = np.setdiff1d(failed, stepped)
             # the exact sweep of the step taken (steering tested sampled lengths only)
             go = np.flatnonzero(move)
             if go.size and nbs.valid.shape[1]:
@@ -539,26 +551,43 @@ class CrowdSimulation:
         # 4. commit
         self._commit(idx, te, t, move, choice.direction, sl, sh, energy, swing)
 
-    def _shorten(self, idx, short, choice, sl, sh, energy, swing, move) -> None:
-        """Replace planned steps that are longer than the free length by the free length
-        where the whole foot (heel, ankle, toe) rests on even ground; else wait."""
+    def _shorten(self, idx, rows, length, direction, sl, sh, energy, swing, move) -> np.ndarray:
+        """Take steps of ``length`` (k,) [m] instead, for the agents at ``rows`` of
+        ``idx``, where the whole foot (heel, ankle, toe) lands on even ground; the others
+        wait. The step's energy is the planners' Eq. 4 for that step. Returns the rows
+        that step."""
         st = self.state
-        a = idx[short]
-        new = choice.free_length[short]
-        d = choice.direction[short]
-        foot = np.array([self.legs[k].heel_offset for k in self.leg_index[a]])
+        a = idx[rows]
+        d = direction[rows]
+        heel = np.array([self.legs[k].heel_offset for k in self.leg_index[a]])
         toe = np.array([self.legs[k].toe_offset for k in self.leg_index[a]])
-        c = st.stance[a] + new[:, None] * d
-        pts = np.concatenate([c - foot[:, None] * d, c, c + toe[:, None] * d])
+        c = st.stance[a] + length[:, None] * d
+        pts = np.concatenate([c - heel[:, None] * d, c, c + toe[:, None] * d])
         z = self.terrain.height(pts).reshape(3, -1)
-        even = (np.ptp(z, axis=0) <= 0.02) & (new >= self.params.steering.min_step)
-        ratio = np.where(sl[short] > 0, new / np.maximum(sl[short], 1e-9), 0.0)
-        energy[short] = energy[short] * ratio
-        sl[short] = np.where(even, new, 0.0)
-        sh[short] = z[1] - st.stance_z[a]
-        swing[short] = np.nan
-        move[short] = even
+        even = (np.ptp(z, axis=0) <= 0.02) & (length >= self.params.steering.min_step)
+        sl[rows] = np.where(even, length, 0.0)
+        sh[rows] = z[1] - st.stance_z[a]
+        energy[rows] = np.where(even, self._step_energy(a, length, sh[rows]), 0.0)
+        swing[rows] = np.nan
+        move[rows] = even
         st.shortened[a[even]] += 1
+        return rows[even]
+
+    def _step_energy(self, a: np.ndarray, length: np.ndarray, rise: np.ndarray) -> np.ndarray:
+        """Chen & Li Eq. 4 energy [J/kg] of steps not planned by the planner (shortened or
+        positioning steps): the planners' energy model, one call per leg class."""
+        from planners.energy import step_energy
+
+        cfg = self.footsteps.config
+        out = np.zeros(a.size)
+        for k in np.unique(self.leg_index[a]):
+            m = self.leg_index[a] == k
+            leg = self.legs[k]
+            zero = np.zeros(int(m.sum()))
+            summit = np.maximum(zero, rise[m]) + leg.ankle_height + 0.75 * cfg.swing_lift
+            out[m] = step_energy(zero, zero, length[m], rise[m], summit, leg,
+                                 self.pop.free_speed[a[m]], cfg)[3]
+        return out
 
     def _commit(self, idx, te, t, move, direction, sl, sh, energy, swing) -> None:
         st, prm = self.state, self.params
