@@ -700,7 +700,7 @@ class CrowdSimulation:
                           np.column_stack([foothold, new_z]), L, H, swing[go], d,
                           side)
         st.stance_foot[a] = np.column_stack([foothold, new_z])
-        kind = self.terrain.kind(foothold)
+        kind, on_obstacle = self._ground_type(a, foothold, d)
         self._step_rows.append({
             "agent": a, "step": st.steps[a].copy(), "time": t0 + duration,
             "foot": np.where(foot == 0, "left", "right"),
@@ -708,11 +708,34 @@ class CrowdSimulation:
             "step_length": L, "step_height": H, "energy": energy[go],
             "planner": self.planner_of[a].astype(str),
             "group": np.asarray(self.pop.group_names, dtype=object)[self.pop.group[a]].astype(str),
-            "heading": st.heading[a].copy(), "kind": kind, "on_obstacle": (kind == 3).astype(int),
+            "heading": st.heading[a].copy(), "kind": kind, "on_obstacle": on_obstacle.astype(int),
             "duration": duration, "start_time": t0,
             "from_x": st.trail[a][:, 0], "from_y": st.trail[a][:, 1],
             "swing": swing[go],
         })
+
+    def _ground_type(self, a, foothold, d) -> tuple[np.ndarray, np.ndarray]:
+        """Terrain kind under footholds (k,) and whether each is on an obstacle: a block
+        short enough along the walking direction d (its chord through the foothold at most
+        one longest step, 1.05 leg lengths) that it could have been stepped over (Chen &
+        Li Fig. 11) — not a terrace or a sidewalk one walks along."""
+        import shapely
+
+        own = self.terrain.owner(foothold)
+        features = self.terrain.features
+        codes = np.array([int(f.kind) for f in features] + [0])
+        kind = codes[own]
+        obstacle = np.zeros(a.size, bool)
+        block = np.flatnonzero(kind == 3)
+        if block.size:
+            reach = 2.0
+            lines = shapely.linestrings(np.stack([foothold[block] - reach * d[block],
+                                                  foothold[block] + reach * d[block]], axis=1))
+            polys = np.array([features[k].footprint for k in own[block]], dtype=object)
+            chord = shapely.length(shapely.intersection(lines, polys))
+            longest = np.array([1.05 * self.legs[k].length for k in self.leg_index[a[block]]])
+            obstacle[block] = chord <= longest
+        return kind, obstacle
 
     # -- poses ---------------------------------------------------------------------
 
