@@ -18,6 +18,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help texts carry units in [brackets]; keep them literal
 )
 
 
@@ -234,9 +235,9 @@ def view(
     target: Path = typer.Argument(..., help="Run folder, or a scenario YAML (world only)."),
     follow: int | None = typer.Option(None, "--follow", help="Agent id the camera follows."),
     color: str = typer.Option("energy", "--color", help=_COLOR_HELP),
-    time: float | None = typer.Option(None, "--time", help="Start at this simulated time \\[s]."),
+    time: float | None = typer.Option(None, "--time", help="Start at this simulated time [s]."),
     trail: float | None = typer.Option(
-        None, "--trail", help="Show only footprints of the last TRAIL seconds \\[s]."
+        None, "--trail", help="Show only footprints of the last TRAIL seconds [s]."
     ),
 ) -> None:
     """Open the interactive viewer (keys: space play/pause, ←/→ one frame, ↑/↓ speed,
@@ -256,16 +257,16 @@ def view(
 def render(
     target: Path = typer.Argument(..., help="Run folder, or a scenario YAML (world only)."),
     out: Path = typer.Option(..., "--out", help="Output file: .png, .gif or .mp4."),
-    time: float | None = typer.Option(None, "--time", help="PNG: simulated time \\[s]."),
-    start: float | None = typer.Option(None, "--start", help="Movie: first time \\[s]."),
-    end: float | None = typer.Option(None, "--end", help="Movie: last time \\[s]."),
-    size: str = typer.Option("1280x800", "--size", help="Image size WIDTHxHEIGHT \\[px]."),
+    time: float | None = typer.Option(None, "--time", help="PNG: simulated time [s]."),
+    start: float | None = typer.Option(None, "--start", help="Movie: first time [s]."),
+    end: float | None = typer.Option(None, "--end", help="Movie: last time [s]."),
+    size: str = typer.Option("1280x800", "--size", help="Image size WIDTHxHEIGHT [px]."),
     follow: int | None = typer.Option(None, "--follow", help="Agent id the camera follows."),
     color: str = typer.Option("energy", "--color", help=_COLOR_HELP),
     fps: float | None = typer.Option(None, "--fps", help="Movie frame rate [1/s]."),
     speed: float = typer.Option(1.0, "--speed", help="Movie: simulated seconds per second."),
     trail: float | None = typer.Option(
-        None, "--trail", help="Show only footprints of the last TRAIL seconds \\[s]."
+        None, "--trail", help="Show only footprints of the last TRAIL seconds [s]."
     ),
 ) -> None:
     """Render a run off-screen: one instant to PNG, or a time range to GIF/MP4."""
