@@ -277,13 +277,21 @@ def solve_single_dof(
     ok : (k,) bool, False when no θ reaches φ (the closest angle is returned).
     """
     k = parent.shape[0]
-    axis = np.broadcast_to(axis, (k, 3))
-    w = np.broadcast_to(w, (k, 3))
-    qw = _dot(axis, w)
-    wc = w - axis * qw[:, None]
-    ws = np.cross(axis, w)
-    wq = axis * qw[:, None]
-    d, e, f = _mv(parent, wc), _mv(parent, ws), _mv(parent, wq)
+    axis = np.asarray(axis, dtype=float)
+    w = np.asarray(w, dtype=float)
+    if axis.ndim == 1 and w.ndim == 1:
+        # constant axis and segment: split w once, one batched product for d, e, f
+        qw = float(axis @ w)
+        basis = np.stack([w - axis * qw, np.cross(axis, w), axis * qw], axis=1)  # (3, 3)
+        d, e, f = np.moveaxis(parent @ basis, 2, 0)
+    else:
+        axis = np.broadcast_to(axis, (k, 3))
+        w = np.broadcast_to(w, (k, 3))
+        qw = _dot(axis, w)
+        wc = w - axis * qw[:, None]
+        ws = np.cross(axis, w)
+        wq = axis * qw[:, None]
+        d, e, f = _mv(parent, wc), _mv(parent, ws), _mv(parent, wq)
     ch, sh = np.cos(heading), np.sin(heading)
     cphi, sphi = np.cos(phi), np.sin(phi)
 
