@@ -310,6 +310,11 @@ def rotation_z(angle: np.ndarray) -> np.ndarray:
     return _elementary(angle, 0, 1)
 
 
+_QUAT_PICK = np.array([[0, 1, 2, 3], [1, 0, 4, 5], [2, 4, 0, 6], [3, 5, 6, 0]])
+"""Shepperd candidates: for each pivot (w, x, y, z) the indices into the seven
+distinct components (big, m21-m12, m02-m20, m10-m01, m01+m10, m02+m20, m12+m21)."""
+
+
 def matrix_to_quaternion(matrix: np.ndarray) -> np.ndarray:
     """Unit quaternions wxyz (..., 4) of rotation matrices (..., 3, 3), w ≥ 0.
 
@@ -327,18 +332,13 @@ def matrix_to_quaternion(matrix: np.ndarray) -> np.ndarray:
         axis=1,
     )
     pivot = np.argmax(squares, axis=1)
-    big = np.sqrt(np.maximum(squares[np.arange(len(m)), pivot], 1e-300))
+    rows = np.arange(len(m))
+    big = np.sqrt(np.maximum(squares[rows, pivot], 1e-300))
     f = 0.25 / big
-    candidates = np.stack(
-        [
-            np.stack([big, (m21 - m12) * f, (m02 - m20) * f, (m10 - m01) * f], axis=1),
-            np.stack([(m21 - m12) * f, big, (m01 + m10) * f, (m02 + m20) * f], axis=1),
-            np.stack([(m02 - m20) * f, (m01 + m10) * f, big, (m12 + m21) * f], axis=1),
-            np.stack([(m10 - m01) * f, (m02 + m20) * f, (m12 + m21) * f, big], axis=1),
-        ],
-        axis=1,
-    )
-    q = candidates[np.arange(len(m)), pivot]
+    # the seven distinct candidate components; _QUAT_PICK[pivot] selects a row's four
+    parts = np.stack([big, (m21 - m12) * f, (m02 - m20) * f, (m10 - m01) * f,
+                      (m01 + m10) * f, (m02 + m20) * f, (m12 + m21) * f])  # fmt: skip
+    q = parts[_QUAT_PICK[pivot], rows[:, None]]
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
     return q.reshape(shape + (4,))
