@@ -251,6 +251,29 @@ def sagittal_elevation(v: np.ndarray, heading: np.ndarray) -> np.ndarray:
     return np.arctan2(fwd, -v[:, 2])
 
 
+_DOF_BASES: dict[bytes, np.ndarray] = {}
+
+
+def _dof_basis(axis: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Columns (w − (a·w)a, a × w, (a·w)a) (3, 3) of a constant axis a and segment w."""
+    key = axis.tobytes() + w.tobytes()
+    basis = _DOF_BASES.get(key)
+    if basis is None:
+        qw = float(axis @ w)
+        basis = np.stack([w - axis * qw, np.cross(axis, w), axis * qw], axis=1)
+        basis.flags.writeable = False
+        if len(_DOF_BASES) < 64:
+            _DOF_BASES[key] = basis
+    return basis
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (k, 3) arrays (``np.cross``'s formula, less overhead)."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
 def solve_single_dof(
     parent: np.ndarray, axis: np.ndarray, w: np.ndarray, heading: np.ndarray, phi: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -280,16 +303,14 @@ def solve_single_dof(
     axis = np.asarray(axis, dtype=float)
     w = np.asarray(w, dtype=float)
     if axis.ndim == 1 and w.ndim == 1:
-        # constant axis and segment: split w once, one batched product for d, e, f
-        qw = float(axis @ w)
-        basis = np.stack([w - axis * qw, np.cross(axis, w), axis * qw], axis=1)  # (3, 3)
-        d, e, f = np.moveaxis(parent @ basis, 2, 0)
+        # constant axis and segment: split w once (cached), one batched product for d, e, f
+        d, e, f = (parent @ _dof_basis(axis, w)).transpose(2, 0, 1)
     else:
         axis = np.broadcast_to(axis, (k, 3))
         w = np.broadcast_to(w, (k, 3))
         qw = _dot(axis, w)
         wc = w - axis * qw[:, None]
-        ws = np.cross(axis, w)
+        ws = _cross(axis, w)
         wq = axis * qw[:, None]
         d, e, f = _mv(parent, wc), _mv(parent, ws), _mv(parent, wq)
     ch, sh = np.cos(heading), np.sin(heading)
