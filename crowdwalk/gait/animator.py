@@ -450,12 +450,22 @@ class Animator:
         self._jac_ankle[a] = np.where(ok[:, None, None], walked.warm.ankle_jacobian, np.nan)
         self._jac_hip[a] = np.where(ok[:, None, None], walked.warm.hip_jacobian, np.nan)
         keep = ~ok & self._has_pose[a]
-        root = np.where(keep[:, None], self._prev_root[a], walked.root_position)
-        rot = np.where(keep[:, None, None], self._prev_rot[a], walked.root_rotation)
-        local = np.where(keep[:, None, None, None], self._prev_local[a], walked.local)
-        positions = np.where(keep[:, None, None], self._prev_positions[a], walked.positions)
-        contact = np.where(keep[:, None], self._prev_contact[a], walked.contact)
-        bad = ~(np.isfinite(positions).all(axis=(1, 2)) & np.isfinite(local).all(axis=(1, 2, 3)))
+        if keep.any():
+            root = np.where(keep[:, None], self._prev_root[a], walked.root_position)
+            rot = np.where(keep[:, None, None], self._prev_rot[a], walked.root_rotation)
+            local = np.where(keep[:, None, None, None], self._prev_local[a], walked.local)
+            positions = np.where(keep[:, None, None], self._prev_positions[a],
+                                 walked.positions)  # fmt: skip
+            contact = np.where(keep[:, None], self._prev_contact[a], walked.contact)
+        else:  # the walker's own arrays (fresh per call, not kept elsewhere)
+            root, rot, local = walked.root_position, walked.root_rotation, walked.local
+            positions, contact = walked.positions, walked.contact
+        # converged rows are finite (the walker checks), kept rows were guarded before:
+        # only rows that did not converge can be non-finite
+        bad = np.zeros(a.size, bool)
+        if not ok.all():
+            bad = ~(np.isfinite(positions).all(axis=(1, 2))
+                    & np.isfinite(local).all(axis=(1, 2, 3)))  # fmt: skip
         if bad.any():  # never reached in tests; a last guard so no NaN leaves the Animator
             root[bad], rot[bad], local[bad], positions[bad] = self._standing(a[bad])
             contact[bad] = True
