@@ -315,11 +315,9 @@ def solve_single_dof(
         d, e, f = _mv(parent, wc), _mv(parent, ws), _mv(parent, wq)
     ch, sh = np.cos(heading), np.sin(heading)
     cphi, sphi = np.cos(phi), np.sin(phi)
-
-    def coeff(u: np.ndarray) -> np.ndarray:
-        return (u[:, 0] * ch + u[:, 1] * sh) * cphi + u[:, 2] * sphi
-
-    A, B, C = coeff(d), coeff(e), coeff(f)
+    # horizontal (along ψ) and vertical components of d, e, f
+    hd, he, hf = (u[:, 0] * ch + u[:, 1] * sh for u in (d, e, f))
+    A, B, C = hd * cphi + d[:, 2] * sphi, he * cphi + e[:, 2] * sphi, hf * cphi + f[:, 2] * sphi
     R = np.hypot(A, B)
     ratio = -C / np.where(R > 1e-12, R, 1e-12)
     ok = (np.abs(ratio) <= 1.0) & (R > 1e-12)
@@ -328,8 +326,9 @@ def solve_single_dof(
     best = np.empty(k)
     score = np.full(k, -np.inf)
     for cand in (base + delta, base - delta):
-        v = d * np.cos(cand)[:, None] + e * np.sin(cand)[:, None] + f
-        g = (v[:, 0] * ch + v[:, 1] * sh) * sphi - v[:, 2] * cphi  # v · (unit vector at φ)
+        c, s = np.cos(cand), np.sin(cand)
+        # v · (unit vector at φ) of v = d cos θ + e sin θ + f
+        g = (hd * c + he * s + hf) * sphi - (d[:, 2] * c + e[:, 2] * s + f[:, 2]) * cphi
         better = g > score
         best = np.where(better, cand, best)
         score = np.where(better, g, score)
