@@ -81,7 +81,7 @@ def plot_efficiency_curve(
         Curve labels (c,).
     reference : (float, float), optional
         Measured preferred step-length range [m] shaded for comparison (default: 0.65-0.78 m
-        at 1.34 m/s, ../shared/DESIGN.md); None for no band.
+        at 1.34 m/s, WBDS / Vadere OSM); None for no band.
 
     Returns
     -------
