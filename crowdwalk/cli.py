@@ -128,6 +128,23 @@ def _sim_progress(quiet: bool, label: str):
     )
 
 
+def _check_before_running(command: str, scenario: Path, duration: float | None,
+                          planners: tuple[str, ...] = ()) -> None:
+    """Load the scenario and build its world (milliseconds), so that bad input ends with
+    its one-line message before a progress bar is drawn."""
+    from crowdwalk.errors import invalid
+    from crowdwalk.scenario import load_scenario
+    from crowdwalk.world import build_world
+    from planners import PLANNERS
+
+    if duration is not None and not duration > 0:
+        raise invalid(command, "duration", "> 0 [s]", duration)
+    for name in planners:
+        if name not in PLANNERS:
+            raise invalid(command, "planner", f"one of {', '.join(sorted(PLANNERS))}", name)
+    build_world(load_scenario(scenario))
+
+
 def _term_as_interrupt() -> None:
     """Let SIGTERM end a run like Ctrl-C (summary written, files closed)."""
     import signal
@@ -153,6 +170,7 @@ def run(
     from crowdwalk.crowd.run import RunOverrides, run_scenario
 
     _term_as_interrupt()
+    _check_before_running("run", scenario, duration, (planner,) if planner else ())
     overrides = RunOverrides(planner=planner, duration=duration)
     with _sim_progress(quiet, scenario.stem) as bar:
         update = None
@@ -188,6 +206,7 @@ def compare(
 
     _term_as_interrupt()
     names = [p.strip() for p in planners.split(",") if p.strip()]
+    _check_before_running("compare", scenario, duration, tuple(names))
     with _sim_progress(quiet, scenario.stem) as bar:
         update = None
         if bar is not None:

@@ -18,3 +18,26 @@ def test_missing_file_exits_2_without_traceback(tmp_path):
     result = runner.invoke(app, ["validate", str(tmp_path / "nope.yaml")])
     assert result.exit_code == 2
     assert "Traceback" not in result.output
+
+
+def test_bad_scenario_is_reported_before_any_progress_bar(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nterrain: {extent: [0, 0, 10, 10]}\ngroups: []\n")
+    for args in (["run", str(bad), "--out", str(tmp_path / "r")],
+                 ["compare", str(bad), "--out", str(tmp_path / "c")]):
+        result = runner.invoke(app, args)
+        assert result.exit_code == 2
+        assert "bad.yaml:1: routes is required" in result.output
+        assert "agents remaining" not in result.output  # no bar was drawn
+        assert not (tmp_path / "r").exists()
+
+
+def test_bad_planner_and_duration_name_the_field(tmp_path):
+    scenario = "scenarios/rimea1_corridor.yaml"
+    result = runner.invoke(app, ["run", scenario, "--out", str(tmp_path), "--planner", "nope"])
+    assert result.exit_code == 2
+    assert "run.planner must be one of best_first, fixed, optimal; got 'nope'." in result.output
+    result = runner.invoke(app, ["compare", scenario, "--out", str(tmp_path),
+                                 "--planners", "fixed,x", "--duration", "-1"])
+    assert result.exit_code == 2
+    assert "compare.duration must be > 0 [s]; got -1.0." in result.output
