@@ -21,14 +21,31 @@ def test_flat_ground_gives_equal_neutral_steps(leg):
     assert p.phase_durations.sum(axis=1) == pytest.approx(p.step_lengths / 1.34)
 
 
+def _to_reach(p):
+    """Energy [J/kg] of a plan's steps plus the terminal estimate to the common reach."""
+    return p.energy_total + p.stats["terminal_energy"]
+
+
 @settings(max_examples=30, deadline=None)
 @given(terrain_profiles())
 def test_optimal_is_best_and_fixed_never_beats_it(leg, profile):
+    # the searches' criterion: the least energy to the horizon's common reach
     plans = {name: plan(profile, leg, 1.34, name) for name in ("best_first", "fixed", "optimal")}
     best = plans["optimal"]
     for name, p in plans.items():
         if p.ok:
             assert best.ok, name
+            assert p.stats["reach"] == best.stats["reach"]
+            assert _to_reach(best) <= _to_reach(p) * (1 + 1e-12), name
+    # the paper's criterion (Eq. 5 over the planned steps alone)
+    paper = PlannerConfig(terminal_cost=False)
+    plans = {name: plan(profile, leg, 1.34, name, paper)
+             for name in ("best_first", "fixed", "optimal")}
+    best = plans["optimal"]
+    for name, p in plans.items():
+        if p.ok:
+            assert best.ok, name
+            assert p.stats["terminal_energy"] == 0.0
             assert best.efficiency >= p.efficiency * (1 - 1e-12), name
             assert best.energy_per_metre <= p.energy_per_metre * (1 + 1e-12), name
 
@@ -158,5 +175,5 @@ def test_pruning_swing_pairs_does_not_change_the_optimum(leg, profile):
     finally:
         lattice.PRUNE_SWINGS = True
     assert pruned.status == full.status
-    assert pruned.efficiency == pytest.approx(full.efficiency, rel=1e-12)
+    assert _to_reach(pruned) == pytest.approx(_to_reach(full), rel=1e-12)
     assert pruned.stats["swing_curves"] <= full.stats["swing_curves"]
