@@ -127,7 +127,9 @@ def paired_trips(summaries: dict[str, dict], baseline: str) -> dict[str, dict]:
         (mean energy per trip [J/kg]), ``difference`` [J/kg] with its 95 % ``ci``
         (paired bootstrap over agents), ``relative`` (difference over the baseline's
         energy [-]) with ``relative_ci``, ``distance_difference`` (mean difference of
-        the walked distance [m]), ``significant`` (the interval excludes 0).
+        the walked distance [m]), ``significant`` (the interval excludes 0). With fewer
+        than ``MIN_AGENTS_CI`` agents there is no interval (NaN) and ``significant`` is
+        False.
     """
     base = {a["id"]: a for a in summaries[baseline]["agents"] if a.get("arrived")}
     out = {}
@@ -145,16 +147,18 @@ def paired_trips(summaries: dict[str, dict], baseline: str) -> dict[str, dict]:
                "relative": float("nan"), "relative_ci": (float("nan"), float("nan")),
                "distance_difference": float("nan"), "significant": False}
         if ids:
+            row.update(energy=float(e.mean()), baseline_energy=float(b.mean()),
+                       difference=float((e - b).mean()),
+                       relative=float((e - b).mean() / b.mean()),
+                       distance_difference=float(d.mean()))
+        if len(ids) >= MIN_AGENTS_CI:
             pick = rng.integers(0, len(ids), size=(BOOTSTRAP, len(ids)))
             diff = (e - b)[pick].mean(axis=1)
             rel = diff / b[pick].mean(axis=1)
             ci = tuple(float(x) for x in np.percentile(diff, [2.5, 97.5]))
-            row.update(energy=float(e.mean()), baseline_energy=float(b.mean()),
-                       difference=float((e - b).mean()), ci=ci,
-                       relative=float((e - b).mean() / b.mean()),
+            row.update(ci=ci,
                        relative_ci=tuple(float(x) for x in np.percentile(rel, [2.5, 97.5])),
-                       distance_difference=float(d.mean()),
-                       significant=bool(len(ids) > 1 and (ci[0] > 0 or ci[1] < 0)))
+                       significant=bool(ci[0] > 0 or ci[1] < 0))
         out[name] = row
     return out
 
@@ -286,6 +290,10 @@ def _trip_lines(trips: dict, baseline: str) -> list[str]:
     for name, r in trips.items():
         if r["agents"] == 0:
             verdict = "no agent arrived in both runs"
+        elif r["agents"] < MIN_AGENTS_CI:
+            verdict = (f"{'less' if r['difference'] < 0 else 'more'} energy than "
+                       f"`{baseline}` ({r['agents']} agents: too few for an interval)"
+                       if r["difference"] != 0 else "the same energy")
         elif not r["significant"]:
             verdict = "no significant difference"
         else:
