@@ -6,6 +6,16 @@ seed, so the agents are identical), each into ``OUT/<planner>/``, and writes
 ``OUT/report.md`` with PNG plots: energy per metre, travel time and steps per agent,
 footholds on obstacles, and energy per metre by terrain type (``Terrain.kind`` under each
 foothold).
+
+Reading the numbers. Energy per metre by terrain type is the sum of the step energies
+over the sum of the step lengths of the footholds on that terrain, so a run's mix of
+steps up, down and along matters (a stair row of a run in which more walkers reached the
+stairs up within the simulated time is dearer per metre, whoever planned), and a step
+onto a stair counts its whole length as stairs. The report therefore also splits by the
+step's direction (up / level / down), gives 95 % confidence intervals from resampling
+the agents (bootstrap, seed 0), and compares the same agents on the same trips: the
+energy [J/kg] of each agent that arrived in both runs (same spawn, same destination),
+paired. Differences whose interval contains zero are reported as not significant.
 """
 
 from __future__ import annotations
@@ -17,9 +27,16 @@ import numpy as np
 
 from crowdwalk.errors import invalid
 
-__all__ = ["compare_planners", "terrain_table"]
+__all__ = ["compare_planners", "terrain_table", "paired_trips", "BOOTSTRAP"]
 
 ProgressCallback = Callable[[str, float, float, int], None]
+
+#: Bootstrap resamples for the confidence intervals (agents resampled with replacement).
+BOOTSTRAP = 2000
+#: A step with a larger height change [m] is a step up or down (else level).
+LEVEL_RISE = 0.02
+#: Fewest agents behind a row for a confidence interval (else none is given).
+MIN_AGENTS_CI = 5
 
 
 def _kind_names() -> dict[int, str]:
@@ -28,34 +45,121 @@ def _kind_names() -> dict[int, str]:
     return {int(k): k.name.lower() for k in TerrainKind}
 
 
-def terrain_table(steps: dict[str, np.ndarray]) -> dict[str, dict[str, float]]:
-    """Footstep statistics per terrain type.
+def _ratio_draws(energy, length, agent, rng) -> np.ndarray:
+    """Bootstrap draws (BOOTSTRAP,) of sum(energy) / sum(length), resampling agents."""
+    ids, inverse = np.unique(agent, return_inverse=True)
+    e = np.bincount(inverse, weights=energy, minlength=ids.size)
+    n = np.bincount(inverse, weights=length, minlength=ids.size)
+    pick = rng.integers(0, ids.size, size=(BOOTSTRAP, ids.size))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return e[pick].sum(axis=1) / n[pick].sum(axis=1)
+
+
+def terrain_table(steps: dict[str, np.ndarray], *, by_direction: bool = False,
+                  draws: bool = False) -> dict[str, dict]:
+    """Footstep statistics per terrain type (optionally per step direction).
 
     Parameters
     ----------
     steps : dict of columns
         ``footsteps.csv`` as read by ``record.Run.footsteps``.
+    by_direction : bool
+        Split each terrain type by the step's height change: ``"<type> up"`` and
+        ``"<type> down"`` (more than ``LEVEL_RISE``), ``"<type>"`` level.
+    draws : bool
+        Also return the bootstrap draws of the energy per metre (``"draws"``).
 
     Returns
     -------
     dict
-        terrain type name -> ``footholds``, ``energy_per_metre`` [J/(kg m)] (sum of step
-        energies over the sum of step lengths), ``mean_step_length`` [m],
-        ``on_obstacle`` (footholds on obstacles).
+        terrain type name -> ``footholds``, ``agents``, ``energy_per_metre`` [J/(kg m)]
+        (sum of step energies over the sum of step lengths), ``ci`` (its 95 % interval,
+        agents resampled; NaN with fewer than ``MIN_AGENTS_CI`` agents),
+        ``mean_step_length`` [m], ``on_obstacle`` (footholds on obstacles).
     """
     names = _kind_names()
-    out: dict[str, dict[str, float]] = {}
-    kind = steps["kind"]
-    for code in np.unique(kind):
-        m = kind == code
+    out: dict[str, dict] = {}
+    kind = np.asarray(steps["kind"]).astype(int)
+    direction = np.zeros(kind.size, dtype=int)  # 0 level, 1 up, 2 down
+    if by_direction:
+        rise = np.asarray(steps["step_height"], dtype=float)
+        direction = np.where(rise > LEVEL_RISE, 1, np.where(rise < -LEVEL_RISE, 2, 0))
+    suffix = ("", " up", " down")
+    groups = sorted(set(zip(kind.tolist(), direction.tolist(), strict=True)))
+    rng = np.random.default_rng(0)
+    agent = np.asarray(steps["agent"])
+    for code, way in groups:
+        m = (kind == code) & (direction == way)
+        label = names.get(code, str(code)) + suffix[way]
         length = float(steps["step_length"][m].sum())
-        out[names.get(int(code), str(code))] = {
+        boot = _ratio_draws(steps["energy"][m], steps["step_length"][m], agent[m], rng)
+        if np.unique(agent[m]).size < MIN_AGENTS_CI:
+            boot = np.full(BOOTSTRAP, np.nan)
+        row = {
             "footholds": int(m.sum()),
+            "agents": int(np.unique(agent[m]).size),
             "energy_per_metre": float(steps["energy"][m].sum() / length) if length > 0
             else float("nan"),
+            "ci": (tuple(float(x) for x in np.percentile(boot, [2.5, 97.5]))
+                   if np.isfinite(boot).all() else (float("nan"), float("nan"))),
             "mean_step_length": float(steps["step_length"][m].mean()),
             "on_obstacle": int(steps["on_obstacle"][m].sum()),
         }
+        if draws:
+            row["draws"] = boot
+        out[label] = row
+    return out
+
+
+def paired_trips(summaries: dict[str, dict], baseline: str) -> dict[str, dict]:
+    """The same agents on the same trips: energy of the agents that arrived in both runs.
+
+    Parameters
+    ----------
+    summaries : mapping planner -> summary dict (``summary.json``)
+    baseline : str
+        The planner the others are compared with.
+
+    Returns
+    -------
+    dict
+        planner -> ``agents`` (arrived in both runs), ``energy`` and ``baseline_energy``
+        (mean energy per trip [J/kg]), ``difference`` [J/kg] with its 95 % ``ci``
+        (paired bootstrap over agents), ``relative`` (difference over the baseline's
+        energy [-]) with ``relative_ci``, ``distance_difference`` (mean difference of
+        the walked distance [m]), ``significant`` (the interval excludes 0). With fewer
+        than ``MIN_AGENTS_CI`` agents there is no interval (NaN) and ``significant`` is
+        False.
+    """
+    base = {a["id"]: a for a in summaries[baseline]["agents"] if a.get("arrived")}
+    out = {}
+    rng = np.random.default_rng(0)
+    for name, s in summaries.items():
+        if name == baseline:
+            continue
+        ids = [a["id"] for a in s["agents"] if a.get("arrived") and a["id"] in base]
+        mine = {a["id"]: a for a in s["agents"]}
+        e = np.array([mine[i]["energy_J_per_kg"] for i in ids], dtype=float)
+        b = np.array([base[i]["energy_J_per_kg"] for i in ids], dtype=float)
+        d = np.array([mine[i]["distance_m"] - base[i]["distance_m"] for i in ids], dtype=float)
+        row = {"agents": len(ids), "energy": float("nan"), "baseline_energy": float("nan"),
+               "difference": float("nan"), "ci": (float("nan"), float("nan")),
+               "relative": float("nan"), "relative_ci": (float("nan"), float("nan")),
+               "distance_difference": float("nan"), "significant": False}
+        if ids:
+            row.update(energy=float(e.mean()), baseline_energy=float(b.mean()),
+                       difference=float((e - b).mean()),
+                       relative=float((e - b).mean() / b.mean()),
+                       distance_difference=float(d.mean()))
+        if len(ids) >= MIN_AGENTS_CI:
+            pick = rng.integers(0, len(ids), size=(BOOTSTRAP, len(ids)))
+            diff = (e - b)[pick].mean(axis=1)
+            rel = diff / b[pick].mean(axis=1)
+            ci = tuple(float(x) for x in np.percentile(diff, [2.5, 97.5]))
+            row.update(ci=ci,
+                       relative_ci=tuple(float(x) for x in np.percentile(rel, [2.5, 97.5])),
+                       significant=bool(ci[0] > 0 or ci[1] < 0))
+        out[name] = row
     return out
 
 
@@ -110,7 +214,7 @@ def compare_planners(
         raise invalid("compare", "planners", "without repeats", planners)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    summaries, tables = {}, {}
+    summaries, tables, directions = {}, {}, {}
     for name in planners:
         def update(t, total, remaining, name=name):
             if progress is not None:
@@ -121,7 +225,11 @@ def compare_planners(
             overrides=RunOverrides(planner=name, duration=duration, poses=False,
                                    max_agents=max_agents),
         )
-        tables[name] = terrain_table(open_run(out / name).footsteps())
+        steps = open_run(out / name).footsteps()
+        tables[name] = terrain_table(steps)
+        directions[name] = terrain_table(steps, by_direction=True, draws=True)
+    baseline = "fixed" if "fixed" in planners else planners[-1]
+    trips = paired_trips(summaries, baseline) if len(planners) > 1 else {}
 
     def per_agent(key: str) -> dict[str, np.ndarray]:
         return {n: np.array([np.nan if a[key] is None else a[key]
@@ -138,10 +246,13 @@ def compare_planners(
     if shown:
         pngs["agents"] = plot_planner_comparison(shown, out / "per_agent.png", units=units,
                                                  title="Per agent, by planner")
-    energy = {n: {k: v["energy_per_metre"] for k, v in t.items()} for n, t in tables.items()}
+    energy = {n: {k: v["energy_per_metre"] for k, v in t.items()}
+              for n, t in directions.items()}
+    spread = {n: {k: v["ci"] for k, v in t.items()} for n, t in directions.items()}
     pngs["energy"] = plot_by_terrain(energy, out / "energy_by_terrain.png",
                                      ylabel="energy per metre [J/(kg m)]",
-                                     title="Energy per metre walked, by terrain type")
+                                     title="Energy per metre walked, by terrain type and "
+                                           "step direction (95 % CI)", errors=spread)
     obstacle = {n: {k: float(v["on_obstacle"]) for k, v in t.items()} for n, t in tables.items()}
     pngs["obstacle"] = plot_by_terrain(obstacle, out / "footholds_on_obstacles.png",
                                        ylabel="footholds on obstacles [-]",
@@ -151,11 +262,92 @@ def compare_planners(
                                     ylabel="footholds [-]", title="Footholds by terrain type")
 
     report = out / "report.md"
-    report.write_text(_report_text(scenario, planners, summaries, tables, pngs, out))
+    report.write_text(_report_text(scenario, planners, summaries, tables, pngs, out,
+                                   directions=directions, trips=trips, baseline=baseline))
     return report
 
 
-def _report_text(scenario, planners, summaries, tables, pngs, out: Path) -> str:
+def _ci(ci, digits: int = 3, scale: float = 1.0) -> str:
+    lo, hi = ci
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return "–"
+    return f"{_fmt(scale * lo, digits)}…{_fmt(scale * hi, digits)}"
+
+
+def _trip_lines(trips: dict, baseline: str) -> list[str]:
+    """The paired same-trip comparison section."""
+    lines = [
+        "## Same agents, same trips",
+        "",
+        f"The like-for-like comparison: the agents that arrived in both runs (same body, "
+        f"speed, spawn and destination), energy per trip [J/kg] against `{baseline}`, "
+        "paired; 95 % confidence intervals from resampling the agents.",
+        "",
+        f"| planner | agents | energy per trip [J/kg] | {baseline} [J/kg] | difference "
+        "[J/kg] (95 % CI) | difference [%] (95 % CI) | distance difference [m] | verdict |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, r in trips.items():
+        if r["agents"] == 0:
+            verdict = "no agent arrived in both runs"
+        elif r["agents"] < MIN_AGENTS_CI:
+            verdict = (f"{'less' if r['difference'] < 0 else 'more'} energy than "
+                       f"`{baseline}` ({r['agents']} agents: too few for an interval)"
+                       if r["difference"] != 0 else "the same energy")
+        elif not r["significant"]:
+            verdict = "no significant difference"
+        else:
+            verdict = (f"{'less' if r['difference'] < 0 else 'more'} energy than "
+                       f"`{baseline}`")
+        lines.append(
+            f"| {name} | {r['agents']} | {_fmt(r['energy'])} | {_fmt(r['baseline_energy'])} "
+            f"| {_fmt(r['difference'], 2)} ({_ci(r['ci'], 2)}) | "
+            f"{_fmt(100 * r['relative'], 2)} ({_ci(r['relative_ci'], 2, 100.0)}) | "
+            f"{_fmt(r['distance_difference'], 2)} | {verdict} |")
+    return lines + [""]
+
+
+def _direction_lines(planners, directions: dict, baseline: str) -> list[str]:
+    """Energy per metre by terrain type and step direction, with intervals."""
+    lines = [
+        "## By terrain type and step direction",
+        "",
+        "Steps up or down (a height change of more than "
+        f"{100 * LEVEL_RISE:.0f} cm) apart from level ones, so that rows compare like with "
+        f"like; the last column is the difference from `{baseline}` on the same row "
+        "(intervals from resampling each run's agents; none for rows of fewer than "
+        f"{MIN_AGENTS_CI} agents). A difference whose interval contains 0 is noise "
+        "(different walkers reaching a place within the simulated time, different paths "
+        "in the crowd), not an effect of planning. Per metre, a step up or down is "
+        "cheaper the longer it is, and the level step before it then shorter: a planner "
+        "that approaches a curb or stair differently moves energy per metre between "
+        "rows without changing what the stretch costs. Whether planning saves energy is "
+        "answered by the trips above.",
+        "",
+        "| planner | terrain | footholds | agents | mean step length [m] | energy per metre "
+        f"[J/(kg m)] (95 % CI) | vs {baseline} [%] (95 % CI) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    base = directions.get(baseline, {})
+    for name in planners:
+        for kind, v in directions[name].items():
+            versus = "–"
+            if name != baseline and kind in base:
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    rel = v["draws"] / base[kind]["draws"] - 1
+                    point = v["energy_per_metre"] / base[kind]["energy_per_metre"] - 1
+                lo, hi = (np.percentile(rel, [2.5, 97.5]) if np.isfinite(rel).all()
+                          else (np.nan, np.nan))
+                mark = "" if not (lo > 0 or hi < 0) else " *"
+                versus = f"{_fmt(100 * point, 2)} ({_ci((lo, hi), 2, 100.0)}){mark}"
+            lines.append(f"| {name} | {kind} | {v['footholds']} | {v['agents']} | "
+                         f"{_fmt(v['mean_step_length'])} | {_fmt(v['energy_per_metre'])} "
+                         f"({_ci(v['ci'])}) | {versus} |")
+    return lines + ["", "\\* the interval excludes 0.", ""]
+
+
+def _report_text(scenario, planners, summaries, tables, pngs, out: Path, *,
+                 directions=None, trips=None, baseline=None) -> str:
     first = summaries[planners[0]]
     lines = [
         f"# Planner comparison: {first['scenario'] or Path(str(scenario)).stem}",
@@ -191,22 +383,33 @@ def _report_text(scenario, planners, summaries, tables, pngs, out: Path) -> str:
         "",
         "Travel time and steps are means over the agents that arrived / stepped; energy per "
         "metre is the planners' energy model (Chen & Li Eq. 4, J/kg per step) summed over "
-        "all steps and divided by the distance the bodies walked.",
+        "all steps and divided by the distance the bodies walked (including the agents "
+        "still walking at the end, wherever they are then).",
         "",
+    ]
+    if trips:
+        lines += _trip_lines(trips, baseline)
+    lines += [
         "## By terrain type",
         "",
+        "Each step counts on the terrain under its landing foot, with its whole length "
+        "(a step onto a stair is a stairs step). Up, down and level steps are mixed here: "
+        "compare planners in the next table.",
+        "",
         "| planner | terrain | footholds | mean step length [m] | energy per metre "
-        "[J/(kg m)] | on obstacles |",
+        "[J/(kg m)] (95 % CI) | on obstacles |",
         "|---|---|---|---|---|---|",
     ]
     for name in planners:
         for kind, v in tables[name].items():
             lines.append(f"| {name} | {kind} | {v['footholds']} | "
-                         f"{_fmt(v['mean_step_length'])} | {_fmt(v['energy_per_metre'])} | "
-                         f"{v['on_obstacle']} |")
+                         f"{_fmt(v['mean_step_length'])} | {_fmt(v['energy_per_metre'])} "
+                         f"({_ci(v['ci'])}) | {v['on_obstacle']} |")
+    if directions:
+        lines += [""] + _direction_lines(planners, directions, baseline)
     lines += ["", "## Plots", ""]
     titles = {"agents": "Energy per metre, travel time and steps per agent",
-              "energy": "Energy per metre by terrain type",
+              "energy": "Energy per metre by terrain type and step direction",
               "obstacle": "Footholds on obstacles by terrain type",
               "steps": "Footholds by terrain type"}
     for key, path in pngs.items():

@@ -435,7 +435,7 @@ def plot_plan(profile, plans, out, *, labels=None, title: str | None = None):
 # --- planner comparison by terrain type (issue 5: crowdwalk compare) -------------------
 
 
-def plot_by_terrain(values, out, *, ylabel: str, title: str):
+def plot_by_terrain(values, out, *, ylabel: str, title: str, errors=None):
     """Grouped bars: one group per terrain type, one bar per planner.
 
     Parameters
@@ -447,6 +447,8 @@ def plot_by_terrain(values, out, *, ylabel: str, title: str):
         PNG file.
     ylabel : str
         Y axis label with its unit.
+    errors : mapping of planner -> mapping of terrain type name -> (low, high), optional
+        An interval per bar (e.g. a 95 % confidence interval), drawn as an error bar.
 
     Returns
     -------
@@ -464,6 +466,14 @@ def plot_by_terrain(values, out, *, ylabel: str, title: str):
         ys = np.array([values[name].get(k, np.nan) for k in kinds], dtype=float)
         bars = ax.bar(x + (i - (len(planners) - 1) / 2) * width, np.nan_to_num(ys), width,
                       label=name)
+        if errors is not None and name in errors:
+            lo, hi = (np.array([errors[name].get(k, (np.nan, np.nan))[j] for k in kinds],
+                               dtype=float) for j in (0, 1))
+            ok = np.isfinite(ys) & np.isfinite(lo) & np.isfinite(hi)
+            if ok.any():
+                ax.errorbar((x + (i - (len(planners) - 1) / 2) * width)[ok], ys[ok],
+                            yerr=[np.maximum(ys[ok] - lo[ok], 0), np.maximum(hi[ok] - ys[ok], 0)],
+                            fmt="none", ecolor="black", elinewidth=0.8, capsize=2)
         for bar, y in zip(bars, ys, strict=True):
             if np.isfinite(y):
                 ax.annotate(f"{y:.3g}", (bar.get_x() + bar.get_width() / 2, y),

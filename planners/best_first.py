@@ -67,7 +67,7 @@ def find_init(tables: StepTables, centres: np.ndarray | None = None,
     blocked = np.flatnonzero(~legal)
     if blocked.size:
         dist = np.abs(st.step_j[None, :] - centres[blocked, None])
-        cost = dist + 1e-7 * tables.E[agents[blocked]]
+        cost = dist + 1e-7 * tables.cost[agents[blocked]]
         best, ok = cheapest(tables, cost, agents[blocked])
         configs[blocked[ok]] = best[ok]
         found[blocked] = ok
@@ -134,9 +134,11 @@ def budget(tables: StepTables) -> SearchResult:
 
     ``lam0`` is the walker's energy per metre on flat ground: each metre of progress is
     worth what it normally costs. This is the linearisation of Eq. 5 at the neutral
-    walk, a start for the best-first search that already accounts for the terrain.
+    walk, a start for the best-first search that already accounts for the terrain. E and
+    L are the tables' ``cost`` and ``progress`` (with the terminal energy, see
+    :class:`~planners.config.PlannerConfig`).
     """
-    cost = tables.E - tables.neutral_cost[:, None] * tables.length
+    cost = tables.cost - tables.neutral_cost[:, None] * tables.progress
     configs, found = cheapest(tables, cost)
     per_pass = tables.struct.swing_back.size * tables.struct.J
     A = found.size

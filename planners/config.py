@@ -113,6 +113,17 @@ class PlannerConfig:
         position where the whole foot is supported (deviation from the fixed grid of
         §6.2: a 28-30 cm tread leaves a 26.6 cm foot only 2-3 cm of play, which a 5 cm
         grid usually misses). False gives the paper's rigid grid.
+    terminal_cost : bool
+        Compare the plans of a horizon for the same progress (deviation from §4.2, where
+        Eq. 5 is taken over the n planned steps alone): every plan is scored by the
+        efficiency of reaching the farthest foothold of the lattice, its own steps plus
+        the estimated energy of walking on from its last foothold
+        (:func:`planners.energy.terminal_energy`). Eq. 5 over the steps alone rewards a
+        plan for leaving an expensive stretch (a stair flight, a curb) beyond the horizon:
+        walked with a receding horizon, it shuffles up to a flight in ever shorter steps
+        and costs more per metre than the unplanned walker (measured in
+        ``docs/architecture.md``). On level ground the plans are the same either way.
+        False gives the paper's criterion.
     weights : EnergyWeights
         Energy model weights.
     """
@@ -135,6 +146,7 @@ class PlannerConfig:
     turn_threshold: float = math.radians(45.0)
     search_starts: int = 8
     snap: bool = True
+    terminal_cost: bool = True
     weights: EnergyWeights = field(default_factory=EnergyWeights)
 
     def __post_init__(self) -> None:
@@ -163,5 +175,7 @@ class PlannerConfig:
                           self.pelvis_height_ratio)
         if not isinstance(self.snap, bool):
             raise invalid("PlannerConfig", "snap", "True or False", self.snap)
+        if not isinstance(self.terminal_cost, bool):
+            raise invalid("PlannerConfig", "terminal_cost", "True or False", self.terminal_cost)
         if not isinstance(self.weights, EnergyWeights):
             raise invalid("PlannerConfig", "weights", "an EnergyWeights", self.weights)

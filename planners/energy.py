@@ -14,7 +14,7 @@ from planners.kinematics import key_frames
 from planners.leg import Leg
 
 __all__ = ["walking_energy", "vertical_energy", "joint_energy", "total_energy",
-           "step_energy", "flat_efficiency", "EV_PEAK_CM"]
+           "step_energy", "flat_efficiency", "terminal_energy", "EV_PEAK_CM"]
 
 #: Height [cm] where the printed quadratic of Eq. (2) peaks: 7.14 / (2 * 0.18).
 EV_PEAK_CM = 7.14 / 0.36
@@ -138,3 +138,104 @@ def flat_efficiency(leg: Leg, speed: float, step_lengths,
     summit = zero + leg.ankle_height + 0.75 * config.swing_lift
     _, _, _, E, _ = step_energy(zero, zero, L, zero, summit, leg, speed, config)
     return L / E
+
+
+def terminal_energy(profile, start, stop, owner_start, legs, speeds, per_metre, neutral_step,
+                    config: PlannerConfig):
+    """Estimated energy [J/kg] of walking on from footholds ``start`` to ``stop``.
+
+    The terminal cost of a plan (deviation from Chen & Li, see Notes): the energy the
+    walker will still spend between the plan's last foothold and a point ``stop`` that
+    every plan of the horizon reaches, so that plans are compared for the same progress.
+
+    Parameters
+    ----------
+    profile : GroundProfile
+        The (combined) ground profile [m].
+    start : ndarray, shape (A, K)
+        Last footholds of the plans [m] (absolute arc length on ``profile``).
+    stop : ndarray, shape (A,)
+        Common end of every plan of agent a [m], >= ``start[a]``.
+    owner_start : ndarray, shape (A,)
+        Ascending arc lengths where each agent's part of ``profile`` begins [m].
+    legs : leg arrays
+        Per-agent legs with ``take(rows)`` (``planners.lattice._LegArrays``).
+    speeds : ndarray, shape (A,)
+        Target speeds [m/s].
+    per_metre : ndarray, shape (A,)
+        Energy per metre of neutral steps on level ground [J/(kg m)].
+    neutral_step : ndarray, shape (A,)
+        Neutral step length [m].
+    config : PlannerConfig
+
+    Returns
+    -------
+    ndarray, shape (A, K)
+
+    Notes
+    -----
+    Level ground costs ``per_metre``. A height change steeper than ``max_foot_slope`` (a
+    riser, a curb) costs what one step up or down it costs beyond level walking of the
+    same length, Eq. 4 for a step of length ``g`` (the distance to the next such change,
+    i.e. the tread, at most the neutral step) minus ``per_metre * g``; a slope costs, per
+    metre, what a neutral step on it costs beyond a level one. The estimate is exact for
+    a flight of equal treads and for level ground, where it changes nothing (every plan
+    is then charged ``per_metre`` for the distance it leaves to ``stop``, and the neutral
+    step is the cheapest per metre).
+    """
+    s, z = np.asarray(profile.s, dtype=float), np.asarray(profile.z, dtype=float)
+    A = start.shape[0]
+    if s.size < 2:
+        return per_metre[:, None] * (stop[:, None] - start)
+    ds, dz = np.diff(s), np.diff(z)
+    owner = np.clip(np.searchsorted(owner_start, 0.5 * (s[:-1] + s[1:]), side="right") - 1,
+                    0, A - 1)
+    leg = legs.take(owner)
+    L0 = neutral_step[owner]
+    lam = per_metre[owner]
+    v = np.asarray(speeds, dtype=float)[owner]
+    steep = np.abs(dz) > config.max_foot_slope * ds
+    # the tread after a steep change: up to the next steep change (or a neutral step)
+    where = np.flatnonzero(steep)
+    nxt = np.searchsorted(where, np.arange(ds.size), side="right")
+    if where.size:
+        gap = np.where(nxt < where.size, s[where[np.minimum(nxt, where.size - 1)]] - s[1:],
+                       np.inf)
+    else:
+        gap = np.full(ds.size, np.inf)
+    lo = config.min_step_ratio * leg.length
+    g = np.where(steep, np.clip(gap, lo, L0), L0)
+    rise = np.where(steep, dz, dz / np.maximum(ds, 1e-12) * L0)
+    zero = np.zeros_like(g)
+    lift = leg.ankle_height + 0.75 * config.swing_lift
+    _, _, _, E, _ = step_energy(zero, zero, g, rise, np.maximum(rise, 0.0) + lift, leg, v,
+                                config)
+    _, _, _, E0, _ = step_energy(zero, zero, L0, zero, zero + lift, leg, v, config)
+    cost = np.where(steep, E - lam * g, (E - E0) / L0 * ds)
+    # a low obstacle (a steep rise, then a steep drop within one longest step less a foot)
+    # may be stridden over: it costs the cheaper of stepping on and off it and one step
+    # over it, of at least the neutral length, with the swing ankle lifted over its top
+    if where.size > 1:
+        j = where[np.minimum(nxt, where.size - 1)]  # the next steep change after each
+        longest = config.max_step_ratio * leg.length
+        stride = np.maximum(L0, np.minimum(gap + leg.foot_length, longest))
+        top = np.maximum(z[1:], z[j]) - z[:-1]
+        _, _, _, Es, _ = step_energy(zero, zero, stride, zero, np.maximum(top, 0.0) + lift,
+                                     leg, v, config)
+        over = (steep & (dz > 0) & (nxt < where.size) & (dz[j] < 0)
+                & (gap + leg.foot_length <= longest))
+        i, j = np.flatnonzero(over), j[over]
+        both, jump = cost[i] + cost[j], Es[i] - lam[i] * stride[i]
+        cost[j] = np.where(both <= jump, cost[j], 0.0)
+        cost[i] = np.minimum(both, jump) - cost[j]
+    cost = np.where(np.isfinite(cost), cost, 0.0)  # e.g. the seams between agents' parts
+    cum = np.concatenate([[0.0], np.cumsum(cost)])
+
+    def F(x):
+        k = np.clip(np.searchsorted(s, x, side="right") - 1, 0, s.size - 1)
+        seg = np.minimum(k, ds.size - 1)
+        inside = (k < s.size - 1) & (ds[seg] > 0)
+        frac = np.where(inside, np.clip((x - s[k]) / np.where(inside, ds[seg], 1.0), 0, 1), 0)
+        return cum[k] + cost[seg] * frac
+
+    return (per_metre[:, None] * (stop[:, None] - start) + F(stop)[:, None] - F(start))

@@ -16,7 +16,13 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from planners.config import PlannerConfig
-from planners.energy import step_energy, total_energy, vertical_energy, walking_energy
+from planners.energy import (
+    step_energy,
+    terminal_energy,
+    total_energy,
+    vertical_energy,
+    walking_energy,
+)
 from planners.legality import Reason, foot_support, snap_to_support
 from planners.profile import GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
@@ -243,6 +249,16 @@ class StepTables:
         Swing-ankle Bezier control points (s relative to the stance foot, z) [m].
     rounds : ndarray of int, shape (A, Np)
         §5.2 adjustment rounds (-1 where no curve was computed).
+    cost, progress : ndarray, shape (A, Ns)
+        What the searches score (efficiency = sum of progress / sum of cost): ``E`` and
+        ``length``, except that with ``config.terminal_cost`` a last step (depth n) also
+        costs the terminal energy of its landing node and progresses to ``reach``, so
+        that every configuration is scored for the same progress [J/kg], [m].
+    terminal : ndarray, shape (A, Nn)
+        Estimated energy from a node to ``reach`` (:func:`planners.energy.terminal_energy`;
+        0 where unused) [J/kg].
+    reach : ndarray, shape (A,)
+        Farthest last foothold of the lattice, relative to the stance foot [m].
     """
 
     struct: Structure
@@ -263,6 +279,10 @@ class StepTables:
     controls: np.ndarray
     rounds: np.ndarray
     config: PlannerConfig
+    cost: np.ndarray
+    progress: np.ndarray
+    terminal: np.ndarray
+    reach: np.ndarray
 
     @cached_property
     def step_legal(self) -> np.ndarray:
@@ -281,14 +301,15 @@ class StepTables:
         -------
         legal : ndarray of bool, shape (B, ...)
         efficiency : ndarray, shape (B, ...)
-            Sum of step lengths over sum of energies [m kg/J].
+            Sum of ``progress`` over sum of ``cost`` [m kg/J] (Eq. 5 over the steps, for
+            the same progress with ``terminal_cost``).
         """
         steps, swings = self.struct.indices(configs)
         rows = agents.reshape((-1,) + (1,) * (configs.ndim - 1))
         legal = (self.step_legal[rows, steps].all(axis=-1)
                  & self.swing_ok[rows, swings].all(axis=-1))
-        energy = self.E[rows, steps].sum(axis=-1)
-        length = self.length[rows, steps].sum(axis=-1)
+        energy = self.cost[rows, steps].sum(axis=-1)
+        length = self.progress[rows, steps].sum(axis=-1)
         # Rounded to 1e-12 so that ties (mirror-image plans on level ground) are broken
         # the same way whatever the profile's offsets.
         return legal, np.round(length / energy, 12)
@@ -463,6 +484,18 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     En = walking_energy(length, speeds[:, None])
     Ev = vertical_energy(rise, w.down_ratio, w.vertical)
     E = total_energy(En, Ev, Ej, w)
+    per_metre = neutral_energy_per_metre(legs, speeds, config)
+    last = slice(st.node_offset[st.n], None)  # the nodes of depth n
+    far = node_s[:, last].max(axis=1)  # (A,) every plan's common end
+    terminal = np.zeros(node_s.shape)
+    cost, progress = E, length
+    if config.terminal_cost:
+        terminal[:, last] = terminal_energy(profile, base + node_s[:, last], base[:, 0] + far,
+                                            base[:, 0] + trailing - 2.0, legs_col, speeds,
+                                            per_metre, lo + delta * neutral, config)
+        final = st.step_depth == st.n
+        cost = E + np.where(final, terminal[:, st.step_front], 0.0)
+        progress = np.where(final, far[:, None] - stance_s, length)
     reason = support[:, st.step_front].copy()
     reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)
     reason |= np.where(reachable, 0, int(Reason.KNEE_REACH))
@@ -541,6 +574,6 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             controls[ag, which[rest]] = ctrl
             rounds[ag, which[rest]] = swing.rounds
             swing_ok[ag, which[rest]] = swing.ok
-    return StepTables(st, lo, delta, neutral, neutral_energy_per_metre(legs, speeds, config),
+    return StepTables(st, lo, delta, neutral, per_metre,
                       node_s, node_z, length, rise, En, Ev, Ej, E, reason,
-                      swing_ok, controls, rounds, config)
+                      swing_ok, controls, rounds, config, cost, progress, terminal, far)

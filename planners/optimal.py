@@ -23,7 +23,9 @@ def optimal(tables: StepTables) -> SearchResult:
     configuration so far, dynamic programming finds the legal configuration minimising
     ``sum(E - lam * L)``; if that sum is negative the new configuration is more efficient
     and ``lam`` moves to it, otherwise ``lam`` is optimal. All agents iterate together.
-    ``nodes_expanded`` counts DP states, ``legality_checks`` DP transitions.
+    ``nodes_expanded`` counts DP states, ``legality_checks`` DP transitions. E and L are
+    the tables' ``cost`` and ``progress``: with ``PlannerConfig.terminal_cost`` every
+    configuration progresses equally and the optimum is the least energy for it.
     """
     A = tables.neutral.size
     st = tables.struct
@@ -42,7 +44,8 @@ def optimal(tables: StepTables) -> SearchResult:
         if active.size == 0:
             break
         lam = 1.0 / eff[active, None]
-        best, ok = cheapest(tables, tables.E[active] - lam * tables.length[active], active)
+        best, ok = cheapest(tables, tables.cost[active] - lam * tables.progress[active],
+                            active)
         passes[active] += 1
         _, new = tables.evaluate(active, best)
         better = ok & (new > eff[active] * (1 + 1e-12))

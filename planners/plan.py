@@ -273,6 +273,10 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
             "step_increment": float(tables.step_delta[a]),
             "neutral_step": float(tables.step_min[a]
                                   + tables.step_delta[a] * tables.neutral[a]),
+            # the horizon's common end and the estimated energy of walking on to it from
+            # the last foothold (PlannerConfig.terminal_cost; 0 without it)
+            "reach": float(tables.reach[a] + origins[a]),
+            "terminal_energy": float(tables.terminal[a, foot_nodes[a, -1]]),
         }
         trailing_s = float(tables.node_s[a, 0] + origins[a])
         if a in messages:

@@ -65,6 +65,6 @@ def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
         sl = slice(start, start + chunk)
         legal[sl] = (tables.step_legal[rows, steps].all(axis=-1)
                      & tables.swing_ok[rows, swings].all(axis=-1))
-        eff[sl] = (tables.length[rows, steps].sum(axis=-1)
-                   / tables.E[rows, steps].sum(axis=-1))
+        eff[sl] = (tables.progress[rows, steps].sum(axis=-1)
+                   / tables.cost[rows, steps].sum(axis=-1))
     return legal, eff

@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -52,3 +53,49 @@ def test_cli_rejects_unknown_planner_with_exit_2(tmp_path):
     assert result.exit_code == 2
     assert "compare.planners must be names from" in result.output
     assert "Traceback" not in result.output
+
+
+def test_report_compares_the_same_trips_and_splits_by_step_direction(report):
+    text = report.read_text()
+    assert "## Same agents, same trips" in text
+    assert "## By terrain type and step direction" in text
+    trips = next(line for line in text.splitlines() if line.startswith("| best_first | 2 |"))
+    assert "less energy than `fixed` (2 agents" in trips  # Fig. 11: striding saves
+
+
+def test_paired_trips_only_pairs_agents_that_arrived_in_both_runs():
+    from crowdwalk.compare import paired_trips
+
+    def summary(energies, arrived):
+        return {"agents": [{"id": i, "arrived": a, "energy_J_per_kg": e, "distance_m": 10.0}
+                           for i, (e, a) in enumerate(zip(energies, arrived, strict=True))]}
+
+    rng = np.random.default_rng(1)
+    base = 100 + rng.normal(0, 5, 40)
+    noisy = {"fixed": summary(base, [True] * 40),
+             "best_first": summary(base + rng.normal(0, 3, 40), [True] * 39 + [False])}
+    r = paired_trips(noisy, "fixed")["best_first"]
+    assert r["agents"] == 39
+    assert r["ci"][0] < r["difference"] < r["ci"][1]
+    assert r["significant"] == (r["ci"][0] > 0 or r["ci"][1] < 0)
+    saving = {"fixed": summary(base, [True] * 40), "best_first": summary(base - 2, [True] * 40)}
+    r = paired_trips(saving, "fixed")["best_first"]
+    assert r["significant"] and r["difference"] == pytest.approx(-2)
+    assert r["relative"] == pytest.approx(-2 / base.mean())
+
+
+def test_terrain_rows_split_by_direction_keep_the_totals():
+    from crowdwalk.compare import terrain_table
+
+    steps = {"kind": np.array([0, 0, 2, 2, 2, 0]), "agent": np.array([0, 0, 0, 1, 1, 1]),
+             "step_length": np.array([0.6, 0.6, 0.3, 0.3, 0.3, 0.6]),
+             "step_height": np.array([0.0, 0.0, 0.17, 0.17, -0.17, -0.17]),
+             "energy": np.array([4.0, 4.0, 9.5, 9.5, 4.5, 6.0]),
+             "on_obstacle": np.zeros(6, dtype=int)}
+    split = terrain_table(steps, by_direction=True)
+    assert list(split) == ["flat", "flat down", "stairs up", "stairs down"]
+    assert split["stairs up"]["energy_per_metre"] == pytest.approx(19 / 0.6)
+    assert split["stairs up"]["agents"] == 2
+    whole = terrain_table(steps)
+    assert whole["stairs"]["footholds"] == 3
+    assert np.isnan(whole["stairs"]["ci"][0])  # too few agents for an interval

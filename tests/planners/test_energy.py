@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from planners import EnergyWeights, Leg, PlannerConfig, flat_efficiency
+from planners import EnergyWeights, GroundProfile, Leg, PlannerConfig, flat_efficiency
 from planners.energy import (
     EV_PEAK_CM,
     joint_energy,
@@ -82,3 +82,49 @@ def test_uphill_steps_shorten_with_the_linear_form_and_jump_with_the_printed_one
                    PlannerConfig(weights=EnergyWeights(vertical="paper"))).step_lengths.mean()
     assert linear < level < printed
     assert printed == pytest.approx(1.05 * leg.length, rel=1e-6)  # the longest grid step
+
+
+def _legs(leg):
+    from planners.lattice import _LegArrays
+
+    return _LegArrays([leg])
+
+
+def test_terminal_energy_is_level_walking_on_level_ground(leg):
+    from planners.energy import terminal_energy
+
+    start = np.array([[0.3, 1.0, 2.2]])
+    got = terminal_energy(GroundProfile.flat(), start, np.array([2.5]), np.array([-2.0]),
+                          _legs(leg), np.array([1.34]), np.array([6.3]), np.array([0.65]),
+                          PlannerConfig())
+    assert np.allclose(got, 6.3 * (2.5 - start))
+
+
+def test_terminal_energy_charges_each_tread_of_a_flight_one_stair_step(leg):
+    """From one tread to the next, the estimate drops by Eq. 4 of a step of one going."""
+    from planners.energy import step_energy, terminal_energy
+
+    cfg = PlannerConfig()
+    flight = GroundProfile.stairs(0.17, 0.30, 6, first_edge=1.0)
+    start = np.array([[1.15, 1.45, 1.75]])  # mid-tread of treads 1, 2, 3
+    got = terminal_energy(flight, start, np.array([4.0]), np.array([-2.0]), _legs(leg),
+                          np.array([1.34]), np.array([6.3]), np.array([0.65]), cfg)[0]
+    z = np.zeros(1)
+    lift = leg.ankle_height + 0.75 * cfg.swing_lift
+    stair = step_energy(z, z, z + 0.30, z + 0.17, z + 0.17 + lift, leg, 1.34, cfg)[3][0]
+    assert np.allclose(-np.diff(got), stair)
+    assert got[0] > 6.3 * (4.0 - 1.15)  # climbing costs more than level walking
+
+
+def test_terminal_energy_lets_a_low_obstacle_be_stridden_over(leg):
+    from planners.energy import terminal_energy
+
+    args = (np.array([[0.0]]), np.array([3.0]), np.array([-2.0]), _legs(leg),
+            np.array([1.34]), np.array([6.3]), np.array([0.65]), PlannerConfig())
+    low = GroundProfile([-2, 1, 1, 1.3, 1.3, 8], [0, 0, 0.1, 0.1, 0, 0])
+    curb = GroundProfile([-2, 1, 1, 8], [0, 0, 0.1, 0.1])
+    kerb_down = GroundProfile([-2, 1.3, 1.3, 8], [0, 0, -0.1, -0.1])
+    step_on = (terminal_energy(curb, *args) + terminal_energy(kerb_down, *args)
+               - 2 * 6.3 * 3.0)
+    over = terminal_energy(low, *args) - 6.3 * 3.0
+    assert 0 < over < step_on

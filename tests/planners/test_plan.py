@@ -21,14 +21,31 @@ def test_flat_ground_gives_equal_neutral_steps(leg):
     assert p.phase_durations.sum(axis=1) == pytest.approx(p.step_lengths / 1.34)
 
 
+def _to_reach(p):
+    """Energy [J/kg] of a plan's steps plus the terminal estimate to the common reach."""
+    return p.energy_total + p.stats["terminal_energy"]
+
+
 @settings(max_examples=30, deadline=None)
 @given(terrain_profiles())
 def test_optimal_is_best_and_fixed_never_beats_it(leg, profile):
+    # the searches' criterion: the least energy to the horizon's common reach
     plans = {name: plan(profile, leg, 1.34, name) for name in ("best_first", "fixed", "optimal")}
     best = plans["optimal"]
     for name, p in plans.items():
         if p.ok:
             assert best.ok, name
+            assert p.stats["reach"] == best.stats["reach"]
+            assert _to_reach(best) <= _to_reach(p) * (1 + 1e-12), name
+    # the paper's criterion (Eq. 5 over the planned steps alone)
+    paper = PlannerConfig(terminal_cost=False)
+    plans = {name: plan(profile, leg, 1.34, name, paper)
+             for name in ("best_first", "fixed", "optimal")}
+    best = plans["optimal"]
+    for name, p in plans.items():
+        if p.ok:
+            assert best.ok, name
+            assert p.stats["terminal_energy"] == 0.0
             assert best.efficiency >= p.efficiency * (1 - 1e-12), name
             assert best.energy_per_metre <= p.energy_per_metre * (1 + 1e-12), name
 
@@ -158,5 +175,57 @@ def test_pruning_swing_pairs_does_not_change_the_optimum(leg, profile):
     finally:
         lattice.PRUNE_SWINGS = True
     assert pruned.status == full.status
-    assert pruned.efficiency == pytest.approx(full.efficiency, rel=1e-12)
+    assert _to_reach(pruned) == pytest.approx(_to_reach(full), rel=1e-12)
     assert pruned.stats["swing_curves"] <= full.stats["swing_curves"]
+
+
+def _walk(profile, leg, planner, config, distance):
+    """A lone walker on a profile with a receding horizon: plan, take the first step,
+    plan again. Returns the energy [J/kg] to ``distance`` (the last step pro rata) and
+    the step lengths [m]."""
+    s, trailing, energy, lengths = 0.0, None, 0.0, []
+    while s < distance:
+        p = plan(profile, leg, 1.34, planner, config, trailing=trailing, origin=s)
+        assert p.ok, p.message
+        step, e = float(p.step_lengths[0]), float(p.E[0])
+        energy += e * min(1.0, (distance - s) / step)
+        lengths.append(step)
+        trailing, s = -step, s + step
+    return energy, np.array(lengths)
+
+
+_GROUNDS = {
+    "flat": GroundProfile.flat(20.0),
+    "stairs up": GroundProfile.stairs(0.17, 0.30, 6, first_edge=3.0),
+    "stairs down": GroundProfile.stairs(-0.17, 0.30, 6, first_edge=3.0),
+    "curb": GroundProfile([-2, 2.9, 2.9, 20], [0, 0, 0.15, 0.15]),
+    "low block": GroundProfile([-2, 3.2, 3.2, 3.5, 3.5, 20], [0, 0, 0.1, 0.1, 0, 0]),
+}
+_CROWD = PlannerConfig(n_steps=3, min_step_ratio=0.15)  # crowdwalk.crowd's planner config
+
+
+@pytest.mark.parametrize("ground", sorted(_GROUNDS))
+def test_planned_lone_walker_never_spends_more_than_the_fixed_one(leg, ground):
+    """Walked step by step over the same ground to the same point, the planned walker's
+    summed energy is at most the unplanned one's (equal on level ground)."""
+    profile = _GROUNDS[ground]
+    planned, steps = _walk(profile, leg, "best_first", _CROWD, 6.0)
+    fixed, _ = _walk(profile, leg, "fixed", _CROWD, 6.0)
+    assert planned <= fixed * (1 + 1e-9)
+    if ground == "flat":
+        assert planned == pytest.approx(fixed, rel=1e-12)
+    assert steps.min() > 0.25  # no shuffling in front of a flight or a curb
+
+
+def test_without_the_terminal_cost_the_planner_shuffles_before_a_flight(leg):
+    """Chen & Li's Eq. 5 over the planned steps alone: leaving the flight beyond the
+    horizon looks efficient, so the walker shortens its steps before it and spends more
+    than the unplanned walker (why PlannerConfig.terminal_cost exists)."""
+    from dataclasses import replace
+
+    paper = replace(_CROWD, terminal_cost=False)
+    profile = _GROUNDS["stairs up"]
+    planned, steps = _walk(profile, leg, "best_first", paper, 6.0)
+    fixed, _ = _walk(profile, leg, "fixed", paper, 6.0)
+    assert steps.min() < 0.2
+    assert planned > fixed
