@@ -32,12 +32,10 @@ def test_bad_scenario_is_reported_before_any_progress_bar(tmp_path):
         assert not (tmp_path / "r").exists()
 
 
-def test_bad_planner_and_duration_name_the_field(tmp_path):
-    scenario = "scenarios/rimea1_corridor.yaml"
-    result = runner.invoke(app, ["run", scenario, "--out", str(tmp_path), "--planner", "nope"])
+
+def test_compare_checks_its_planners_and_duration_first(tmp_path):
+    result = runner.invoke(app, ["compare", "scenarios/rimea1_corridor.yaml", "--out",
+                                 str(tmp_path / "c"), "--planners", "fixed,x"])
     assert result.exit_code == 2
-    assert "run.planner must be one of best_first, fixed, optimal; got 'nope'." in result.output
-    result = runner.invoke(app, ["compare", scenario, "--out", str(tmp_path),
-                                 "--planners", "fixed,x", "--duration", "-1"])
-    assert result.exit_code == 2
-    assert "compare.duration must be > 0 [s]; got -1.0." in result.output
+    assert "compare.planner must be one of best_first, fixed, optimal; got 'x'." in result.output
+    assert not (tmp_path / "c").exists()
