@@ -128,20 +128,14 @@ def _sim_progress(quiet: bool, label: str):
     )
 
 
-def _check_before_running(command: str, scenario: Path, duration: float | None,
-                          planners: tuple[str, ...] = ()) -> None:
-    """Load the scenario and build its world (milliseconds), so that bad input ends with
-    its one-line message before a progress bar is drawn."""
-    from crowdwalk.errors import invalid
+def _check_before_running(scenario: Path, overrides) -> None:
+    """Check the overrides, load the scenario and build its world (milliseconds), so that
+    bad input ends with its one-line message before a progress bar is drawn."""
+    from crowdwalk.crowd.run import check_overrides
     from crowdwalk.scenario import load_scenario
     from crowdwalk.world import build_world
-    from planners import PLANNERS
 
-    if duration is not None and not duration > 0:
-        raise invalid(command, "duration", "> 0 [s]", duration)
-    for name in planners:
-        if name not in PLANNERS:
-            raise invalid(command, "planner", f"one of {', '.join(sorted(PLANNERS))}", name)
+    check_overrides(overrides)
     build_world(load_scenario(scenario))
 
 
@@ -170,8 +164,8 @@ def run(
     from crowdwalk.crowd.run import RunOverrides, run_scenario
 
     _term_as_interrupt()
-    _check_before_running("run", scenario, duration, (planner,) if planner else ())
     overrides = RunOverrides(planner=planner, duration=duration)
+    _check_before_running(scenario, overrides)
     with _sim_progress(quiet, scenario.stem) as bar:
         update = None
         if bar is not None:
@@ -202,11 +196,13 @@ def compare(
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
 ) -> None:
     """Run the same scenario, seed and agents with each planner; write report.md."""
-    from crowdwalk.compare import compare_planners
+    from crowdwalk.compare import check_planners, compare_planners
+    from crowdwalk.crowd.run import RunOverrides
 
     _term_as_interrupt()
     names = [p.strip() for p in planners.split(",") if p.strip()]
-    _check_before_running("compare", scenario, duration, tuple(names))
+    check_planners(names)
+    _check_before_running(scenario, RunOverrides(duration=duration))
     with _sim_progress(quiet, scenario.stem) as bar:
         update = None
         if bar is not None:

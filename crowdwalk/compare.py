@@ -27,7 +27,7 @@ import numpy as np
 
 from crowdwalk.errors import invalid
 
-__all__ = ["compare_planners", "terrain_table", "paired_trips", "BOOTSTRAP"]
+__all__ = ["check_planners", "compare_planners", "terrain_table", "paired_trips", "BOOTSTRAP"]
 
 ProgressCallback = Callable[[str, float, float, int], None]
 
@@ -169,6 +169,20 @@ def _fmt(x, digits: int = 3) -> str:
     return f"{x:.{digits}g}" if isinstance(x, float) else str(x)
 
 
+def check_planners(planners: list[str]) -> None:
+    """Raise ``InputError`` unless ``planners`` is a non-empty list of distinct names from
+    ``planners.PLANNERS``."""
+    from planners import PLANNERS
+
+    if not planners:
+        raise invalid("compare", "planners", "a non-empty comma-separated list", planners)
+    for name in planners:
+        if name not in PLANNERS:
+            raise invalid("compare", "planners", f"names from {sorted(PLANNERS)}", name)
+    if len(set(planners)) != len(planners):
+        raise invalid("compare", "planners", "without repeats", planners)
+
+
 def compare_planners(
     scenario,
     planners: list[str],
@@ -203,15 +217,8 @@ def compare_planners(
     from crowdwalk.crowd.run import RunOverrides, run_scenario
     from crowdwalk.plots import plot_by_terrain, plot_planner_comparison
     from crowdwalk.record import open_run
-    from planners import PLANNERS
 
-    if not planners:
-        raise invalid("compare", "planners", "a non-empty comma-separated list", planners)
-    for name in planners:
-        if name not in PLANNERS:
-            raise invalid("compare", "planners", f"names from {sorted(PLANNERS)}", name)
-    if len(set(planners)) != len(planners):
-        raise invalid("compare", "planners", "without repeats", planners)
+    check_planners(planners)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     summaries, tables, directions = {}, {}, {}

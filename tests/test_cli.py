@@ -32,10 +32,3 @@ def test_bad_scenario_is_reported_before_any_progress_bar(tmp_path):
         assert not (tmp_path / "r").exists()
 
 
-
-def test_compare_checks_its_planners_and_duration_first(tmp_path):
-    result = runner.invoke(app, ["compare", "scenarios/rimea1_corridor.yaml", "--out",
-                                 str(tmp_path / "c"), "--planners", "fixed,x"])
-    assert result.exit_code == 2
-    assert "compare.planner must be one of best_first, fixed, optimal; got 'x'." in result.output
-    assert not (tmp_path / "c").exists()

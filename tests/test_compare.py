@@ -53,6 +53,7 @@ def test_cli_rejects_unknown_planner_with_exit_2(tmp_path):
     assert result.exit_code == 2
     assert "compare.planners must be names from" in result.output
     assert "Traceback" not in result.output
+    assert "agents remaining" not in result.output  # checked before the progress bar
 
 
 def test_report_compares_the_same_trips_and_splits_by_step_direction(report):

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from crowdwalk.crowd.simulation import ARRIVED, WAITING, CrowdParams, CrowdSimulation
 from crowdwalk.errors import invalid
 
-__all__ = ["RunOverrides", "run_scenario", "prepare", "summarise"]
+__all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
 
 @dataclass(frozen=True)
@@ -50,6 +50,22 @@ class RunOverrides:
 ProgressCallback = Callable[[float, float, int], None]
 
 
+def check_overrides(overrides: RunOverrides) -> None:
+    """Raise ``InputError`` for an override outside its range."""
+    from planners import PLANNERS
+
+    o = overrides
+    if o.planner is not None and o.planner not in PLANNERS:
+        raise invalid("RunOverrides", "planner", f"one of {sorted(PLANNERS)}", o.planner)
+    if o.max_agents is not None and o.max_agents < 1:
+        raise invalid("RunOverrides", "max_agents", ">= 1", o.max_agents)
+    for name in ("duration", "fps"):
+        value = getattr(o, name)
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise invalid("RunOverrides", name, "> 0 [s]" if name == "duration" else "> 0 [1/s]",
+                          value)
+
+
 def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams | None = None):
     """World, population and simulation of a scenario (a path or a loaded Scenario).
 
@@ -61,6 +77,7 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
     import yaml
 
     overrides = overrides or RunOverrides()
+    check_overrides(overrides)
     params = params or CrowdParams()
     from crowdwalk.population import Population
     from crowdwalk.scenario import Scenario, load_scenario
@@ -77,15 +94,8 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
     rng = np.random.default_rng(sc.simulation.seed)
     pop = Population.from_scenario(sc, world.routes, rng)
     if overrides.planner is not None:
-        from crowdwalk.scenario import Group
-
-        allowed = Group.model_fields["planner"].annotation.__args__
-        if overrides.planner not in allowed:
-            raise invalid("RunOverrides", "planner", f"one of {list(allowed)}", overrides.planner)
         pop = pop.with_planner(overrides.planner)
     if overrides.max_agents is not None:
-        if overrides.max_agents < 1:
-            raise invalid("RunOverrides", "max_agents", ">= 1", overrides.max_agents)
         order = np.argsort(pop.spawn_time, kind="stable")[: overrides.max_agents]
         pop = pop.take(np.sort(order))
     duration = overrides.duration if overrides.duration is not None else sc.simulation.duration

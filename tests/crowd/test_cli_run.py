@@ -33,9 +33,9 @@ def test_bad_input_exits_2_without_traceback(tmp_path):
     for args, text in (
         (["run", str(tmp_path / "missing.yaml"), "--out", str(tmp_path)], "file not found"),
         (["run", str(SCENARIO), "--out", str(tmp_path), "--duration", "-1"],
-         "run.duration must be > 0 [s]; got -1.0."),
+         "RunOverrides.duration must be > 0 [s]; got -1.0."),
         (["run", str(SCENARIO), "--out", str(tmp_path), "--planner", "teleport"],
-         "run.planner must be one of best_first, fixed, optimal; got 'teleport'."),
+         "RunOverrides.planner must be one of"),
     ):
         result = runner.invoke(app, args)
         assert result.exit_code == 2, (args, result.output)
