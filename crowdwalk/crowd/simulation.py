@@ -65,8 +65,14 @@ class CrowdParams:
     Attributes
     ----------
     radius_ratio : float
-        Body radius over body height [-] (0.115: 0.20 m for a 1.75 m person; shoulder
-        half-breadth 0.13 H (Winter 2009) minus arm compression in crowds).
+        Body radius over body height [-] (0.105: 0.18 m for a 1.71 m person, so that two
+        bodies standing one behind the other are 0.36 m apart, the standstill spacing
+        Seyfried et al. (2005, J. Stat. Mech. P10002) measured in single file; a disc
+        stands for a body about 0.26 H broad (Winter 2009) but only about half as deep.
+        With 0.115 H (the shoulder half-breadth less some arm compression) the 1 m
+        bottleneck passed 1.43 /s instead of Seyfried et al.'s (2009) 1.9 /s: two such
+        discs abreast plus their wall clearance barely fit, so the two lanes of the
+        "zipper" (Hoogendoorn & Daamen 2005) rarely formed).
     foot_half_width : float
         Lateral distance of each foot's centre from the walking line [m] (stride width
         about 0.1 m, normative.json).
@@ -100,7 +106,7 @@ class CrowdParams:
     steering : SteeringParams
     """
 
-    radius_ratio: float = 0.115
+    radius_ratio: float = 0.105
     foot_half_width: float = 0.05
     wait_time: float = 0.25
     target_distance: float = 2.0

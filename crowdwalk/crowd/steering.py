@@ -8,11 +8,17 @@ neighbours and walls — and takes the best one, or stays put when no step impro
 
 Deviation from OSM, for the "bodies never overlap" guarantee: a candidate is *hard*
 limited by a swept-body test in the spirit of velocity obstacles (Fiorini & Shiller 1998):
-the body's straight sweep during the step (a capsule of the agent's radius) must keep
-clear of every neighbour's committed remaining sweep and of the walls. Each candidate gets
-the longest step that stays clear ("free length"); the footstep planner may then shorten
-the step but never lengthen it beyond that. Because every agent only commits sweeps that
-are clear of all committed sweeps, no two bodies ever overlap.
+the body moving along its straight sweep during the step (a disc of the agent's radius)
+must keep clear, at every instant from now on, of every neighbour moving along its
+committed remaining sweep and standing at its end afterwards, and of the walls. Each
+candidate gets the longest step that stays clear ("free length"); the footstep planner may
+then shorten the step but never lengthen it beyond that. Because every agent only commits
+motions that are clear of all committed motions (and an agent stands still until it
+commits the next), no two bodies ever overlap. The test is in time, not against the
+neighbour's whole sweep: a follower may step into the room its leader vacates during the
+same step, as people walking in line do (they even fall into lockstep at high density,
+Jelić et al. 2012, Phys. Rev. E 86, 046111); the whole-sweep test kept a follower about
+a step further behind (through a 1 m opening 1.09 /s instead of 1.49 /s, all else equal).
 
 Counterflow: neighbours moving towards the agent are also repelled at their position
 ``anticipation`` seconds ahead (anticipation as in Moussaïd et al. 2011 / Karamouzas et
