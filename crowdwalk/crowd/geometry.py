@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["point_segment_distance", "segment_distance"]
+__all__ = ["moving_distance", "point_segment_distance", "segment_distance"]
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -42,3 +42,31 @@ def segment_distance(
     u = _cross(qp, r) / safe
     crossing = ok & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
     return np.where(crossing, 0.0, d)
+
+
+def _closest_on_piece(r0: np.ndarray, w: np.ndarray, span: np.ndarray) -> np.ndarray:
+    """min over s in [0, span] of |r0 + w s| (arrays (..., 2), span (...))."""
+    ww = w[..., 0] * w[..., 0] + w[..., 1] * w[..., 1]
+    s = np.clip(-(r0[..., 0] * w[..., 0] + r0[..., 1] * w[..., 1]) / np.where(ww > 0, ww, 1.0),
+                0.0, span)
+    return np.hypot(r0[..., 0] + s * w[..., 0], r0[..., 1] + s * w[..., 1])
+
+
+def moving_distance(a: np.ndarray, va: np.ndarray, ta: np.ndarray, b: np.ndarray,
+                    vb: np.ndarray, tb: np.ndarray) -> np.ndarray:
+    """Closest approach [m] of two points that move from now on (time 0) and then stand.
+
+    Point A is at ``a`` now and moves with velocity ``va`` [m/s] for ``ta`` [s] (>= 0),
+    then stands; likewise B (``b``, ``vb``, ``tb``). Arrays (..., 2) and (...) broadcast;
+    result (...): the least distance between them at any time >= 0 (exact: the relative
+    position is piecewise linear in time with breaks at ``ta`` and ``tb``).
+    """
+    t1 = np.minimum(ta, tb)
+    t2 = np.maximum(ta, tb)
+    r0 = a - b
+    w1 = va - vb
+    d = _closest_on_piece(r0, w1, t1)
+    r1 = r0 + t1[..., None] * w1
+    w2 = np.where((ta < tb)[..., None], -vb, va)  # after the first stops, the other moves
+    d = np.minimum(d, _closest_on_piece(r1, w2, t2 - t1))
+    return d  # the last piece (both standing) is the end of the second one

@@ -43,7 +43,7 @@ from scipy.spatial import cKDTree
 
 from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.footsteps import FootstepPlanner
-from crowdwalk.crowd.geometry import segment_distance
+from crowdwalk.crowd.geometry import moving_distance, segment_distance
 from crowdwalk.crowd.navigation import RouteTable
 from crowdwalk.crowd.steering import Neighbours, SteeringParams, choose_steps
 from crowdwalk.errors import invalid
@@ -65,8 +65,14 @@ class CrowdParams:
     Attributes
     ----------
     radius_ratio : float
-        Body radius over body height [-] (0.115: 0.20 m for a 1.75 m person; shoulder
-        half-breadth 0.13 H (Winter 2009) minus arm compression in crowds).
+        Body radius over body height [-] (0.105: 0.18 m for a 1.71 m person, so that two
+        bodies standing one behind the other are 0.36 m apart, the standstill spacing
+        Seyfried et al. (2005, J. Stat. Mech. P10002) measured in single file; a disc
+        stands for a body about 0.26 H broad (Winter 2009) but only about half as deep.
+        With 0.115 H (the shoulder half-breadth less some arm compression) the 1 m
+        bottleneck passed 1.43 /s instead of Seyfried et al.'s (2009) 1.9 /s: two such
+        discs abreast plus their wall clearance barely fit, so the two lanes of the
+        "zipper" (Hoogendoorn & Daamen 2005) rarely formed).
     foot_half_width : float
         Lateral distance of each foot's centre from the walking line [m] (stride width
         about 0.1 m, normative.json).
@@ -100,7 +106,7 @@ class CrowdParams:
     steering : SteeringParams
     """
 
-    radius_ratio: float = 0.115
+    radius_ratio: float = 0.105
     foot_half_width: float = 0.05
     wait_time: float = 0.25
     target_distance: float = 2.0
@@ -426,7 +432,8 @@ class CrowdSimulation:
                        / np.where(span > 0, span, 1.0)[..., None], 0.0)
         return Neighbours(valid=valid, now=now[nb_safe], end=st.pos1[agent], velocity=vel,
                           heading=st.heading[agent],
-                          radius=self.radius[agent])
+                          radius=self.radius[agent],
+                          remaining=np.where(moving, st.t1[agent] - t, 0.0))
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm = self.state, self.params
@@ -473,7 +480,8 @@ class CrowdSimulation:
         choice = choose_steps(pos, st.stance[idx], st.heading[idx], self.radius[idx], route_dir,
                               target, self.nominal_step[idx], nbs, self.clearance,
                               prm.steering, speed=self.pop.free_speed[idx],
-                              stuck=st.stuck[idx])
+                              stuck=st.stuck[idx], step_time=self.min_step_time[idx],
+                              lag=t - te)
         self.wall_steering += _time.perf_counter() - w0
 
         move = choice.move.copy()
@@ -538,12 +546,19 @@ class CrowdSimulation:
                 stepped = self._shorten(idx, failed, np.minimum(free[failed], length),
                                         choice.direction, sl, sh, energy, swing, move)
                 failed = np.setdiff1d(failed, stepped)
-            # the exact sweep of the step taken (steering tested sampled lengths only)
+            # the exact step taken, in time (steering tested sampled lengths only): the
+            # body moving along its sweep against each neighbour moving along its own
             go = np.flatnonzero(move)
             if go.size and nbs.valid.shape[1]:
                 end = st.stance[idx[go]] + 0.5 * sl[go, None] * choice.direction[go]
-                gap = segment_distance(pos[go, None, :], end[:, None, :], nbs.now[go],
-                                       nbs.end[go])
+                dur = self._durations(idx[go], sl[go], sh[go])
+                vel = (end - pos[go]) / dur[:, None]
+                gone = np.minimum(t - te[go], dur)
+                rem = nbs.remaining[go]
+                vq = (nbs.end[go] - nbs.now[go]) / np.where(rem > 0, rem, 1.0)[..., None]
+                gap = moving_distance((pos[go] + gone[:, None] * vel)[:, None, :],
+                                      vel[:, None, :], (dur - gone)[:, None], nbs.now[go],
+                                      vq, rem)
                 clash = ((gap < self.radius[idx[go], None] + nbs.radius[go])
                          & nbs.valid[go]).any(axis=1)
                 move[go[clash]] = False
@@ -605,7 +620,13 @@ class CrowdSimulation:
             pairs = tree.query_pairs(2 * (half.max() + self.radius[a].max()), output_type="ndarray")
             if len(pairs):
                 i, j = pairs[:, 0], pairs[:, 1]
-                gap = segment_distance(start[i], end[i], start[j], end[j])
+                # in time (from now on), as in the test against the neighbours
+                dur = self._durations(a, sl[mv], sh[mv])
+                vel = (end - start) / dur[:, None]
+                gone = np.minimum(t - te[mv], dur)
+                now = start + gone[:, None] * vel
+                gap = moving_distance(now[i], vel[i], (dur - gone)[i], now[j], vel[j],
+                                      (dur - gone)[j])
                 bad = gap < self.radius[a[i]] + self.radius[a[j]]
                 if bad.any():
                     # the later heel strike (then the higher id) yields and waits
@@ -664,16 +685,7 @@ class CrowdSimulation:
         L, H = sl[go], sh[go]
         new_c = st.stance[a] + L[:, None] * d
         new_z = st.stance_z[a] + H
-        # speed model: Weidmann stairs, Tobler slopes, cadence floor
-        v0 = self.pop.free_speed[a]
-        grade = H / np.maximum(L, 1e-6)
-        factor = np.where(H > prm.stair_rise, STAIR_UP_FACTOR,
-                          np.where(H < -prm.stair_rise, STAIR_DOWN_FACTOR,
-                                   1.0 / np.maximum(1.0, np.exp(3.5 * (np.abs(grade + 0.05)
-                                                                       - 0.05)))))
-        stair = np.abs(H) > prm.stair_rise
-        duration = np.where(stair, L / (v0 * factor),
-                            np.maximum(L / (v0 * factor), self.min_step_time[a]))
+        duration = self._durations(a, L, H)
         t0 = te[go]
         end = 0.5 * (st.stance[a] + new_c)
         st.distance[a] += np.linalg.norm(end - st.pos1[a], axis=1)
@@ -713,6 +725,20 @@ class CrowdSimulation:
             "from_x": st.trail[a][:, 0], "from_y": st.trail[a][:, 1],
             "swing": swing[go],
         })
+
+    def _durations(self, a: np.ndarray, L: np.ndarray, H: np.ndarray) -> np.ndarray:
+        """Duration [s] of steps of length ``L`` and rise ``H`` (k,) [m] by agents ``a``."""
+        prm = self.params
+        # speed model: Weidmann stairs, Tobler slopes, cadence floor
+        v0 = self.pop.free_speed[a]
+        grade = H / np.maximum(L, 1e-6)
+        factor = np.where(H > prm.stair_rise, STAIR_UP_FACTOR,
+                          np.where(H < -prm.stair_rise, STAIR_DOWN_FACTOR,
+                                   1.0 / np.maximum(1.0, np.exp(3.5 * (np.abs(grade + 0.05)
+                                                                       - 0.05)))))
+        stair = np.abs(H) > prm.stair_rise
+        return np.where(stair, L / (v0 * factor),
+                        np.maximum(L / (v0 * factor), self.min_step_time[a]))
 
     def _ground_type(self, a, foothold, d) -> tuple[np.ndarray, np.ndarray]:
         """Terrain kind under footholds (k,) and whether each is on an obstacle: a block

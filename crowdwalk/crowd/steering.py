@@ -8,11 +8,17 @@ neighbours and walls — and takes the best one, or stays put when no step impro
 
 Deviation from OSM, for the "bodies never overlap" guarantee: a candidate is *hard*
 limited by a swept-body test in the spirit of velocity obstacles (Fiorini & Shiller 1998):
-the body's straight sweep during the step (a capsule of the agent's radius) must keep
-clear of every neighbour's committed remaining sweep and of the walls. Each candidate gets
-the longest step that stays clear ("free length"); the footstep planner may then shorten
-the step but never lengthen it beyond that. Because every agent only commits sweeps that
-are clear of all committed sweeps, no two bodies ever overlap.
+the body moving along its straight sweep during the step (a disc of the agent's radius)
+must keep clear, at every instant from now on, of every neighbour moving along its
+committed remaining sweep and standing at its end afterwards, and of the walls. Each
+candidate gets the longest step that stays clear ("free length"); the footstep planner may
+then shorten the step but never lengthen it beyond that. Because every agent only commits
+motions that are clear of all committed motions (and an agent stands still until it
+commits the next), no two bodies ever overlap. The test is in time, not against the
+neighbour's whole sweep: a follower may step into the room its leader vacates during the
+same step, as people walking in line do (they even fall into lockstep at high density,
+Jelić et al. 2012, Phys. Rev. E 86, 046111); the whole-sweep test kept a follower about
+a step further behind (through a 1 m opening 1.09 /s instead of 1.49 /s, all else equal).
 
 Counterflow: neighbours moving towards the agent are also repelled at their position
 ``anticipation`` seconds ahead (anticipation as in Moussaïd et al. 2011 / Karamouzas et
@@ -31,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import point_segment_distance
+from crowdwalk.crowd.geometry import moving_distance, point_segment_distance
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -107,6 +113,10 @@ class Neighbours:
         Neighbour body radius [m].
     heading : (m, K) float, optional
         Neighbour walking direction [rad] (tells who faces whom when both stand).
+    remaining : (m, K) float, optional
+        Time until the neighbour reaches ``end`` [s] (0 when standing). With it (and the
+        deciding agents' step timing) the swept-body test is made in time: see
+        :func:`choose_steps`.
     """
 
     valid: np.ndarray
@@ -115,6 +125,7 @@ class Neighbours:
     velocity: np.ndarray
     radius: np.ndarray
     heading: np.ndarray | None = None
+    remaining: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -157,6 +168,8 @@ def choose_steps(
     params: SteeringParams = SteeringParams(),
     speed: np.ndarray | None = None,
     stuck: np.ndarray | None = None,
+    step_time: np.ndarray | None = None,
+    lag: np.ndarray | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -186,6 +199,14 @@ def choose_steps(
         Walking speeds for the anticipation term [m/s] (default 2 nominal steps per s).
     stuck : (m,), optional
         How long each agent has been standing [s] (for giving way).
+    step_time : (m,), optional
+        Shortest step duration [s]; a step of length L lasts ``max(L / speed,
+        step_time)``. Given with ``neighbours.remaining``, the hard test is made in time
+        (the two bodies moving along their sweeps at the same time, each standing at its
+        end afterwards) instead of against the neighbour's whole remaining sweep: a
+        follower may step into the room its leader is vacating during the same step.
+    lag : (m,), optional
+        How long ago each agent's step would have started (its heel strike) [s].
 
     Returns
     -------
@@ -231,13 +252,25 @@ def choose_steps(
             rel = take(relevant, order, axis=1)[:, None, None, :]
             p0 = position[:, None, None, None, :]
             p1 = ends[:, :, :, None, :]
-            d = np.minimum(
-                np.minimum(point_segment_distance(p1, q0, q1), point_segment_distance(
-                    q0, p0, p1)),
-                np.minimum(point_segment_distance(q1, p0, p1),
-                           take(gap0, order, axis=1)[:, None, None, :]),
-            )
-            d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (m, C, L, k)
+            if neighbours.remaining is not None and step_time is not None:
+                # in time: both bodies move along their sweeps from now on and then stand
+                # (the candidate's body from ``position`` to ``ends`` over the step)
+                dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])
+                late = np.zeros(m) if lag is None else np.asarray(lag, dtype=float)
+                vel = (p1 - p0) / dur[:, None, :, None, None]
+                gone = np.minimum(late[:, None], dur)  # (m, L)
+                tq = take(neighbours.remaining, order, axis=1)[:, None, None, :]
+                vq = (q1 - q0) / np.where(tq > 0, tq, 1.0)[..., None]
+                d = moving_distance(p0 + gone[:, None, :, None, None] * vel, vel,
+                                    (dur - gone)[:, None, :, None], q0, vq, tq)
+            else:
+                d = np.minimum(
+                    np.minimum(point_segment_distance(p1, q0, q1), point_segment_distance(
+                        q0, p0, p1)),
+                    np.minimum(point_segment_distance(q1, p0, p1),
+                               take(gap0, order, axis=1)[:, None, None, :]),
+                )
+                d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (m, C, L, k)
             clear = (d >= take(need, order, axis=1)[:, None, None, :]) | ~rel
             ok = ok & clear.all(axis=-1)
     n_free = np.cumprod(ok, axis=2).sum(axis=2)  # (m, C) feasible lengths from the short end

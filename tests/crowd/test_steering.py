@@ -77,3 +77,30 @@ def test_walls_are_respected():
     if choice.move[0]:
         end = 0.5 * choice.free_length[0] * choice.direction[0]
         assert corridor(end[None])[0] >= R - 1e-9
+
+
+def test_follower_steps_into_the_room_its_leader_vacates():
+    # in single file (a 0.6 m corridor) the leader is 0.5 m ahead and walking 0.6 m
+    # further within 0.5 s: against its whole sweep the follower could barely step; in time
+    # it follows at the same pace
+    corridor = ClearanceField.from_area(shapely.box(-6, -0.3, 6, 0.3))
+    now, end = np.array([[0.5, 0.0]]), np.array([[1.1, 0.0]])
+    nbs = Neighbours(valid=np.ones((1, 1), bool), now=now[None], end=end[None],
+                     velocity=(end - now)[None] / 0.5, radius=np.full((1, 1), R),
+                     remaining=np.full((1, 1), 0.5))
+    kw = dict(position=np.zeros((1, 2)), stance=np.zeros((1, 2)), heading=np.zeros(1),
+              radius=np.array([R]), route_direction=np.array([[1.0, 0.0]]),
+              target=np.array([[3.0, 0.0]]), nominal_step=np.array([0.7]), neighbours=nbs,
+              clearance=corridor, speed=np.array([1.3]))
+    whole = choose_steps(**kw)
+    timed = choose_steps(**kw, step_time=np.array([0.5]))
+    assert whole.free_length[0] <= 0.15
+    assert timed.move[0] and timed.free_length[0] >= 0.6
+    # and the body stays clear of the leader at every instant (both stand afterwards)
+    L = timed.free_length[0]
+    dur = max(L / 1.3, 0.5)
+    vel = 0.5 * L * timed.direction[0] / dur
+    t = np.linspace(0.0, 2.0, 2001)[:, None]
+    me = vel * np.minimum(t, dur)
+    leader = now[0] + (end[0] - now[0]) / 0.5 * np.minimum(t, 0.5)
+    assert np.linalg.norm(me - leader, axis=1).min() >= 2 * R - 1e-9
