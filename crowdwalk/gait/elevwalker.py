@@ -24,8 +24,8 @@ at ``t + 0.5`` (columns foot, shank, thigh, pelvis, :mod:`crowdwalk.gait.dataset
 Optionally the swing ankle is pulled toward a target with IK on the swing leg (the
 Animator's landing correction and swing-clearance blend, issue item 6).
 
-Everything is vectorised over agents: each Gauss–Newton iteration evaluates the
-residuals at the point and at its finite-difference neighbours in one stacked batch.
+Everything is vectorised over agents; the two Gauss–Newton solves run per agent in the
+compiled kernels of :mod:`crowdwalk.gait.complexes`.
 Conventions: world x east, y north, z up; ψ from +x; angles [rad]; lengths [m].
 """
 
@@ -50,6 +50,7 @@ from crowdwalk.body import (
     rotation_z,
 )
 from crowdwalk.errors import invalid
+from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
 
 __all__ = [
     "GaitStyle",
@@ -335,69 +336,6 @@ def solve_single_dof(
     return _wrap(best), ok & (score > 1e-6)  # a vanishing projection has no elevation
 
 
-def _gauss_newton(residual, x0: np.ndarray, tol: float, max_iter: int,
-                  jacobian: np.ndarray | None = None):  # fmt: skip
-    """Batched Gauss–Newton with forward-difference Jacobians, warm-started.
-
-    ``residual(x, rows)`` maps points (p·q, m) of the agents ``rows`` (q,) tiled p times
-    to residuals (p·q, m). When the previous frame's Jacobians (k, m, m) are given, up to
-    two chord steps reuse them (one residual evaluation each, no differencing); agents
-    that are still off then take full Gauss–Newton steps, each evaluating the point's m
-    finite-difference neighbours in one stacked batch.
-
-    Returns the solution (k, m), a converged flag (k,), the residual (k, m) and the
-    latest Jacobians (k, m, m) (NaN where none was formed).
-    """
-    k, m = x0.shape
-    eps = 1e-6
-    eye = np.eye(m)
-    rows = np.arange(k)
-    x = x0.copy()
-    r = residual(x, rows)
-    jac = np.full((k, m, m), np.nan) if jacobian is None else jacobian.copy()
-
-    def converged(res):
-        return np.all(np.abs(res) < tol, axis=1) & np.all(np.isfinite(res), axis=1)
-
-    def step(j, res):
-        jt = np.swapaxes(j, 1, 2)
-        lhs = jt @ j + 1e-12 * eye
-        rhs = -np.einsum("kij,kj->ki", jt, res)
-        good = np.isfinite(lhs).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=1)
-        lhs[~good] = eye
-        rhs[~good] = 0.0
-        dx = np.linalg.solve(lhs, rhs[..., None])[..., 0]
-        return np.clip(dx, -0.5, 0.5)  # trust region: at most 0.5 rad per iteration
-
-    done = converged(r)
-    for _ in range(2):  # chord steps with the previous frame's Jacobian
-        active = np.flatnonzero(~done & np.isfinite(jac).all(axis=(1, 2)))
-        if active.size == 0:
-            break
-        x_try = x[active] + step(jac[active], r[active])
-        r_try = residual(x_try, active)
-        better = np.linalg.norm(r_try, axis=1) < np.linalg.norm(r[active], axis=1)
-        keep = active[better]
-        x[keep], r[keep] = x_try[better], r_try[better]
-        done[keep] = converged(r_try[better])
-        if not better.all():
-            jac[active[~better]] = np.nan  # stale Jacobian: difference it anew
-    for _ in range(max_iter):
-        active = np.flatnonzero(~done)
-        if active.size == 0:
-            break
-        xa = x[active]
-        q = active.size
-        stacked = np.concatenate([xa + eps * eye[i] for i in range(m)], axis=0)
-        r_nb = residual(stacked, np.tile(active, m)).reshape(m, q, m)
-        ja = np.stack([(r_nb[i] - r[active]) / eps for i in range(m)], axis=-1)
-        jac[active] = ja
-        x[active] = xa + step(ja, r[active])
-        r[active] = residual(x[active], active)
-        done[active] = converged(r[active])
-    return x, done & np.isfinite(x).all(axis=1), r, jac
-
-
 # --- the walker -------------------------------------------------------------------------
 
 
@@ -497,7 +435,6 @@ def elevwalker_pose(
     phi_st = np.asarray(stance_angles, dtype=float)
     phi_sw = np.asarray(swing_angles, dtype=float)
     toe_out = np.broadcast_to(np.asarray(toe_out, dtype=float), (k,))
-    all_rows = np.arange(k)
 
     # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
     #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
@@ -514,25 +451,11 @@ def elevwalker_pose(
 
     # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
     tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
-    def stance_chain(x, rows):
-        r_talus = r_foot[rows] @ np.swapaxes(axis_angle_matrix(sub_axis[rows], x[:, 1]), 1, 2)
-        r_shank = r_talus @ np.swapaxes(axis_angle_matrix(tc_axis[rows], x[:, 0]), 1, 2)
-        knee = ankle[rows] + body.shank[rows, None] * r_shank[:, :, 2]
-        theta, ok = solve_single_dof(r_shank, _EY, _DOWN, heading[rows], phi_st[rows, 2])
-        r_thigh = r_shank @ rotation_y(theta)
-        hip = knee + body.thigh[rows, None] * r_thigh[:, :, 2]
-        return r_shank, knee, theta, ok, r_thigh, hip
-
-    def stance_residual(x, rows):
-        r_shank, _, _, _, _, hip = stance_chain(x, rows)
-        e = _wrap(sagittal_elevation(-r_shank[:, :, 2], heading[rows]) - phi_st[rows, 1])
-        width = _dot(ankle[rows] - hip, normal[rows]) - w_stance[rows]
-        return np.stack([e, width], axis=1)
-
-    x_ankle, ok_ankle, _, jac_ankle = _gauss_newton(
-        stance_residual, warm.ankle, style.tolerance, style.max_iterations, warm.ankle_jacobian
-    )
-    r_shank_st, _, knee_rel, ok_knee_st, r_thigh_st, hip_st = stance_chain(x_ankle, all_rows)
+    x_ankle, ok_ankle, jac_ankle, r_shank_st, knee_rel, ok_knee_st, r_thigh_st, hip_st = (
+        solve_stance_ankle(r_foot, ankle, tc_axis, sub_axis, body.shank, body.thigh, heading,
+                           phi_st[:, 1], phi_st[:, 2], normal, w_stance, warm.ankle,
+                           warm.ankle_jacobian, style.tolerance, style.max_iterations)
+    )  # fmt: skip
 
     # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
     lst = side_st * style.pelvic_list * np.sin(2.0 * np.pi * phase)
@@ -542,29 +465,11 @@ def elevwalker_pose(
     y_pelvis = r_pelvis[:, :, 1]
     root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
     hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
-    side_sw = -side_st
-
-    def swing_chain(x, rows):
-        r_thigh = r_pelvis[rows] @ rotation_y(x[:, 0]) @ rotation_x(x[:, 1]) @ rotation_z(x[:, 2])
-        knee_angle, ok = solve_single_dof(r_thigh, _EY, _DOWN, heading[rows], phi_sw[rows, 1])
-        r_shank = r_thigh @ rotation_y(knee_angle)
-        knee = hip_sw[rows] - body.thigh[rows, None] * r_thigh[:, :, 2]
-        ank = knee - body.shank[rows, None] * r_shank[:, :, 2]
-        return r_thigh, knee_angle, ok, r_shank, ank
-
-    def swing_residual(x, rows):
-        r_thigh, _, _, _, ank = swing_chain(x, rows)
-        nrm, fw = normal[rows], fwd[rows]
-        e = _wrap(sagittal_elevation(-r_thigh[:, :, 2], heading[rows]) - phi_sw[rows, 2])
-        width = _dot(ank - hip_sw[rows], nrm) - w_swing[rows]
-        f = r_thigh[:, :, 0]
-        out = side_sw[rows] * np.arctan2(_dot(f, nrm), _dot(f, fw))
-        return np.stack([e, width, _wrap(out - toe_out[rows])], axis=1)
-
-    x_hip, ok_hip, _, jac_hip = _gauss_newton(
-        swing_residual, warm.hip, style.tolerance, style.max_iterations, warm.hip_jacobian
-    )
-    r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = swing_chain(x_hip, all_rows)
+    x_hip, ok_hip, jac_hip, r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = (
+        solve_swing_hip(r_pelvis, hip_sw, body.thigh, body.shank, heading, phi_sw[:, 1],
+                        phi_sw[:, 2], normal, -side_st, toe_out, w_swing, warm.hip,
+                        warm.hip_jacobian, style.tolerance, style.max_iterations)
+    )  # fmt: skip
 
     # Optional swing-ankle target with two-link IK on the swing leg.
     if (swing_offset is not None or swing_goal is not None
