@@ -25,6 +25,7 @@ import numpy as np
 __all__ = ["solve_stance_ankle", "solve_swing_hip"]
 
 _EPS = 1e-6  # forward-difference step [rad]
+_CHORDS = 2  # chord steps with the previous frame's Jacobian
 _jit = nb.njit(cache=True, nogil=True)
 
 
@@ -232,124 +233,106 @@ def _step(jac, res, lhs, rhs, dx):
         dx[c] = min(max(dx[c], -0.5), 0.5)  # trust region: at most 0.5 rad per iteration
 
 
+def _solver(chain):
+    """Compiled Gauss–Newton ``solve(i, x, jac, args, tol, max_iter, scratch)`` over
+    ``chain(i, x, *args, res)``, which fills the residual res (m,) and the chain outputs
+    in ``args`` and returns (knee angle, knee solvable)."""
+
+    @_jit
+    def solve(i, x, jac, args, tol, max_iter, scratch):
+        """Agent i from x (m,), in place; ``jac`` (m, m) in: the previous frame's
+        Jacobian (NaN: none), out: the latest. On return the chain outputs belong to x;
+        returns the knee angle, knee solvable and converged at x.
+
+        Up to two chord steps reuse the previous Jacobian while they reduce the
+        residual; then Gauss–Newton steps with forward differences.
+        """
+        res, res_try, res_nb, x_try, dx, lhs, rhs = scratch
+        m = x.size
+        knee, knee_ok = chain(i, x, *args, res)
+        at_x = True  # the chain outputs belong to x
+        ok = _converged(res, tol)
+        for _ in range(_CHORDS):
+            if ok or not _finite(jac):
+                break
+            _step(jac, res, lhs, rhs, dx)
+            for a in range(m):
+                x_try[a] = x[a] + dx[a]
+            knee_try, ok_try = chain(i, x_try, *args, res_try)
+            norm, norm_try = _norm(res), _norm(res_try)
+            if not norm_try < norm:
+                at_x = False
+                jac[:] = np.nan  # stale Jacobian: difference it anew
+                break
+            x[:] = x_try
+            res[:] = res_try
+            knee, knee_ok = knee_try, ok_try
+            ok = _converged(res, tol)
+        for _ in range(max_iter):
+            if ok:
+                break
+            for c in range(m):
+                x_try[:] = x
+                x_try[c] += _EPS
+                chain(i, x_try, *args, res_nb)
+                for a in range(m):
+                    jac[a, c] = (res_nb[a] - res[a]) / _EPS
+            _step(jac, res, lhs, rhs, dx)
+            x += dx
+            knee, knee_ok = chain(i, x, *args, res)
+            at_x = True
+            ok = _converged(res, tol)
+        if not at_x:
+            knee, knee_ok = chain(i, x, *args, res)
+        return knee, knee_ok, ok and _finite(x)
+
+    return solve
+
+
+_solve_stance = _solver(_stance)
+_solve_swing = _solver(_swing)
+
+
+@_jit
+def _scratch(m):
+    """Work arrays of :func:`_solver`'s solve for m unknowns."""
+    return (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
+            np.empty((m, m)), np.empty(m))  # fmt: skip
+
+
 @_jit
 def _stance_gn(r_foot, ankle, tc_axis, sub_axis, shank, thigh, heading, phi_shank,
                phi_thigh, normal, w_stance, x0, jac0, tol, max_iter):  # fmt: skip
     k = x0.shape[0]
-    x_out = x0.copy()
-    jac_out = jac0.copy()
-    done = np.zeros(k, np.bool_)
-    r_shank_out = np.empty((k, 3, 3))
-    r_thigh_out = np.empty((k, 3, 3))
-    hip_out = np.empty((k, 3))
-    knee_out = np.empty(k)
-    knee_ok = np.zeros(k, np.bool_)
-    rot = np.empty((2, 3, 3))
-    r_shank, r_thigh, hip = np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
-    res, res_try, res_nb = np.empty(2), np.empty(2), np.empty(2)
-    x_try, dx, fd = np.empty(2), np.empty(2), np.empty((2, 2))
-    lhs, rhs = np.empty((2, 2)), np.empty(2)
+    x, jac = x0.copy(), jac0.copy()
+    done, knee, knee_ok = np.zeros(k, np.bool_), np.empty(k), np.zeros(k, np.bool_)
+    r_shank, r_thigh, hip = np.empty((k, 3, 3)), np.empty((k, 3, 3)), np.empty((k, 3))
+    rot, scratch = np.empty((2, 3, 3)), _scratch(2)
     for i in range(k):
         ch, sh = np.cos(heading[i]), np.sin(heading[i])
         args = (r_foot, ankle, tc_axis, sub_axis, shank[i], thigh[i], ch, sh, phi_shank[i],
-                phi_thigh[i], normal, w_stance[i], rot, r_shank, r_thigh, hip)  # fmt: skip
-        x = x_out[i]
-        jac = jac_out[i]
-        _stance(i, x, *args, res)
-        ok = _converged(res, tol)
-        for _ in range(2):  # chord steps with the previous frame's Jacobian
-            if ok or not _finite(jac):
-                break
-            _step(jac, res, lhs, rhs, dx)
-            x_try[:] = x
-            x_try += dx
-            _stance(i, x_try, *args, res_try)
-            if _norm(res_try) < _norm(res):
-                x[:] = x_try
-                res[:] = res_try
-                ok = _converged(res, tol)
-            else:
-                jac[:] = np.nan  # stale Jacobian: difference it anew
-        for _ in range(max_iter):
-            if ok:
-                break
-            for c in range(2):
-                x_try[:] = x
-                x_try[c] += _EPS
-                _stance(i, x_try, *args, res_nb)
-                for a in range(res.size):
-                    fd[a, c] = (res_nb[a] - res[a]) / _EPS
-            jac[:] = fd
-            _step(fd, res, lhs, rhs, dx)
-            x += dx
-            _stance(i, x, *args, res)
-            ok = _converged(res, tol)
-        done[i] = ok and _finite(x)
-        knee_out[i], knee_ok[i] = _stance(i, x, *args, res)
-        r_shank_out[i] = r_shank
-        r_thigh_out[i] = r_thigh
-        hip_out[i] = hip
-    return x_out, done, jac_out, r_shank_out, knee_out, knee_ok, r_thigh_out, hip_out
+                phi_thigh[i], normal, w_stance[i], rot, r_shank[i], r_thigh[i], hip[i])  # fmt: skip
+        knee[i], knee_ok[i], done[i] = _solve_stance(i, x[i], jac[i], args, tol, max_iter,
+                                                     scratch)  # fmt: skip
+    return x, done, jac, r_shank, knee, knee_ok, r_thigh, hip
 
 
 @_jit
 def _swing_gn(r_pelvis, hip_sw, thigh, shank, heading, phi_knee, phi_thigh, normal, side,
               toe_out, w_swing, x0, jac0, tol, max_iter):  # fmt: skip
     k = x0.shape[0]
-    x_out = x0.copy()
-    jac_out = jac0.copy()
-    done = np.zeros(k, np.bool_)
-    r_thigh_out = np.empty((k, 3, 3))
-    r_shank_out = np.empty((k, 3, 3))
-    ankle_out = np.empty((k, 3))
-    knee_out = np.empty(k)
-    knee_ok = np.zeros(k, np.bool_)
-    rot = np.empty((2, 3, 3))
-    r_thigh, r_shank, ankle = np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
-    res, res_try, res_nb = np.empty(3), np.empty(3), np.empty(3)
-    x_try, dx, fd = np.empty(3), np.empty(3), np.empty((3, 3))
-    lhs, rhs = np.empty((3, 3)), np.empty(3)
+    x, jac = x0.copy(), jac0.copy()
+    done, knee, knee_ok = np.zeros(k, np.bool_), np.empty(k), np.zeros(k, np.bool_)
+    r_thigh, r_shank, ankle = np.empty((k, 3, 3)), np.empty((k, 3, 3)), np.empty((k, 3))
+    rot, scratch = np.empty((2, 3, 3)), _scratch(3)
     for i in range(k):
         ch, sh = np.cos(heading[i]), np.sin(heading[i])
         args = (r_pelvis, hip_sw, thigh[i], shank[i], ch, sh, phi_knee[i], phi_thigh[i],
-                normal, side[i], toe_out[i], w_swing[i], rot, r_thigh, r_shank, ankle)  # fmt: skip
-        x = x_out[i]
-        jac = jac_out[i]
-        _swing(i, x, *args, res)
-        ok = _converged(res, tol)
-        for _ in range(2):  # chord steps with the previous frame's Jacobian
-            if ok or not _finite(jac):
-                break
-            _step(jac, res, lhs, rhs, dx)
-            x_try[:] = x
-            x_try += dx
-            _swing(i, x_try, *args, res_try)
-            if _norm(res_try) < _norm(res):
-                x[:] = x_try
-                res[:] = res_try
-                ok = _converged(res, tol)
-            else:
-                jac[:] = np.nan
-        for _ in range(max_iter):
-            if ok:
-                break
-            for c in range(3):
-                x_try[:] = x
-                x_try[c] += _EPS
-                _swing(i, x_try, *args, res_nb)
-                for a in range(res.size):
-                    fd[a, c] = (res_nb[a] - res[a]) / _EPS
-            jac[:] = fd
-            _step(fd, res, lhs, rhs, dx)
-            x += dx
-            _swing(i, x, *args, res)
-            ok = _converged(res, tol)
-        done[i] = ok and _finite(x)
-        knee_out[i], knee_ok[i] = _swing(i, x, *args, res)
-        r_thigh_out[i] = r_thigh
-        r_shank_out[i] = r_shank
-        ankle_out[i] = ankle
-    return x_out, done, jac_out, r_thigh_out, knee_out, knee_ok, r_shank_out, ankle_out
+                normal, side[i], toe_out[i], w_swing[i], rot, r_thigh[i], r_shank[i],
+                ankle[i])  # fmt: skip
+        knee[i], knee_ok[i], done[i] = _solve_swing(i, x[i], jac[i], args, tol, max_iter,
+                                                    scratch)  # fmt: skip
+    return x, done, jac, r_thigh, knee, knee_ok, r_shank, ankle
 
 
 def _f(a, shape=None) -> np.ndarray:
