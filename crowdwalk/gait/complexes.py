@@ -60,9 +60,8 @@ def _rodrigues(axis, angle, out):
 
 
 @_jit
-def _times_rotation_y(a, angle, out):
-    """out = a @ rotation_y(angle)."""
-    c, s = np.cos(angle), np.sin(angle)
+def _times_rotation_y(a, c, s, out):
+    """out = a @ rotation_y(angle) of an angle with cosine c and sine s."""
     for i in range(3):
         a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
         out[i, 0] = a0 * c - a2 * s
@@ -71,9 +70,8 @@ def _times_rotation_y(a, angle, out):
 
 
 @_jit
-def _times_rotation_x(a, angle, out):
-    """out = a @ rotation_x(angle)."""
-    c, s = np.cos(angle), np.sin(angle)
+def _times_rotation_x(a, c, s, out):
+    """out = a @ rotation_x(angle) of an angle with cosine c and sine s."""
     for i in range(3):
         a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
         out[i, 0] = a0
@@ -82,9 +80,8 @@ def _times_rotation_x(a, angle, out):
 
 
 @_jit
-def _times_rotation_z(a, angle, out):
-    """out = a @ rotation_z(angle)."""
-    c, s = np.cos(angle), np.sin(angle)
+def _times_rotation_z(a, c, s, out):
+    """out = a @ rotation_z(angle) of an angle with cosine c and sine s."""
     for i in range(3):
         a0, a1, a2 = a[i, 0], a[i, 1], a[i, 2]
         out[i, 0] = a0 * c + a1 * s
@@ -93,42 +90,40 @@ def _times_rotation_z(a, angle, out):
 
 
 @_jit
-def _knee(parent, ch, sh, phi):
-    """Knee angle [rad] giving the distal segment (rest direction −z, hinge +y of the
-    parent frame ``parent`` (3, 3)) the sagittal elevation φ; and whether it exists.
+def _knee(parent, ch, sh, cphi, sphi):
+    """Cosine and sine of the knee angle giving the distal segment (rest direction −z,
+    hinge +y of the parent frame ``parent`` (3, 3)) the sagittal elevation φ (cosine
+    ``cphi``, sine ``sphi``); and whether that angle exists.
 
     :func:`crowdwalk.gait.elevwalker.solve_single_dof` for axis y and segment −z: the
-    circle of Eq. 2 is v = d cos θ + e sin θ with d = −parent[:, 2], e = −parent[:, 0].
+    circle of Eq. 2 is v = d cos θ + e sin θ with d = −parent[:, 2], e = −parent[:, 0],
+    Eq. 3 is A cos θ + B sin θ = 0, its roots θ = atan2(B, A) ± π/2.
     """
     d0, d1, d2 = -parent[0, 2], -parent[1, 2], -parent[2, 2]
     e0, e1, e2 = -parent[0, 0], -parent[1, 0], -parent[2, 0]
-    cphi, sphi = np.cos(phi), np.sin(phi)
     hd, he = d0 * ch + d1 * sh, e0 * ch + e1 * sh
     A, B = hd * cphi + d2 * sphi, he * cphi + e2 * sphi
     R = np.hypot(A, B)
-    ok = R > 1e-12  # C = 0: the ratio −C/R is 0, always reachable
-    base = np.arctan2(B, A)
-    best, score = 0.0, -np.inf
-    for sign in (1.0, -1.0):
-        cand = base + sign * 0.5 * np.pi
-        c, s = np.cos(cand), np.sin(cand)
+    ca, sa = (A / R, B / R) if R > 0.0 else (1.0, 0.0)
+    best_c, best_s, score = 0.0, 0.0, -np.inf
+    for c, s in ((-sa, ca), (sa, -ca)):  # atan2(B, A) + π/2, then − π/2
         g = (hd * c + he * s) * sphi - (d2 * c + e2 * s) * cphi
         if g > score:
-            best, score = cand, g
-    return _wrap(best), ok and score > 1e-6
+            best_c, best_s, score = c, s, g
+    return best_c, best_s, R > 1e-12 and score > 1e-6
 
 
 @_jit
 def _stance(i, x, r_foot, ankle, tc_axis, sub_axis, shank, thigh, ch, sh, phi_shank,
-            phi_thigh, normal, w_stance, rot, r_shank, r_thigh, hip, res):  # fmt: skip
+            c_thigh, s_thigh, normal, w_stance, rot, r_shank, r_thigh, hip, res):  # fmt: skip
     """Stance chain of agent i at x (2,): fills r_shank, r_thigh, hip (3,), res (2,);
-    returns the knee angle and whether it exists. ``rot`` (2, 3, 3) is scratch."""
+    returns the knee's :func:`_knee`. ``rot`` (2, 3, 3) is scratch."""
     _rodrigues(sub_axis[i], -x[1], rot[0])  # transposed subtalar rotation
     _matmul(r_foot[i], rot[0], rot[1])  # talus
     _rodrigues(tc_axis[i], -x[0], rot[0])  # transposed talocrural rotation
     _matmul(rot[1], rot[0], r_shank)
-    theta, ok = _knee(r_shank, ch, sh, phi_thigh)
-    _times_rotation_y(r_shank, theta, r_thigh)
+    c, s, ok = _knee(r_shank, ch, sh, c_thigh, s_thigh)
+    _times_rotation_y(r_shank, c, s, r_thigh)
     width = 0.0
     for a in range(3):
         hip[a] = ankle[i, a] + shank * r_shank[a, 2] + thigh * r_thigh[a, 2]
@@ -137,19 +132,19 @@ def _stance(i, x, r_foot, ankle, tc_axis, sub_axis, shank, thigh, ch, sh, phi_sh
     fwd = -(r_shank[0, 2] * ch + r_shank[1, 2] * sh)
     res[0] = _wrap(np.arctan2(fwd, r_shank[2, 2]) - phi_shank)
     res[1] = width - w_stance
-    return theta, ok
+    return c, s, ok
 
 
 @_jit
-def _swing(i, x, r_pelvis, hip_sw, thigh, shank, ch, sh, phi_knee, phi_thigh, normal,
+def _swing(i, x, r_pelvis, hip_sw, thigh, shank, ch, sh, c_knee, s_knee, phi_thigh, normal,
            side, toe_out, w_swing, rot, r_thigh, r_shank, ankle, res):  # fmt: skip
     """Swing chain of agent i at x (3,): fills r_thigh, r_shank, ankle (3,), res (3,);
-    returns the knee angle and whether it exists. ``rot`` (2, 3, 3) is scratch."""
-    _times_rotation_y(r_pelvis[i], x[0], rot[0])
-    _times_rotation_x(rot[0], x[1], rot[1])
-    _times_rotation_z(rot[1], x[2], r_thigh)
-    knee, ok = _knee(r_thigh, ch, sh, phi_knee)
-    _times_rotation_y(r_thigh, knee, r_shank)
+    returns the knee's :func:`_knee`. ``rot`` (2, 3, 3) is scratch."""
+    _times_rotation_y(r_pelvis[i], np.cos(x[0]), np.sin(x[0]), rot[0])
+    _times_rotation_x(rot[0], np.cos(x[1]), np.sin(x[1]), rot[1])
+    _times_rotation_z(rot[1], np.cos(x[2]), np.sin(x[2]), r_thigh)
+    c, s, ok = _knee(r_thigh, ch, sh, c_knee, s_knee)
+    _times_rotation_y(r_thigh, c, s, r_shank)
     width = 0.0
     f_n = 0.0
     f_f = 0.0
@@ -163,7 +158,7 @@ def _swing(i, x, r_pelvis, hip_sw, thigh, shank, ch, sh, phi_knee, phi_thigh, no
     res[0] = _wrap(np.arctan2(fwd, r_thigh[2, 2]) - phi_thigh)
     res[1] = width - w_swing
     res[2] = _wrap(side * np.arctan2(f_n, f_f) - toe_out)
-    return knee, ok
+    return c, s, ok
 
 
 @_jit
@@ -236,7 +231,7 @@ def _step(jac, res, lhs, rhs, dx):
 def _solver(chain):
     """Compiled Gauss–Newton ``solve(i, x, jac, args, tol, max_iter, scratch)`` over
     ``chain(i, x, *args, res)``, which fills the residual res (m,) and the chain outputs
-    in ``args`` and returns (knee angle, knee solvable)."""
+    in ``args`` and returns the knee angle's cosine, sine and whether it exists."""
 
     @_jit
     def solve(i, x, jac, args, tol, max_iter, scratch):
@@ -249,7 +244,7 @@ def _solver(chain):
         """
         res, res_try, res_nb, x_try, dx, lhs, rhs = scratch
         m = x.size
-        knee, knee_ok = chain(i, x, *args, res)
+        kc, ks, knee_ok = chain(i, x, *args, res)
         at_x = True  # the chain outputs belong to x
         ok = _converged(res, tol)
         for _ in range(_CHORDS):
@@ -258,7 +253,7 @@ def _solver(chain):
             _step(jac, res, lhs, rhs, dx)
             for a in range(m):
                 x_try[a] = x[a] + dx[a]
-            knee_try, ok_try = chain(i, x_try, *args, res_try)
+            kc_try, ks_try, ok_try = chain(i, x_try, *args, res_try)
             norm, norm_try = _norm(res), _norm(res_try)
             if not norm_try < norm:
                 at_x = False
@@ -266,7 +261,7 @@ def _solver(chain):
                 break
             x[:] = x_try
             res[:] = res_try
-            knee, knee_ok = knee_try, ok_try
+            kc, ks, knee_ok = kc_try, ks_try, ok_try
             ok = _converged(res, tol)
         for _ in range(max_iter):
             if ok:
@@ -279,12 +274,12 @@ def _solver(chain):
                     jac[a, c] = (res_nb[a] - res[a]) / _EPS
             _step(jac, res, lhs, rhs, dx)
             x += dx
-            knee, knee_ok = chain(i, x, *args, res)
+            kc, ks, knee_ok = chain(i, x, *args, res)
             at_x = True
             ok = _converged(res, tol)
         if not at_x:
-            knee, knee_ok = chain(i, x, *args, res)
-        return knee, knee_ok, ok and _finite(x)
+            kc, ks, knee_ok = chain(i, x, *args, res)
+        return np.arctan2(ks, kc), knee_ok, ok and _finite(x)
 
     return solve
 
@@ -311,7 +306,8 @@ def _stance_gn(r_foot, ankle, tc_axis, sub_axis, shank, thigh, heading, phi_shan
     for i in range(k):
         ch, sh = np.cos(heading[i]), np.sin(heading[i])
         args = (r_foot, ankle, tc_axis, sub_axis, shank[i], thigh[i], ch, sh, phi_shank[i],
-                phi_thigh[i], normal, w_stance[i], rot, r_shank[i], r_thigh[i], hip[i])  # fmt: skip
+                np.cos(phi_thigh[i]), np.sin(phi_thigh[i]), normal, w_stance[i], rot,
+                r_shank[i], r_thigh[i], hip[i])  # fmt: skip
         knee[i], knee_ok[i], done[i] = _solve_stance(i, x[i], jac[i], args, tol, max_iter,
                                                      scratch)  # fmt: skip
     return x, done, jac, r_shank, knee, knee_ok, r_thigh, hip
@@ -327,9 +323,9 @@ def _swing_gn(r_pelvis, hip_sw, thigh, shank, heading, phi_knee, phi_thigh, norm
     rot, scratch = np.empty((2, 3, 3)), _scratch(3)
     for i in range(k):
         ch, sh = np.cos(heading[i]), np.sin(heading[i])
-        args = (r_pelvis, hip_sw, thigh[i], shank[i], ch, sh, phi_knee[i], phi_thigh[i],
-                normal, side[i], toe_out[i], w_swing[i], rot, r_thigh[i], r_shank[i],
-                ankle[i])  # fmt: skip
+        args = (r_pelvis, hip_sw, thigh[i], shank[i], ch, sh, np.cos(phi_knee[i]),
+                np.sin(phi_knee[i]), phi_thigh[i], normal, side[i], toe_out[i], w_swing[i],
+                rot, r_thigh[i], r_shank[i], ankle[i])  # fmt: skip
         knee[i], knee_ok[i], done[i] = _solve_swing(i, x[i], jac[i], args, tol, max_iter,
                                                     scratch)  # fmt: skip
     return x, done, jac, r_thigh, knee, knee_ok, r_shank, ankle
