@@ -36,13 +36,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.body import (
-    JOINT,
     JOINT_NAMES,
     LEG_JOINTS,
     SUBTALAR_AXIS,
     TALOCRURAL_AXIS,
     Body,
-    axis_angle_matrix,
     forward_kinematics,
     mirrored_axis,
     rotation_x,
@@ -51,6 +49,7 @@ from crowdwalk.body import (
 )
 from crowdwalk.errors import invalid
 from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
+from crowdwalk.gait.joints import assemble_joints
 
 __all__ = [
     "GaitStyle",
@@ -471,7 +470,8 @@ def elevwalker_pose(
                         warm.hip_jacobian, style.tolerance, style.max_iterations)
     )  # fmt: skip
 
-    # Optional swing-ankle target with two-link IK on the swing leg.
+    # Optional swing-ankle goal, reached with two-link IK on the swing leg.
+    goal = use = None
     if (swing_offset is not None or swing_goal is not None
             or (swing_target is not None and swing_blend is not None)):  # fmt: skip
         goal = ankle_sw.copy()
@@ -489,55 +489,19 @@ def elevwalker_pose(
             pinned = np.isfinite(absolute).all(axis=1)
             goal = np.where(pinned[:, None], absolute, goal)
             use |= pinned
-        r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, goal, r_thigh_sw)
-        r_thigh_sw = np.where(use[:, None, None], r_thigh_ik, r_thigh_sw)
-        knee_sw = np.where(use, knee_ik, knee_sw)
-        r_shank_sw = r_thigh_sw @ rotation_y(knee_sw)
 
-    # Swing talocrural: analytic for the foot elevation (heel→toe from the horizontal is
-    # π/2 + φ from the downward vertical); the swing subtalar joint stays neutral.
-    ankle_sw_angle, ok_foot_sw = solve_single_dof(
-        r_shank_sw, _TC_AXES[sw_row], _FWD, heading, 0.5 * np.pi + phi_sw[:, 0]
-    )
-
-    # The swing foot's toes stay flat on the ground while it pushes off (double support).
-    r_foot_sw = r_shank_sw @ axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
-    pitch_sw = np.arcsin(np.clip(r_foot_sw[:, 2, 0], -1.0, 1.0))
-    push = np.asarray(stance_fraction, dtype=float) - 0.5 + 0.05
-    flat = 1.0 - np.clip((phase / push), 0.0, 1.0) ** 2
-    toe_sw = flat * np.minimum(pitch_sw, 0.0)
-    if swing_toe_angle is not None:
-        given = np.asarray(swing_toe_angle, dtype=float)
-        toe_sw = np.where(np.isfinite(given), given, toe_sw)
-
-    # Assemble local rotations.
-    nj = len(JOINT_NAMES)
-    local = np.broadcast_to(np.eye(3), (k, nj, 3, 3)).copy()
+    # Swing IK, swing talocrural (analytic for the data foot elevation; the swing subtalar
+    # stays neutral), push-off toes flat on the ground (double support), every joint's
+    # local rotation, upper body (§8: trunk upright along ψ, arms with the opposite
+    # thigh) — compiled, per agent.
+    toe_given = np.nan if swing_toe_angle is None else swing_toe_angle
+    local, knee_sw, ok_foot_sw = assemble_joints(
+        left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_rel, tc_axis,
+        sub_axis, x_ankle, toe_angle, hip_sw, r_thigh_sw, knee_sw, r_shank_sw,
+        _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
+        style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
+    )  # fmt: skip
     rows = np.arange(k)
-    st_j, sw_j = LEG_JOINTS[st_row], LEG_JOINTS[sw_row]  # (k, 5)
-    local[:, 0] = r_pelvis
-    local[rows, st_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_st
-    local[rows, st_j[:, 1]] = rotation_y(-knee_rel)
-    local[rows, st_j[:, 2]] = axis_angle_matrix(tc_axis, x_ankle[:, 0])
-    local[rows, st_j[:, 3]] = axis_angle_matrix(sub_axis, x_ankle[:, 1])
-    local[rows, st_j[:, 4]] = rotation_y(toe_angle)
-    local[rows, sw_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_sw
-    local[rows, sw_j[:, 1]] = rotation_y(knee_sw)
-    local[rows, sw_j[:, 2]] = axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
-    local[rows, sw_j[:, 4]] = rotation_y(toe_sw)
-
-    # 5. Upper body (§8): trunk upright along ψ, arms with the opposite thigh.
-    r_trunk = rotation_z(heading)
-    local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ r_trunk
-    thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
-    thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
-    for side, opposite, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):
-        arm = style.arm_swing * opposite
-        local[:, JOINT[f"{side}_shoulder"]] = rotation_y(-arm) @ rotation_x(
-            np.full(k, sign * 0.08)
-        )
-        elbow = style.elbow_flexion + 0.5 * np.maximum(arm, 0.0)
-        local[:, JOINT[f"{side}_elbow"]] = rotation_y(-elbow)
 
     positions, rotations = forward_kinematics(body, root, r_pelvis, local)
     swing_phase = phase + 0.5
@@ -574,36 +538,6 @@ def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     at_hip = np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1.0, 1.0))
     at_ankle = np.arccos(np.clip((l2**2 + dist**2 - l1**2) / (2 * l2 * dist), -1.0, 1.0))
     return line - at_ankle, line + at_hip
-
-
-def _two_link_ik(body: Body, hip, goal, r_thigh):
-    """Thigh orientation and knee flexion that put the ankle at ``goal`` (k, 3) [m].
-
-    The knee hinge axis (the thigh's local y) keeps its direction as far as possible: it
-    is the current axis made perpendicular to the hip→goal line, and the knee bends
-    forward in the plane normal to it. So the leg's toe-out is kept even when the knee
-    is nearly straight.
-    """
-    l1, l2 = body.thigh, body.shank
-    to_goal = goal - hip
-    dist = np.linalg.norm(to_goal, axis=1)
-    dist_c = np.clip(dist, np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
-    u = to_goal / np.maximum(dist, 1e-9)[:, None]
-    y_old, x_old = r_thigh[:, :, 1], r_thigh[:, :, 0]
-    y_axis = y_old - u * _dot(y_old, u)[:, None]
-    y_axis /= np.maximum(np.linalg.norm(y_axis, axis=1), 1e-12)[:, None]
-    v = np.cross(y_axis, u)  # in the leg plane, perpendicular to the hip→goal line
-    v *= np.where(_dot(v, x_old) < 0, -1.0, 1.0)[:, None]  # knee forward
-    cos_b = np.clip((l1**2 + dist_c**2 - l2**2) / (2 * l1 * dist_c), -1.0, 1.0)
-    sin_b = np.sqrt(1.0 - cos_b**2)
-    knee_new = hip + l1[:, None] * (cos_b[:, None] * u + sin_b[:, None] * v)
-    ankle_new = hip + dist_c[:, None] * u
-    z_axis = (hip - knee_new) / l1[:, None]
-    x_axis = np.cross(y_axis, z_axis)
-    r_new = np.stack([x_axis, y_axis, z_axis], axis=2)
-    shank = np.einsum("kba,kb->ka", r_new, ankle_new - knee_new)  # thigh frame
-    knee_angle = np.arctan2(-shank[:, 0], -shank[:, 2])
-    return r_new, knee_angle
 
 
 # --- measurements on poses ------------------------------------------------------------
