@@ -20,8 +20,6 @@ import numpy as np
 
 from crowdwalk.body import Body
 from crowdwalk.gait.animator import Animator
-from crowdwalk.gait.datasets import load_datasets
-from crowdwalk.gait.elevwalker import walk_cycle
 from crowdwalk.gait.metagait import MetaGait, animate_paths, level_step_length
 
 
@@ -111,7 +109,7 @@ def walking(n: int, seconds: float = 3.0, fps: float = 25.0) -> dict[str, float]
 
 def main(argv: list[str]) -> None:
     sizes = [int(a) for a in argv] or [100, 1000]
-    walk_cycle(load_datasets()[0].angles, 1.75, samples=4)  # load the compiled kernels
+    walking(20, seconds=1.2)  # load the compiled kernels
     print(f"{'agents':>7} {'pose call [ms]':>15} {'agent-poses/s':>14} "
           f"{'step command [ms]':>18} {'first command [ms]':>19} {'fallbacks':>9}")  # fmt: skip
     for n in sizes:
