@@ -11,7 +11,7 @@ at ``t + 0.5`` (columns foot, shank, thigh, pelvis, :mod:`crowdwalk.gait.dataset
    never slides, and both lie on the ground plane, so it never penetrates.
 2. **Stance ankle complex (§4.3, Eq. 8).** Talocrural and subtalar angles (skew Inman
    axes, :mod:`crowdwalk.body`) from two constraints — the shank elevation and the
-   stance width — by batched Gauss–Newton warm-started from the previous frame. The
+   stance width — by Gauss–Newton warm-started from the previous frame. The
    stance knee inside it is the analytic single-DOF solve (§4.2, Eqs. 2–7).
 3. **Hip complex (§4.3).** The pelvis takes the (exact) data pelvis elevation, the pelvic
    list ``L(t)`` and the heading; the stance hip's 3 DOFs follow in closed form. The
@@ -24,8 +24,9 @@ at ``t + 0.5`` (columns foot, shank, thigh, pelvis, :mod:`crowdwalk.gait.dataset
 Optionally the swing ankle is pulled toward a target with IK on the swing leg (the
 Animator's landing correction and swing-clearance blend, issue item 6).
 
-Everything is vectorised over agents; the two Gauss–Newton solves run per agent in the
-compiled kernels of :mod:`crowdwalk.gait.complexes`.
+Everything is batched over agents: the two Gauss–Newton solves run per agent in the
+compiled kernels of :mod:`crowdwalk.gait.complexes`, the swing IK, swing foot and joint
+rotations in :mod:`crowdwalk.gait.joints`.
 Conventions: world x east, y north, z up; ψ from +x; angles [rad]; lengths [m].
 """
 
