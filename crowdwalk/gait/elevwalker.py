@@ -66,9 +66,6 @@ __all__ = [
     "walk_cycle",
 ]
 
-_EY = np.array([0.0, 1.0, 0.0])
-_DOWN = np.array([0.0, 0.0, -1.0])
-_FWD = np.array([1.0, 0.0, 0.0])
 # Skew ankle axes per side (row 0 left, row 1 right), unit vectors in the parent frame.
 _TC_AXES = np.stack([TALOCRURAL_AXIS, mirrored_axis(TALOCRURAL_AXIS)])
 _SUB_AXES = np.stack([SUBTALAR_AXIS, mirrored_axis(SUBTALAR_AXIS)])

@@ -14,17 +14,13 @@ import numba as nb
 import numpy as np
 
 from crowdwalk.body import JOINT, LEG_JOINTS
+from crowdwalk.gait.complexes import _matmul, _rodrigues, _wrap
 
 __all__ = ["assemble_joints"]
 
 _jit = nb.njit(cache=True, nogil=True)
 _VL5, _SHOULDER, _ELBOW = JOINT["vl5"], (JOINT["l_shoulder"], JOINT["r_shoulder"]), (
     JOINT["l_elbow"], JOINT["r_elbow"])  # fmt: skip
-
-
-@_jit
-def _wrap(a):
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
 
 
 @_jit
@@ -46,23 +42,6 @@ def _rot_z(angle, out):
     c, s = np.cos(angle), np.sin(angle)
     out[:] = 0.0
     out[0, 0], out[0, 1], out[1, 0], out[1, 1], out[2, 2] = c, -s, s, c, 1.0
-
-
-@_jit
-def _rodrigues(axis, angle, out):
-    x, y, z = axis[0], axis[1], axis[2]
-    c, s = np.cos(angle), np.sin(angle)
-    C = 1.0 - c
-    out[0, 0], out[0, 1], out[0, 2] = c + x * x * C, x * y * C - z * s, x * z * C + y * s
-    out[1, 0], out[1, 1], out[1, 2] = y * x * C + z * s, c + y * y * C, y * z * C - x * s
-    out[2, 0], out[2, 1], out[2, 2] = z * x * C - y * s, z * y * C + x * s, c + z * z * C
-
-
-@_jit
-def _matmul(a, b, out):
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = a[i, 0] * b[0, j] + a[i, 1] * b[1, j] + a[i, 2] * b[2, j]
 
 
 @_jit
