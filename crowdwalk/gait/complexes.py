@@ -10,8 +10,8 @@ numpy version spent most of a crowd frame in small array operations):
   thigh has the data elevation, the ankle the swing width and the thigh the toe-out,
   with the analytic swing knee inside.
 
-The iteration is the one :func:`crowdwalk.gait.elevwalker.elevwalker_pose` documents:
-warm start, up to two chord steps with the previous frame's Jacobian while they reduce
+The iteration is the one the batched version ran, per agent: warm start (the previous
+frame's solution), up to two chord steps with the previous frame's Jacobian while they reduce
 the residual, then Gauss–Newton steps with forward-difference Jacobians (ε = 1e-6) and
 a 0.5 rad trust region, until every residual is below the tolerance [rad or m].
 Matrices are the world orientations of the segment frames (columns x fwd, y left, z up).
