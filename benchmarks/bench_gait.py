@@ -3,6 +3,10 @@
 Drives n agents (bodies 1.50–1.95 m, speeds 1.0–1.6 m/s) along straight paths with
 MetaGait on flat ground, then times ``Animator.pose`` for all of them at once, and the
 per-step ``Animator.command`` (ElevInterp + end-of-step walker evaluations). Prints a table.
+A second table walks the agents for a few seconds at 25 fps (``animate_paths``, steps
+desynchronised by the speeds) and gives the Animator's CPU time per output frame, split
+into the step commands and the pose call, after the first second. The compiled kernels
+are loaded before anything is timed.
 
 Usage: ``python benchmarks/bench_gait.py [n ...]`` (default 100 1000).
 """
@@ -16,7 +20,7 @@ import numpy as np
 
 from crowdwalk.body import Body
 from crowdwalk.gait.animator import Animator
-from crowdwalk.gait.metagait import MetaGait, level_step_length
+from crowdwalk.gait.metagait import MetaGait, animate_paths, level_step_length
 
 
 def _flat(xy: np.ndarray) -> np.ndarray:
@@ -64,8 +68,48 @@ def bench(n: int, frames: int = 20, fps: float = 25.0) -> dict[str, float]:
     }
 
 
+class _TimedAnimator(Animator):
+    """An Animator that adds up the CPU time of its commands and pose calls after t0."""
+
+    def __init__(self, *args, t0: float, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.t0, self.cpu, self.frames, self.steps = t0, {"command": 0.0, "pose": 0.0}, 0, 0
+
+    def command(self, cmd) -> None:
+        c0 = time.process_time()
+        super().command(cmd)
+        if cmd.time.size and cmd.time.min() >= self.t0:
+            self.cpu["command"] += time.process_time() - c0
+            self.steps += cmd.agent.size
+
+    def pose(self, t, agents=None):
+        c0 = time.process_time()
+        frame = super().pose(t, agents)
+        if t >= self.t0:
+            self.cpu["pose"] += time.process_time() - c0
+            self.frames += 1
+        return frame
+
+
+def walking(n: int, seconds: float = 3.0, fps: float = 25.0) -> dict[str, float]:
+    """CPU time per frame [ms] of the Animator for n agents walking straight paths."""
+    rng = np.random.default_rng(1)
+    body = Body.from_heights(rng.uniform(1.50, 1.95, n))
+    speed = rng.uniform(1.0, 1.6, n)
+    start = np.column_stack([rng.uniform(0, 50, n), rng.uniform(0, 50, n)])
+    heading = rng.uniform(-np.pi, np.pi, n)
+    ahead = start + 60.0 * np.column_stack([np.cos(heading), np.sin(heading)])
+    paths = np.stack([start, ahead], axis=1)
+    animator = _TimedAnimator(body, ground=_flat, t0=1.0)
+    animate_paths(body, paths, _flat, speed, seconds, fps, animator=animator)
+    f = max(animator.frames, 1)
+    return {"n": n, "command_ms": 1e3 * animator.cpu["command"] / f,
+            "pose_ms": 1e3 * animator.cpu["pose"] / f, "steps": animator.steps / f}  # fmt: skip
+
+
 def main(argv: list[str]) -> None:
     sizes = [int(a) for a in argv] or [100, 1000]
+    walking(20, seconds=1.2)  # load the compiled kernels
     print(f"{'agents':>7} {'pose call [ms]':>15} {'agent-poses/s':>14} "
           f"{'step command [ms]':>18} {'first command [ms]':>19} {'fallbacks':>9}")  # fmt: skip
     for n in sizes:
@@ -73,6 +117,15 @@ def main(argv: list[str]) -> None:
         print(f"{r['n']:>7d} {r['pose_ms']:>15.1f} {r['poses_per_s']:>14,.0f} "
               f"{r['command_ms']:>18.1f} {r['first_command_ms']:>19.1f} {r['fallbacks']:>9d}")
     print("target: >= 20,000 agent-poses/s for 1,000 agents in one call (issue 4, item 9)")
+    print()
+    print(f"{'agents':>7} {'steps/frame':>12} {'command [ms/frame]':>19} "
+          f"{'pose [ms/frame]':>16} {'Animator [ms/frame]':>20}")  # fmt: skip
+    for n in sizes:
+        r = walking(n)
+        print(f"{r['n']:>7d} {r['steps']:>12.1f} {r['command_ms']:>19.1f} {r['pose_ms']:>16.1f} "
+              f"{r['command_ms'] + r['pose_ms']:>20.1f}")  # fmt: skip
+    print("walking 3 s at 25 fps (CPU time after the first second); a crowd frame is one "
+          "command batch and one pose call")
 
 
 if __name__ == "__main__":

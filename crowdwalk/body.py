@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from crowdwalk.errors import invalid
@@ -323,25 +324,39 @@ def matrix_to_quaternion(matrix: np.ndarray) -> np.ndarray:
     """
     m = np.asarray(matrix, dtype=float)
     shape = m.shape[:-2]
-    m = m.reshape(-1, 3, 3)
-    m00, m01, m02 = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2]
-    m10, m11, m12 = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2]
-    m20, m21, m22 = m[:, 2, 0], m[:, 2, 1], m[:, 2, 2]
-    squares = 0.25 * np.stack(
-        [1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22],
-        axis=1,
-    )
-    pivot = np.argmax(squares, axis=1)
-    rows = np.arange(len(m))
-    big = np.sqrt(np.maximum(squares[rows, pivot], 1e-300))
-    f = 0.25 / big
-    # the seven distinct candidate components; _QUAT_PICK[pivot] selects a row's four
-    parts = np.stack([big, (m21 - m12) * f, (m02 - m20) * f, (m10 - m01) * f,
-                      (m01 + m10) * f, (m02 + m20) * f, (m12 + m21) * f])  # fmt: skip
-    q = parts[_QUAT_PICK[pivot], rows[:, None]]
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
-    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    q = _matrix_to_quaternion(np.ascontiguousarray(m.reshape(-1, 3, 3)))
     return q.reshape(shape + (4,))
+
+
+@nb.njit(cache=True, nogil=True)
+def _matrix_to_quaternion(m):
+    """Compiled Shepperd conversion of :func:`matrix_to_quaternion`, (p, 3, 3) → (p, 4)."""
+    q = np.empty((m.shape[0], 4))
+    squares = np.empty(4)
+    parts = np.empty(7)
+    for i in range(m.shape[0]):
+        m00, m01, m02 = m[i, 0, 0], m[i, 0, 1], m[i, 0, 2]
+        m10, m11, m12 = m[i, 1, 0], m[i, 1, 1], m[i, 1, 2]
+        m20, m21, m22 = m[i, 2, 0], m[i, 2, 1], m[i, 2, 2]
+        squares[0] = 0.25 * (1 + m00 + m11 + m22)
+        squares[1] = 0.25 * (1 + m00 - m11 - m22)
+        squares[2] = 0.25 * (1 - m00 + m11 - m22)
+        squares[3] = 0.25 * (1 - m00 - m11 + m22)
+        pivot = np.argmax(squares)
+        big = np.sqrt(max(squares[pivot], 1e-300))
+        f = 0.25 / big
+        # the seven distinct candidate components; _QUAT_PICK[pivot] selects the four
+        parts[0] = big
+        parts[1], parts[2], parts[3] = (m21 - m12) * f, (m02 - m20) * f, (m10 - m01) * f
+        parts[4], parts[5], parts[6] = (m01 + m10) * f, (m02 + m20) * f, (m12 + m21) * f
+        norm = 0.0
+        for c in range(4):
+            q[i, c] = parts[_QUAT_PICK[pivot, c]]
+            norm += q[i, c] * q[i, c]
+        norm = np.sqrt(norm) * (-1.0 if q[i, 0] < 0 else 1.0)
+        for c in range(4):
+            q[i, c] /= norm
+    return q
 
 
 def quaternion_to_matrix(quaternion: np.ndarray) -> np.ndarray:
@@ -382,13 +397,30 @@ def forward_kinematics(
     nj = len(JOINT_NAMES)
     if local.shape != (n, nj, 3, 3):
         raise invalid("forward_kinematics", "local", f"shaped ({n}, {nj}, 3, 3)", local.shape)
-    offsets = body.offsets()
+    return _forward_kinematics(
+        body.offsets(), np.ascontiguousarray(root_position, dtype=float),
+        np.ascontiguousarray(root_rotation, dtype=float),
+        np.ascontiguousarray(local, dtype=float), PARENTS,
+    )
+
+
+@nb.njit(cache=True, nogil=True)
+def _forward_kinematics(offsets, root_position, root_rotation, local, parents):
+    """Compiled joint loop of :func:`forward_kinematics`, one skeleton at a time."""
+    n, nj = local.shape[0], local.shape[1]
     positions = np.empty((n, nj, 3))
     rotations = np.empty((n, nj, 3, 3))
-    positions[:, 0] = root_position
-    rotations[:, 0] = root_rotation
-    for j in range(1, nj):
-        p = PARENTS[j]
-        positions[:, j] = positions[:, p] + np.einsum("nab,nb->na", rotations[:, p], offsets[:, j])
-        rotations[:, j] = rotations[:, p] @ local[:, j]
+    for i in range(n):
+        positions[i, 0] = root_position[i]
+        rotations[i, 0] = root_rotation[i]
+        for j in range(1, nj):
+            p = parents[j]
+            rp, rl, rj = rotations[i, p], local[i, j], rotations[i, j]
+            for a in range(3):
+                positions[i, j, a] = positions[i, p, a] + (
+                    rp[a, 0] * offsets[i, j, 0] + rp[a, 1] * offsets[i, j, 1]
+                    + rp[a, 2] * offsets[i, j, 2]
+                )
+                for b in range(3):
+                    rj[a, b] = rp[a, 0] * rl[0, b] + rp[a, 1] * rl[1, b] + rp[a, 2] * rl[2, b]
     return positions, rotations

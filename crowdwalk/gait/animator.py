@@ -589,9 +589,9 @@ class Animator:
         """ElevWalker for agents a (k,) at stance phases (k,), with the step corrections
         (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal)."""
         body = self.body.take(a)
-        angles = self._angles[a]
-        st = sample(angles, phase)
-        sw = sample(angles, phase + 0.5)
+        k = a.size
+        legs = sample(self._angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
+        st, sw = legs[:k], legs[k:]  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
         tau = 2.0 * phase
         spin = self._spin[a] * _smoothstep(tau / 0.3)
@@ -681,19 +681,13 @@ class Animator:
         if sink.size == 0:
             return walked, 0
         again = self._walk(a[sink], phase[sink], corrected=True, lift=depth[sink] + 1e-3)
-        merged = {}
+        # the walker's arrays are fresh per call: merge in place
         for name in ("root_position", "root_rotation", "local", "positions", "rotations",
                      "contact", "converged", "solves"):  # fmt: skip
-            arr = getattr(walked, name).copy()
-            arr[sink] = getattr(again, name)
-            merged[name] = arr
-        parts = [getattr(walked.warm, f).copy() for f in
-                 ("ankle", "hip", "ankle_jacobian", "hip_jacobian")]  # fmt: skip
-        for part, f in zip(parts, ("ankle", "hip", "ankle_jacobian", "hip_jacobian"),
-                           strict=True):  # fmt: skip
-            part[sink] = getattr(again.warm, f)
-        warm = WarmStart(*parts)
-        return type(walked)(warm=warm, **merged), sink.size
+            getattr(walked, name)[sink] = getattr(again, name)
+        for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
+            getattr(walked.warm, name)[sink] = getattr(again.warm, name)
+        return walked, sink.size
 
     def _standing(self, a: np.ndarray):
         """A neutral standing pose above each agent's stance foothold."""

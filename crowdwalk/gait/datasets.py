@@ -132,7 +132,8 @@ class ElevationDataset:
         return 2.0 / self.stride_time
 
 
-def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float) -> np.ndarray:
+def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float,
+           rows: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """Elevation angles at normalised stride times, periodic cubic interpolation.
 
     Catmull–Rom (C¹) interpolation of the uniformly sampled periodic curve; exact at the
@@ -146,11 +147,15 @@ def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float) -> np.n
     t : float or numpy.ndarray
         Normalised stride times [1], any real values (wrapped into [0, 1)). For a batch of
         curves, shape (n,) — one time per curve — or broadcastable to it.
+    rows : numpy.ndarray, optional
+        For a batch of curves: the curve (k,) of each of k times ``t`` (k,), instead of
+        one time per curve (saves gathering the curves first).
 
     Returns
     -------
     numpy.ndarray
-        Angles [rad]: shape ``t.shape + (4,)`` for one curve, (n, 4) for a batch.
+        Angles [rad]: shape ``t.shape + (4,)`` for one curve, (n, 4) for a batch, (k, 4)
+        with ``rows``.
     """
     curves = angles.angles if isinstance(angles, ElevationDataset) else np.asarray(angles)
     t = np.asarray(t, dtype=float)
@@ -167,7 +172,7 @@ def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float) -> np.n
     if curves.ndim == 2:
         p0, p1, p2, p3 = curves[i0], curves[i1], curves[i2], curves[i3]
     else:
-        rows = np.arange(curves.shape[0])
+        rows = np.arange(curves.shape[0]) if rows is None else np.asarray(rows)
         i0, i1, i2, i3 = np.broadcast_arrays(i0, i1, i2, i3, rows)[:4]
         p0, p1, p2, p3 = (curves[rows, i] for i in (i0, i1, i2, i3))
     s2 = s * s

@@ -41,6 +41,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
+import numba as nb
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, cKDTree
 
@@ -588,10 +589,11 @@ class ElevInterp:
                 w0 = np.clip(space.weights_in(t_rows, target[rows]), -margin, None)
                 w0 /= w0.sum(axis=1, keepdims=True)
                 s0 = _blend_step(space, t_rows, w0, props[rows])
+                keys = space.keys[space.tri.simplices[t_rows]]
                 w1, s1, e1 = _gauss_newton(
-                    lambda ww, sel, t=t_rows, r=rows: _blend_step(space, t[sel], ww, props[r[sel]]),
-                    w0, target[rows], s0, np.linalg.norm(s0 - target[rows], axis=1),
-                    0.1 * tol[rows], cfg.max_iterations, margin=margin,
+                    keys, props[rows], w0, target[rows], s0,
+                    np.linalg.norm(s0 - target[rows], axis=1), 0.1 * tol[rows],
+                    cfg.max_iterations, margin,
                 )
                 better = e1 < err[rows]
                 take = rows[better]
@@ -614,51 +616,96 @@ def _blend_step(space: _ShapeSpace, simplex: np.ndarray, weights: np.ndarray,
     return step_of(blend[:, 0], blend[:, 1], _leg_of(props))
 
 
-def _gauss_newton(produce, w, target, step, err, tol, iterations, margin=0.2, h=1e-6):
-    """Batched Gauss–Newton on two free barycentric weights (third = 1 − sum).
+@nb.njit(cache=True, nogil=True)
+def _row_step(keys, weights, props, out):
+    """Step (2,) [leg lengths] of one Eq. 9 blend: :func:`step_of` for one request.
 
-    ``produce(weights (m, 3), rows (m,))`` gives the steps of the blends for those rows.
+    ``keys`` (3, 2, 4) are the triangle's key rows (stance leg at t = 0.5, swing leg at
+    t = 0), ``weights`` (3,) its barycentric weights, ``props`` (5,) the leg dimensions in
+    ``LEG_FIELDS`` order (the ball is the roll point).
+    """
+    thigh, shank, ankle_h, heel, toe = props[0], props[1], props[2], props[3], props[4]
+    st0 = st1 = st2 = sw0 = sw1 = sw2 = 0.0
+    for v in range(3):
+        st0 += weights[v] * keys[v, 0, 0]
+        st1 += weights[v] * keys[v, 0, 1]
+        st2 += weights[v] * keys[v, 0, 2]
+        sw0 += weights[v] * keys[v, 1, 0]
+        sw1 += weights[v] * keys[v, 1, 1]
+        sw2 += weights[v] * keys[v, 1, 2]
+    c, s = np.cos(st0), np.sin(st0)
+    if st0 <= 0.0:  # on the ball
+        ax, ay = toe - toe * c - ankle_h * s, -toe * s + ankle_h * c
+    else:  # on the heel
+        ax, ay = -heel + heel * c - ankle_h * s, heel * s + ankle_h * c
+    hx = ax - shank * np.sin(st1) - thigh * np.sin(st2)
+    hy = ay + shank * np.cos(st1) + thigh * np.cos(st2)
+    kx = hx + thigh * np.sin(sw2) + shank * np.sin(sw1)
+    ky = hy - thigh * np.cos(sw2) - shank * np.cos(sw1)
+    c, s = np.cos(sw0), np.sin(sw0)
+    if sw0 >= 0.0:  # lands on the heel
+        out[0] = kx - heel * c + ankle_h * s + heel
+        out[1] = ky - heel * s - ankle_h * c
+    else:  # on the ball
+        out[0] = kx + toe * c + ankle_h * s - toe
+        out[1] = ky + toe * s - ankle_h * c
+
+
+@nb.njit(cache=True, nogil=True)
+def _gauss_newton(keys, props, w0, target, step0, err0, tol, iterations, margin, h=1e-6):
+    """Gauss–Newton on two free barycentric weights (third = 1 − sum), per request.
+
+    ``keys`` (m, 3, 2, 4) are each request's triangle key rows, ``props`` (m, 5) its leg
+    dimensions, ``w0`` (m, 3) the start weights with steps ``step0`` (m, 2) and errors
+    ``err0`` (m,) against ``target`` (m, 2), ``tol`` (m,) [leg lengths].
     Weights stay ≥ ``-margin`` (a step is shortened to the bound): the blend may leave the
     triangle a little but never becomes a wild extrapolation, which sliver triangles of
     near-collinear datasets would otherwise invite. A step that does not reduce the error
-    is halved (up to four times); a row that cannot improve stops. Returns the best
+    is halved (up to four times); a request that cannot improve stops. Returns the best
     weights, their steps and errors.
     """
-    w, step, err = w.copy(), step.copy(), err.copy()
-    live = err > tol
-    for _ in range(iterations):
-        rows = np.flatnonzero(live)
-        if len(rows) == 0:
-            break
-        wl, sl_ = w[rows], step[rows]
-        cols = []
-        for j in range(2):
-            dw = np.zeros_like(wl)
-            dw[:, j], dw[:, 2] = h, -h
-            cols.append((produce(wl + dw, rows) - sl_) / h)
-        jac = np.stack(cols, axis=-1)  # (m, 2, 2)
-        jtj = np.einsum("kij,kil->kjl", jac, jac)
-        damp = 1e-12 + 1e-9 * np.trace(jtj, axis1=1, axis2=2)
-        jtj = jtj + damp[:, None, None] * np.eye(2)
-        rhs = np.einsum("kij,ki->kj", jac, sl_ - target[rows])
-        delta = -np.linalg.solve(jtj, rhs[..., None])[..., 0]
-        full = np.concatenate([delta, -delta.sum(axis=1, keepdims=True)], axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            room = np.where(full < 0, (wl + margin) / -full, np.inf)
-        scale = np.clip(np.min(room, axis=1), 0.0, 1.0)
-        pending = np.ones(len(rows), bool)
-        for _ in range(5):
-            sub = rows[pending]
-            trial = w[sub] + scale[pending, None] * full[pending]
-            t_step = produce(trial, sub)
-            t_err = np.linalg.norm(t_step - target[sub], axis=1)
-            better = t_err < err[sub]
-            take = sub[better]
-            w[take], step[take], err[take] = trial[better], t_step[better], t_err[better]
-            pending[np.flatnonzero(pending)[better]] = False
-            if not pending.any():
+    w, step, err = w0.copy(), step0.copy(), err0.copy()
+    trial, t_step, dw = np.empty(3), np.empty(2), np.empty(3)
+    jac, full = np.empty((2, 2)), np.empty(3)
+    for r in range(w.shape[0]):
+        live = err[r] > tol[r]
+        for _ in range(iterations):
+            if not live:
                 break
-            scale = np.where(pending, 0.5 * scale, scale)
-        live[rows[pending]] = False  # no progress: stalled
-        live &= err > tol
+            for j in range(2):  # forward differences, the third weight compensating
+                dw[:] = w[r]
+                dw[j] += h
+                dw[2] -= h
+                _row_step(keys[r], dw, props[r], t_step)
+                jac[0, j] = (t_step[0] - step[r, 0]) / h
+                jac[1, j] = (t_step[1] - step[r, 1]) / h
+            a = jac[0, 0] * jac[0, 0] + jac[1, 0] * jac[1, 0]
+            b = jac[0, 0] * jac[0, 1] + jac[1, 0] * jac[1, 1]
+            d = jac[0, 1] * jac[0, 1] + jac[1, 1] * jac[1, 1]
+            damp = 1e-12 + 1e-9 * (a + d)
+            a, d = a + damp, d + damp
+            e0, e1 = step[r, 0] - target[r, 0], step[r, 1] - target[r, 1]
+            g0 = jac[0, 0] * e0 + jac[1, 0] * e1
+            g1 = jac[0, 1] * e0 + jac[1, 1] * e1
+            det = a * d - b * b
+            full[0] = -(d * g0 - b * g1) / det
+            full[1] = -(a * g1 - b * g0) / det
+            full[2] = -(full[0] + full[1])
+            scale = 1.0
+            for v in range(3):
+                if full[v] < 0:
+                    scale = min(scale, (w[r, v] + margin) / -full[v])
+            scale = max(scale, 0.0)
+            pending = True
+            for _ in range(5):
+                for v in range(3):
+                    trial[v] = w[r, v] + scale * full[v]
+                _row_step(keys[r], trial, props[r], t_step)
+                t_err = np.hypot(t_step[0] - target[r, 0], t_step[1] - target[r, 1])
+                if t_err < err[r]:
+                    w[r], step[r], err[r] = trial, t_step, t_err
+                    pending = False
+                    break
+                scale *= 0.5
+            live = not pending and err[r] > tol[r]  # no progress: stalled
     return w, step, err

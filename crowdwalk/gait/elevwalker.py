@@ -11,7 +11,7 @@ at ``t + 0.5`` (columns foot, shank, thigh, pelvis, :mod:`crowdwalk.gait.dataset
    never slides, and both lie on the ground plane, so it never penetrates.
 2. **Stance ankle complex (§4.3, Eq. 8).** Talocrural and subtalar angles (skew Inman
    axes, :mod:`crowdwalk.body`) from two constraints — the shank elevation and the
-   stance width — by batched Gauss–Newton warm-started from the previous frame. The
+   stance width — by Gauss–Newton warm-started from the previous frame. The
    stance knee inside it is the analytic single-DOF solve (§4.2, Eqs. 2–7).
 3. **Hip complex (§4.3).** The pelvis takes the (exact) data pelvis elevation, the pelvic
    list ``L(t)`` and the heading; the stance hip's 3 DOFs follow in closed form. The
@@ -24,8 +24,9 @@ at ``t + 0.5`` (columns foot, shank, thigh, pelvis, :mod:`crowdwalk.gait.dataset
 Optionally the swing ankle is pulled toward a target with IK on the swing leg (the
 Animator's landing correction and swing-clearance blend, issue item 6).
 
-Everything is vectorised over agents: each Gauss–Newton iteration evaluates the
-residuals at the point and at its finite-difference neighbours in one stacked batch.
+Everything is batched over agents: the two Gauss–Newton solves run per agent in the
+compiled kernels of :mod:`crowdwalk.gait.complexes`, the swing IK, swing foot and joint
+rotations in :mod:`crowdwalk.gait.joints`.
 Conventions: world x east, y north, z up; ψ from +x; angles [rad]; lengths [m].
 """
 
@@ -36,13 +37,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.body import (
-    JOINT,
     JOINT_NAMES,
     LEG_JOINTS,
     SUBTALAR_AXIS,
     TALOCRURAL_AXIS,
     Body,
-    axis_angle_matrix,
     forward_kinematics,
     mirrored_axis,
     rotation_x,
@@ -50,6 +49,8 @@ from crowdwalk.body import (
     rotation_z,
 )
 from crowdwalk.errors import invalid
+from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
+from crowdwalk.gait.joints import assemble_joints
 
 __all__ = [
     "GaitStyle",
@@ -65,9 +66,6 @@ __all__ = [
     "walk_cycle",
 ]
 
-_EY = np.array([0.0, 1.0, 0.0])
-_DOWN = np.array([0.0, 0.0, -1.0])
-_FWD = np.array([1.0, 0.0, 0.0])
 # Skew ankle axes per side (row 0 left, row 1 right), unit vectors in the parent frame.
 _TC_AXES = np.stack([TALOCRURAL_AXIS, mirrored_axis(TALOCRURAL_AXIS)])
 _SUB_AXES = np.stack([SUBTALAR_AXIS, mirrored_axis(SUBTALAR_AXIS)])
@@ -335,69 +333,6 @@ def solve_single_dof(
     return _wrap(best), ok & (score > 1e-6)  # a vanishing projection has no elevation
 
 
-def _gauss_newton(residual, x0: np.ndarray, tol: float, max_iter: int,
-                  jacobian: np.ndarray | None = None):  # fmt: skip
-    """Batched Gauss–Newton with forward-difference Jacobians, warm-started.
-
-    ``residual(x, rows)`` maps points (p·q, m) of the agents ``rows`` (q,) tiled p times
-    to residuals (p·q, m). When the previous frame's Jacobians (k, m, m) are given, up to
-    two chord steps reuse them (one residual evaluation each, no differencing); agents
-    that are still off then take full Gauss–Newton steps, each evaluating the point's m
-    finite-difference neighbours in one stacked batch.
-
-    Returns the solution (k, m), a converged flag (k,), the residual (k, m) and the
-    latest Jacobians (k, m, m) (NaN where none was formed).
-    """
-    k, m = x0.shape
-    eps = 1e-6
-    eye = np.eye(m)
-    rows = np.arange(k)
-    x = x0.copy()
-    r = residual(x, rows)
-    jac = np.full((k, m, m), np.nan) if jacobian is None else jacobian.copy()
-
-    def converged(res):
-        return np.all(np.abs(res) < tol, axis=1) & np.all(np.isfinite(res), axis=1)
-
-    def step(j, res):
-        jt = np.swapaxes(j, 1, 2)
-        lhs = jt @ j + 1e-12 * eye
-        rhs = -np.einsum("kij,kj->ki", jt, res)
-        good = np.isfinite(lhs).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=1)
-        lhs[~good] = eye
-        rhs[~good] = 0.0
-        dx = np.linalg.solve(lhs, rhs[..., None])[..., 0]
-        return np.clip(dx, -0.5, 0.5)  # trust region: at most 0.5 rad per iteration
-
-    done = converged(r)
-    for _ in range(2):  # chord steps with the previous frame's Jacobian
-        active = np.flatnonzero(~done & np.isfinite(jac).all(axis=(1, 2)))
-        if active.size == 0:
-            break
-        x_try = x[active] + step(jac[active], r[active])
-        r_try = residual(x_try, active)
-        better = np.linalg.norm(r_try, axis=1) < np.linalg.norm(r[active], axis=1)
-        keep = active[better]
-        x[keep], r[keep] = x_try[better], r_try[better]
-        done[keep] = converged(r_try[better])
-        if not better.all():
-            jac[active[~better]] = np.nan  # stale Jacobian: difference it anew
-    for _ in range(max_iter):
-        active = np.flatnonzero(~done)
-        if active.size == 0:
-            break
-        xa = x[active]
-        q = active.size
-        stacked = np.concatenate([xa + eps * eye[i] for i in range(m)], axis=0)
-        r_nb = residual(stacked, np.tile(active, m)).reshape(m, q, m)
-        ja = np.stack([(r_nb[i] - r[active]) / eps for i in range(m)], axis=-1)
-        jac[active] = ja
-        x[active] = xa + step(ja, r[active])
-        r[active] = residual(x[active], active)
-        done[active] = converged(r[active])
-    return x, done & np.isfinite(x).all(axis=1), r, jac
-
-
 # --- the walker -------------------------------------------------------------------------
 
 
@@ -497,7 +432,6 @@ def elevwalker_pose(
     phi_st = np.asarray(stance_angles, dtype=float)
     phi_sw = np.asarray(swing_angles, dtype=float)
     toe_out = np.broadcast_to(np.asarray(toe_out, dtype=float), (k,))
-    all_rows = np.arange(k)
 
     # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
     #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
@@ -514,25 +448,11 @@ def elevwalker_pose(
 
     # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
     tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
-    def stance_chain(x, rows):
-        r_talus = r_foot[rows] @ np.swapaxes(axis_angle_matrix(sub_axis[rows], x[:, 1]), 1, 2)
-        r_shank = r_talus @ np.swapaxes(axis_angle_matrix(tc_axis[rows], x[:, 0]), 1, 2)
-        knee = ankle[rows] + body.shank[rows, None] * r_shank[:, :, 2]
-        theta, ok = solve_single_dof(r_shank, _EY, _DOWN, heading[rows], phi_st[rows, 2])
-        r_thigh = r_shank @ rotation_y(theta)
-        hip = knee + body.thigh[rows, None] * r_thigh[:, :, 2]
-        return r_shank, knee, theta, ok, r_thigh, hip
-
-    def stance_residual(x, rows):
-        r_shank, _, _, _, _, hip = stance_chain(x, rows)
-        e = _wrap(sagittal_elevation(-r_shank[:, :, 2], heading[rows]) - phi_st[rows, 1])
-        width = _dot(ankle[rows] - hip, normal[rows]) - w_stance[rows]
-        return np.stack([e, width], axis=1)
-
-    x_ankle, ok_ankle, _, jac_ankle = _gauss_newton(
-        stance_residual, warm.ankle, style.tolerance, style.max_iterations, warm.ankle_jacobian
-    )
-    r_shank_st, _, knee_rel, ok_knee_st, r_thigh_st, hip_st = stance_chain(x_ankle, all_rows)
+    x_ankle, ok_ankle, jac_ankle, r_shank_st, knee_rel, ok_knee_st, r_thigh_st, hip_st = (
+        solve_stance_ankle(r_foot, ankle, tc_axis, sub_axis, body.shank, body.thigh, heading,
+                           phi_st[:, 1], phi_st[:, 2], normal, w_stance, warm.ankle,
+                           warm.ankle_jacobian, style.tolerance, style.max_iterations)
+    )  # fmt: skip
 
     # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
     lst = side_st * style.pelvic_list * np.sin(2.0 * np.pi * phase)
@@ -542,31 +462,14 @@ def elevwalker_pose(
     y_pelvis = r_pelvis[:, :, 1]
     root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
     hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
-    side_sw = -side_st
+    x_hip, ok_hip, jac_hip, r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = (
+        solve_swing_hip(r_pelvis, hip_sw, body.thigh, body.shank, heading, phi_sw[:, 1],
+                        phi_sw[:, 2], normal, -side_st, toe_out, w_swing, warm.hip,
+                        warm.hip_jacobian, style.tolerance, style.max_iterations)
+    )  # fmt: skip
 
-    def swing_chain(x, rows):
-        r_thigh = r_pelvis[rows] @ rotation_y(x[:, 0]) @ rotation_x(x[:, 1]) @ rotation_z(x[:, 2])
-        knee_angle, ok = solve_single_dof(r_thigh, _EY, _DOWN, heading[rows], phi_sw[rows, 1])
-        r_shank = r_thigh @ rotation_y(knee_angle)
-        knee = hip_sw[rows] - body.thigh[rows, None] * r_thigh[:, :, 2]
-        ank = knee - body.shank[rows, None] * r_shank[:, :, 2]
-        return r_thigh, knee_angle, ok, r_shank, ank
-
-    def swing_residual(x, rows):
-        r_thigh, _, _, _, ank = swing_chain(x, rows)
-        nrm, fw = normal[rows], fwd[rows]
-        e = _wrap(sagittal_elevation(-r_thigh[:, :, 2], heading[rows]) - phi_sw[rows, 2])
-        width = _dot(ank - hip_sw[rows], nrm) - w_swing[rows]
-        f = r_thigh[:, :, 0]
-        out = side_sw[rows] * np.arctan2(_dot(f, nrm), _dot(f, fw))
-        return np.stack([e, width, _wrap(out - toe_out[rows])], axis=1)
-
-    x_hip, ok_hip, _, jac_hip = _gauss_newton(
-        swing_residual, warm.hip, style.tolerance, style.max_iterations, warm.hip_jacobian
-    )
-    r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = swing_chain(x_hip, all_rows)
-
-    # Optional swing-ankle target with two-link IK on the swing leg.
+    # Optional swing-ankle goal, reached with two-link IK on the swing leg.
+    goal = use = None
     if (swing_offset is not None or swing_goal is not None
             or (swing_target is not None and swing_blend is not None)):  # fmt: skip
         goal = ankle_sw.copy()
@@ -584,55 +487,19 @@ def elevwalker_pose(
             pinned = np.isfinite(absolute).all(axis=1)
             goal = np.where(pinned[:, None], absolute, goal)
             use |= pinned
-        r_thigh_ik, knee_ik = _two_link_ik(body, hip_sw, goal, r_thigh_sw)
-        r_thigh_sw = np.where(use[:, None, None], r_thigh_ik, r_thigh_sw)
-        knee_sw = np.where(use, knee_ik, knee_sw)
-        r_shank_sw = r_thigh_sw @ rotation_y(knee_sw)
 
-    # Swing talocrural: analytic for the foot elevation (heel→toe from the horizontal is
-    # π/2 + φ from the downward vertical); the swing subtalar joint stays neutral.
-    ankle_sw_angle, ok_foot_sw = solve_single_dof(
-        r_shank_sw, _TC_AXES[sw_row], _FWD, heading, 0.5 * np.pi + phi_sw[:, 0]
-    )
-
-    # The swing foot's toes stay flat on the ground while it pushes off (double support).
-    r_foot_sw = r_shank_sw @ axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
-    pitch_sw = np.arcsin(np.clip(r_foot_sw[:, 2, 0], -1.0, 1.0))
-    push = np.asarray(stance_fraction, dtype=float) - 0.5 + 0.05
-    flat = 1.0 - np.clip((phase / push), 0.0, 1.0) ** 2
-    toe_sw = flat * np.minimum(pitch_sw, 0.0)
-    if swing_toe_angle is not None:
-        given = np.asarray(swing_toe_angle, dtype=float)
-        toe_sw = np.where(np.isfinite(given), given, toe_sw)
-
-    # Assemble local rotations.
-    nj = len(JOINT_NAMES)
-    local = np.broadcast_to(np.eye(3), (k, nj, 3, 3)).copy()
+    # Swing IK, swing talocrural (analytic for the data foot elevation; the swing subtalar
+    # stays neutral), push-off toes flat on the ground (double support), every joint's
+    # local rotation, upper body (§8: trunk upright along ψ, arms with the opposite
+    # thigh) — compiled, per agent.
+    toe_given = np.nan if swing_toe_angle is None else swing_toe_angle
+    local, knee_sw, ok_foot_sw = assemble_joints(
+        left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_rel, tc_axis,
+        sub_axis, x_ankle, toe_angle, hip_sw, r_thigh_sw, knee_sw, r_shank_sw,
+        _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
+        style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
+    )  # fmt: skip
     rows = np.arange(k)
-    st_j, sw_j = LEG_JOINTS[st_row], LEG_JOINTS[sw_row]  # (k, 5)
-    local[:, 0] = r_pelvis
-    local[rows, st_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_st
-    local[rows, st_j[:, 1]] = rotation_y(-knee_rel)
-    local[rows, st_j[:, 2]] = axis_angle_matrix(tc_axis, x_ankle[:, 0])
-    local[rows, st_j[:, 3]] = axis_angle_matrix(sub_axis, x_ankle[:, 1])
-    local[rows, st_j[:, 4]] = rotation_y(toe_angle)
-    local[rows, sw_j[:, 0]] = np.swapaxes(r_pelvis, 1, 2) @ r_thigh_sw
-    local[rows, sw_j[:, 1]] = rotation_y(knee_sw)
-    local[rows, sw_j[:, 2]] = axis_angle_matrix(_TC_AXES[sw_row], ankle_sw_angle)
-    local[rows, sw_j[:, 4]] = rotation_y(toe_sw)
-
-    # 5. Upper body (§8): trunk upright along ψ, arms with the opposite thigh.
-    r_trunk = rotation_z(heading)
-    local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ r_trunk
-    thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
-    thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
-    for side, opposite, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):
-        arm = style.arm_swing * opposite
-        local[:, JOINT[f"{side}_shoulder"]] = rotation_y(-arm) @ rotation_x(
-            np.full(k, sign * 0.08)
-        )
-        elbow = style.elbow_flexion + 0.5 * np.maximum(arm, 0.0)
-        local[:, JOINT[f"{side}_elbow"]] = rotation_y(-elbow)
 
     positions, rotations = forward_kinematics(body, root, r_pelvis, local)
     swing_phase = phase + 0.5
@@ -669,36 +536,6 @@ def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     at_hip = np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1.0, 1.0))
     at_ankle = np.arccos(np.clip((l2**2 + dist**2 - l1**2) / (2 * l2 * dist), -1.0, 1.0))
     return line - at_ankle, line + at_hip
-
-
-def _two_link_ik(body: Body, hip, goal, r_thigh):
-    """Thigh orientation and knee flexion that put the ankle at ``goal`` (k, 3) [m].
-
-    The knee hinge axis (the thigh's local y) keeps its direction as far as possible: it
-    is the current axis made perpendicular to the hip→goal line, and the knee bends
-    forward in the plane normal to it. So the leg's toe-out is kept even when the knee
-    is nearly straight.
-    """
-    l1, l2 = body.thigh, body.shank
-    to_goal = goal - hip
-    dist = np.linalg.norm(to_goal, axis=1)
-    dist_c = np.clip(dist, np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
-    u = to_goal / np.maximum(dist, 1e-9)[:, None]
-    y_old, x_old = r_thigh[:, :, 1], r_thigh[:, :, 0]
-    y_axis = y_old - u * _dot(y_old, u)[:, None]
-    y_axis /= np.maximum(np.linalg.norm(y_axis, axis=1), 1e-12)[:, None]
-    v = np.cross(y_axis, u)  # in the leg plane, perpendicular to the hip→goal line
-    v *= np.where(_dot(v, x_old) < 0, -1.0, 1.0)[:, None]  # knee forward
-    cos_b = np.clip((l1**2 + dist_c**2 - l2**2) / (2 * l1 * dist_c), -1.0, 1.0)
-    sin_b = np.sqrt(1.0 - cos_b**2)
-    knee_new = hip + l1[:, None] * (cos_b[:, None] * u + sin_b[:, None] * v)
-    ankle_new = hip + dist_c[:, None] * u
-    z_axis = (hip - knee_new) / l1[:, None]
-    x_axis = np.cross(y_axis, z_axis)
-    r_new = np.stack([x_axis, y_axis, z_axis], axis=2)
-    shank = np.einsum("kba,kb->ka", r_new, ankle_new - knee_new)  # thigh frame
-    knee_angle = np.arctan2(-shank[:, 0], -shank[:, 2])
-    return r_new, knee_angle
 
 
 # --- measurements on poses ------------------------------------------------------------

@@ -28,6 +28,23 @@ def leg(height):
 # --- Eq. 10 forward kinematics -------------------------------------------------------
 
 
+def test_compiled_blend_step_equals_step_of():
+    """The refinement kernel's per-request Eq. 10 (feet on ball and heel) is step_of's."""
+    from crowdwalk.gait.elevinterp import _row_step
+
+    rng = np.random.default_rng(3)
+    props = np.array([0.245, 0.246, 0.039, 0.038, 0.073]) / 0.53
+    for _ in range(50):
+        keys = rng.normal(0.0, 0.3, (3, 2, 4))
+        w = rng.dirichlet(np.ones(3)) * 1.4 - 0.2
+        blend = np.einsum("v,vrj->rj", w, keys)
+        out = np.empty(2)
+        _row_step(keys, w, props, out)
+        expected = step_of(blend[0], blend[1], SagittalLeg(*props[:4], toe_offset=props[4],
+                                                           ball_offset=props[4]))
+        np.testing.assert_allclose(out, expected, atol=1e-12)
+
+
 def test_standing_upright_is_a_zero_step():
     zero = np.zeros(4)
     np.testing.assert_allclose(step_of(zero, zero, leg(1.75)), [0.0, 0.0], atol=1e-12)
