@@ -7,10 +7,11 @@ turns it (receding horizon). The planner is the cost centre, so identical planni
 problems are answered from a cache. The key is the planner, the leg (2 cm body-height
 classes), the speed (5 cm/s classes), the trailing foot (1 mm; left out on level ground,
 where it only shapes a swing curve that has nothing to clear) and the ground profile
-*relative to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged): a
-reused plan's footholds lie within 0.5 mm of where the planner would put them on that
-ground. On level ground every step of an agent is the same problem, so an agent plans
-there a few times.
+*relative to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged; on
+level ground only its height, since level ground is the same ground whatever the
+profile's extent): a reused plan's footholds lie within 0.5 mm of where the planner
+would put them on that ground. On level ground every step of every agent of a leg and
+speed class is the same problem, so it is planned once.
 """
 
 from __future__ import annotations
@@ -55,16 +56,40 @@ class PlannedSteps:
     from_cache: np.ndarray
 
 
-def _simplify(s: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Drop profile vertices where the ground runs on straight (same slope on both sides,
-    no height jump): they do not change the ground, only the cache key."""
-    if s.size <= 2:
-        return s, z
-    ds0, ds1 = s[1:-1] - s[:-2], s[2:] - s[1:-1]
-    dz0, dz1 = z[1:-1] - z[:-2], z[2:] - z[1:-1]
-    straight = (ds0 > 0) & (ds1 > 0) & (np.abs(dz0 * ds1 - dz1 * ds0) <= 1e-9 * ds0 * ds1)
-    keep = np.concatenate([[True], ~straight, [True]])
-    return s[keep], z[keep]
+def _relative_profiles(arrays, stance_z: np.ndarray):
+    """The agents' profiles relative to their stance feet, concatenated.
+
+    Parameters
+    ----------
+    arrays : list of (s, z) pairs
+        Ground profiles along the local paths [m], s = 0 ``_BEHIND`` behind the stance
+        foot.
+    stance_z : (m,)
+        Heights of the stance footholds [m].
+
+    Returns
+    -------
+    s, z : (V,)
+        Vertices of all profiles, s relative to the stance foot and z to its height [m];
+        vertices where the ground runs on straight (same slope on both sides, no height
+        jump) are dropped: they do not change the ground, only the cache key.
+    bounds : (m + 1,) int
+        Agent i's vertices are ``bounds[i]:bounds[i + 1]``.
+    """
+    sizes = np.array([len(a[0]) for a in arrays])
+    agent = np.repeat(np.arange(len(arrays)), sizes)
+    s = np.concatenate([a[0] for a in arrays]) - _BEHIND
+    z = np.concatenate([a[1] for a in arrays]) - stance_z[agent]
+    inner = np.zeros(s.size, bool)
+    if s.size > 2:
+        ds0, ds1 = s[1:-1] - s[:-2], s[2:] - s[1:-1]
+        dz0, dz1 = z[1:-1] - z[:-2], z[2:] - z[1:-1]
+        inner[1:-1] = ((agent[:-2] == agent[1:-1]) & (agent[2:] == agent[1:-1])
+                       & (ds0 > 0) & (ds1 > 0)
+                       & (np.abs(dz0 * ds1 - dz1 * ds0) <= 1e-9 * ds0 * ds1))
+    keep = ~inner
+    bounds = np.concatenate([[0], np.cumsum(np.bincount(agent[keep], minlength=len(arrays)))])
+    return s[keep], z[keep], bounds
 
 
 def _steps_of(plan, horizon: int) -> tuple:
@@ -190,21 +215,26 @@ class FootstepPlanner:
             arrays = self.terrain.profiles(lines)  # one batched terrain pass
         else:
             arrays = [self.terrain.profile_arrays(line) for line in lines]
-        for i in range(m):  # cache keys and profile objects are per agent
-            s, z = _simplify(*arrays[i])
-            s = s - _BEHIND
-            z = z - stance_z[i]
-            # on level ground the trailing foot changes only the first swing curve, which
-            # the Animator does not need there (nothing to clear): leave it out of the key
-            level = s.size == 2 and abs(z[1] - z[0]) < 1e-9
-            key = b"|".join([
-                str(planner[i]).encode(), np.int64(leg[i]).tobytes(),
-                np.round(speed[i], 3).tobytes(), b"" if level else trailing[i].tobytes(),
-                np.round(s / _S_QUANTUM).astype(np.int64).tobytes(),
-                np.round(z / _Z_QUANTUM).astype(np.int64).tobytes(),
-            ])
-            keys.append(key)
-            profiles.append((s, z))
+        s_all, z_all, bounds = _relative_profiles(arrays, np.asarray(stance_z, float))
+        qs = np.round(s_all / _S_QUANTUM).astype(np.int64)
+        qz = np.round(z_all / _Z_QUANTUM).astype(np.int64)
+        # level ground (one straight horizontal segment) is the same ground whatever the
+        # profile's extent (planners.GroundProfile continues level past its ends): only its
+        # height is in the key. There the trailing foot changes only the first swing
+        # curve, which the Animator does not need (nothing to clear): left out as well.
+        first_row, last_row = bounds[:-1], bounds[1:] - 1
+        level = ((bounds[1:] - bounds[:-1] == 2)
+                 & (np.abs(z_all[last_row] - z_all[first_row]) < 1e-9))
+        head = [b"|".join([str(planner[i]).encode(), np.int64(leg[i]).tobytes(),
+                           np.round(speed[i], 3).tobytes()]) for i in range(m)]
+        for i in range(m):  # cache keys and profiles are per agent (ragged)
+            lo, hi = bounds[i], bounds[i + 1]
+            if level[i]:
+                keys.append(head[i] + b"|level|" + qz[lo].tobytes())
+            else:
+                keys.append(b"|".join([head[i], trailing[i].tobytes(), qs[lo:hi].tobytes(),
+                                       qz[lo:hi].tobytes()]))
+            profiles.append((s_all[lo:hi], z_all[lo:hi]))
         todo = [i for i in range(m) if keys[i] not in self._cache]
         self.calls += m
         self.hits += m - len(todo)
