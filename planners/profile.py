@@ -145,7 +145,26 @@ class GroundProfile:
         """
         count = max(1, int(np.ceil((stop - start) / cell)))
         edges = start + cell * np.arange(count + 1)
-        return HeightRaster(start, cell, self.max_height(edges[:-1], edges[1:]), self.s)
+        # the same maximum as max_height(edges[:-1], edges[1:]) -- the heights at both
+        # cell edges and at the vertices inside -- found from the vertices' cells rather
+        # than by searching every edge: vertex v lies in the closed cells k with
+        # edges[k] <= s_v <= edges[k + 1]
+        last = count + 1
+        f = np.clip(np.ceil((self.s - start) / cell), 0, last).astype(np.intp)
+        # f: the first edge >= s_v (corrected where rounding put it one edge off)
+        f += (f < last) & (edges[np.minimum(f, count)] < self.s)
+        f -= (f > 0) & (edges[np.clip(f - 1, 0, count)] >= self.s)
+        g = np.where((f < last) & (edges[np.minimum(f, count)] == self.s), f, f - 1)
+        # g: the last edge <= s_v; vertex v is at or below edge k when f_v <= k
+        at_or_below = np.cumsum(np.bincount(f, minlength=last + 1))[:last]
+        i = np.maximum(at_or_below - 1, np.searchsorted(self.s, self.s[0], side="right") - 1)
+        q = np.maximum(edges, self.s[0])
+        at_edges = self.z[i] + self._slopes[i] * (q - self.s[i])  # = self.height(edges)
+        cells = np.maximum(at_edges[:-1], at_edges[1:])
+        inside = (f <= count) & (g >= 0)
+        np.maximum.at(cells, np.maximum(f[inside] - 1, 0), self.z[inside])
+        np.maximum.at(cells, np.minimum(g[inside], count - 1), self.z[inside])
+        return HeightRaster(start, cell, cells, self.s)
 
     def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Number of profile vertices in the closed intervals ``[a, b]`` [m] (same shapes)."""
