@@ -17,8 +17,19 @@ def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     abx, aby = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
     apx, apy = p[..., 0] - a[..., 0], p[..., 1] - a[..., 1]
     denom = abx * abx + aby * aby
-    t = np.clip((apx * abx + apy * aby) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
-    return np.hypot(apx - t * abx, apy - t * aby)
+    t = np.atleast_1d(apx * abx)  # an array (not a scalar) for the in-place steps below
+    t += apy * aby
+    t /= np.where(denom > 0, denom, 1.0)
+    np.minimum(np.maximum(t, 0.0, out=t), 1.0, out=t)  # the nearest point's parameter
+    # the offset from the nearest point, in place (large temporaries cost page faults)
+    dx = np.atleast_1d(t * abx)
+    np.subtract(apx, dx, out=dx)
+    t *= aby
+    np.subtract(apy, t, out=t)
+    dx *= dx
+    t *= t
+    dx += t
+    return np.sqrt(dx, out=dx).reshape(np.broadcast_shapes(np.shape(apx), np.shape(abx)))
 
 
 def segment_distance(

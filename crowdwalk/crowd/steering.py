@@ -222,24 +222,23 @@ def choose_steps(
         gap0 = point_segment_distance(position[:, None, :], neighbours.now, neighbours.end)
         reach = np.linalg.norm(ends - position[:, None, None, :], axis=-1).max(axis=(1, 2))
         relevant = neighbours.valid & (gap0 - need < reach[:, None] + 1e-9)
-        k = int(relevant.sum(axis=1).max())
-        if k:
-            order = np.argsort(~relevant, axis=1, kind="stable")[:, :k]  # relevant first
-            take = np.take_along_axis
-            q0 = take(neighbours.now, order[..., None], axis=1)[:, None, None, :, :]
-            q1 = take(neighbours.end, order[..., None], axis=1)[:, None, None, :, :]
-            rel = take(relevant, order, axis=1)[:, None, None, :]
-            p0 = position[:, None, None, None, :]
-            p1 = ends[:, :, :, None, :]
+        # the relevant (agent, neighbour) pairs only, not every agent padded to the most
+        # crowded one's count
+        pa, pk = np.nonzero(relevant)  # (P,), agent-major
+        if pa.size:
+            q0 = neighbours.now[pa, pk][:, None, None, :]  # (P, 1, 1, 2)
+            q1 = neighbours.end[pa, pk][:, None, None, :]
+            p0 = position[pa][:, None, None, :]
+            p1 = ends[pa]  # (P, C, L, 2)
             d = np.minimum(
-                np.minimum(point_segment_distance(p1, q0, q1), point_segment_distance(
-                    q0, p0, p1)),
-                np.minimum(point_segment_distance(q1, p0, p1),
-                           take(gap0, order, axis=1)[:, None, None, :]),
+                np.minimum(point_segment_distance(p1, q0, q1),
+                           point_segment_distance(q0, p0, p1)),
+                np.minimum(point_segment_distance(q1, p0, p1), gap0[pa, pk][:, None, None]),
             )
-            d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (m, C, L, k)
-            clear = (d >= take(need, order, axis=1)[:, None, None, :]) | ~rel
-            ok = ok & clear.all(axis=-1)
+            d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (P, C, L)
+            blocked = d < need[pa, pk][:, None, None]
+            first = np.flatnonzero(np.concatenate([[True], pa[1:] != pa[:-1]]))
+            ok[pa[first]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
     n_free = np.cumprod(ok, axis=2).sum(axis=2)  # (m, C) feasible lengths from the short end
     free = np.where(n_free > 0, lengths[np.maximum(n_free - 1, 0)], 0.0)
 
