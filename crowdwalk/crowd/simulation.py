@@ -259,6 +259,7 @@ class CrowdSimulation:
         self.wall_commands = 0.0  # gait Animator step commands
         self._pending: list[dict] = []  # step commands not yet sent to the Animator
         self._step_rows: list[dict[str, np.ndarray]] = []
+        self._edges: dict | None = None  # corridor sample points (_edge_samples)
 
     # -- setup ---------------------------------------------------------------------
 
@@ -799,6 +800,19 @@ class CrowdSimulation:
 
     # -- re-routing ---------------------------------------------------------------
 
+    def _edge_samples(self) -> dict:
+        """Points about 1 m apart along every corridor of the route graph (k, 2) [m] and
+        its width [m], by edge (computed once: the graph does not change)."""
+        if self._edges is None:
+            self._edges = {}
+            for u, v, data in self.routes.graph.edges(data=True):
+                line = data["geometry"]
+                k = max(2, int(np.ceil(line.length)) + 1)
+                pts = np.array([line.interpolate(f, normalized=True).coords[0]
+                                for f in np.linspace(0, 1, k)])
+                self._edges[(u, v)] = (pts, data["width"])
+        return self._edges
+
     def _reroute(self, blocked: np.ndarray, t: float) -> None:
         """Agents without progress for ``reroute_after`` seconds look for a cheaper route from the
         last route node they passed, with every corridor's cost raised by the time its
@@ -814,14 +828,10 @@ class CrowdSimulation:
         now, _ = st.position(t, act)
         tree = cKDTree(now)
         extra = {}
-        for u, v, data in g.edges(data=True):
-            line = data["geometry"]
-            k = max(2, int(np.ceil(line.length)) + 1)
-            pts = np.array([line.interpolate(f, normalized=True).coords[0]
-                            for f in np.linspace(0, 1, k)])
-            near = tree.query_ball_point(pts, r=max(0.5 * data["width"], 0.5))
+        for (u, v), (pts, width) in self._edge_samples().items():
+            near = tree.query_ball_point(pts, r=max(0.5 * width, 0.5))
             count = len(set().union(*near)) if len(near) else 0
-            extra[(u, v)] = count / (1.3 * data["width"]) * 1.34
+            extra[(u, v)] = count / (1.3 * width) * 1.34
 
         def weight(a, b, data):
             return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)
