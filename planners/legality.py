@@ -113,8 +113,13 @@ def snap_to_support(ankle_s: np.ndarray, window, profile: GroundProfile, heel_of
     candidates = np.concatenate([at[:, None], e + heel + m, e - toe - m], axis=-1)
     shift = np.abs(candidates - at[:, None])
     limit = np.broadcast_to(np.asarray(window, dtype=float), ankle_s.shape)[bad]
-    reason = foot_support(candidates, profile, heel, toe, config)
-    cost = np.where((shift <= limit[:, None]) & (reason == 0), shift, np.inf)
+    # only the candidates within the window are tested (most edges are further away)
+    near = shift <= limit[:, None]
+    rows, cols = np.nonzero(near)
+    supported = np.zeros(near.shape, dtype=bool)
+    supported[rows, cols] = foot_support(candidates[rows, cols], profile, heel[rows, 0],
+                                         toe[rows, 0], config) == 0
+    cost = np.where(supported, shift, np.inf)
     best = np.argmin(cost, axis=-1)
     rows = np.arange(at.size)
     out = ankle_s.copy()
