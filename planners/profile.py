@@ -175,11 +175,13 @@ class GroundProfile:
                 f"z=[{self.z.min():g}, {self.z.max():g}] m)")
 
 
-def _range_max_table(values: np.ndarray) -> np.ndarray:
+def _range_max_table(values: np.ndarray, levels: int | None = None) -> np.ndarray:
     """Sparse table (levels, n) for range-maximum queries: row k holds the maximum of
-    ``values`` (n,) over the 2**k entries from each index (fewer at the end)."""
+    ``values`` (n,) over the 2**k entries from each index (fewer at the end). All
+    ``floor(log2(n)) + 1`` levels by default, or the first ``levels`` of them."""
     n = values.size
-    levels = int(np.floor(np.log2(n))) + 1
+    top = int(np.floor(np.log2(n))) + 1
+    levels = top if levels is None else min(levels, top)
     table = np.empty((levels, n))
     table[0] = values
     width = 1
@@ -226,7 +228,10 @@ class HeightRaster:
         c = heights.size
         cells = np.clip(((vertex_s - self.start) / self.cell).astype(np.intp), 0, c - 1)
         self._vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
-        self._table = _range_max_table(heights)
+        self._heights = heights
+        # the levels of the range-maximum table are built as queries need them (swing
+        # queries span a few dozen cells, the raster tens of thousands)
+        self._table = heights[None, :]
         self._log2 = np.zeros(c + 1, dtype=np.intp)
         self._log2[2:] = np.floor(np.log2(np.arange(2, c + 1))).astype(np.intp)
 
@@ -252,5 +257,8 @@ class HeightRaster:
         np.clip(ia, 0, c - 1, out=ia)
         np.clip(ib, ia, c - 1, out=ib)
         k = self._log2[ib - ia + 1]
+        if k.size and k.max() >= self._table.shape[0]:
+            self._table = _range_max_table(self._heights, int(k.max()) + 1)
+            flat = self._table.ravel()
         row = k * c
         return np.maximum(flat.take(row + ia), flat.take(row + ib - (1 << k) + 1))
