@@ -18,7 +18,7 @@ import numpy as np
 from planners.config import PlannerConfig
 from planners.energy import step_energy, total_energy, vertical_energy, walking_energy
 from planners.legality import Reason, foot_support, snap_to_support
-from planners.profile import GroundProfile
+from planners.profile import _VERTICAL, GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
 
 __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_profiles",
@@ -186,17 +186,34 @@ def combine_profiles(profiles, lo: np.ndarray, hi: np.ndarray, origins: np.ndarr
         offset = np.floor(origins[0] / cell) * cell - origins[0]
         p = profiles[0]
         return (p if offset == 0 else GroundProfile(p.s + offset, p.z)), np.array([offset])
-    s_parts, z_parts, offsets = [], [], []
+    start, end = lo - 1.0, hi + 1.0  # (A,): cropped to the part that can be queried
+    offsets = np.empty(len(profiles))
     cursor = 0.0
-    for p, a, b, o in zip(profiles, lo, hi, origins, strict=True):
-        start, end = a - 1.0, b + 1.0  # cropped to the part that can be queried
-        inside = (p.s > start) & (p.s < end)
-        offset = np.ceil((cursor - start + o) / cell) * cell - o
-        s_parts.append(np.concatenate([[start], p.s[inside], [end]]) + offset)
-        z_parts.append(np.concatenate([p.height([start]), p.z[inside], p.height([end])]))
-        offsets.append(offset)
-        cursor = end + offset + 1.0
-    return GroundProfile(np.concatenate(s_parts), np.concatenate(z_parts)), np.array(offsets)
+    for a in range(offsets.size):  # each agent's offset follows the previous one's end
+        offsets[a] = np.ceil((cursor - start[a] + origins[a]) / cell) * cell - origins[a]
+        cursor = end[a] + offsets[a] + 1.0
+    sizes = np.array([p.s.size for p in profiles])
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    agent = np.repeat(np.arange(sizes.size), sizes)
+    s, z = np.concatenate([p.s for p in profiles]), np.concatenate([p.z for p in profiles])
+    # every profile's own slopes (GroundProfile._slopes, side by side)
+    ds, dz = np.diff(s), np.diff(z)
+    slope = np.zeros(s.size)
+    np.divide(dz, ds, out=slope[:-1], where=(ds > _VERTICAL) & (agent[1:] == agent[:-1]))
+
+    def heights(q):  # GroundProfile.height of each agent's own profile at q (A,)
+        q = np.maximum(q, s[bounds[:-1]])
+        at_or_below = np.add.reduceat((s <= q[agent]).astype(np.intp), bounds[:-1])
+        i = bounds[:-1] + at_or_below - 1
+        return z[i] + slope[i] * (q - s[i])
+
+    inside = np.flatnonzero((s > start[agent]) & (s < end[agent]))
+    rows = np.concatenate([np.arange(sizes.size), agent[inside], np.arange(sizes.size)])
+    rank = np.concatenate([np.full(sizes.size, -1), inside, np.full(sizes.size, s.size)])
+    order = np.lexsort((rank, rows))  # per agent: start, the vertices inside, end
+    out_s = np.concatenate([start, s[inside], end]) + offsets[rows]
+    out_z = np.concatenate([heights(start), z[inside], heights(end)])
+    return GroundProfile(out_s[order], out_z[order]), offsets
 
 
 class _LegArrays:
