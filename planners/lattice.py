@@ -29,6 +29,8 @@ __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_prof
 RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 #: Extra clearance of the reusable curves for straight sloped spans [m].
 SLOPE_EXTRA = 0.03
+#: Largest number of configurations J**n whose step and swing indices are tabulated.
+LOOKUP_CONFIGS = 65536
 #: Compute swing curves only for pairs a legal sequence of steps can use (False: for
 #: every pair of supported footholds; the results are the same, only slower).
 PRUNE_SWINGS = True
@@ -61,8 +63,27 @@ class Structure:
     swing_stride: np.ndarray  # (Np,) stride index j_{k-1} + j_k; -1 at depth 1
 
     def indices(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Step and swing indices (..., n) of configurations (..., n) of j's."""
+        """Step and swing indices (..., n) of configurations (..., n) of j's (each in
+        0..J-1); looked up in a table of every configuration when there are at most
+        ``LOOKUP_CONFIGS`` of them."""
         configs = np.asarray(configs, dtype=np.int64)
+        table = self._lookup
+        if table is None:
+            return self._indices(configs)
+        code = configs @ self._codes  # the configuration's row in all_configs
+        return table[0][code], table[1][code]
+
+    @cached_property
+    def _codes(self) -> np.ndarray:
+        return self.J ** np.arange(self.n - 1, -1, -1, dtype=np.int64)
+
+    @cached_property
+    def _lookup(self) -> tuple[np.ndarray, np.ndarray] | None:
+        if self.J**self.n > LOOKUP_CONFIGS:
+            return None
+        return self._indices(self.all_configs.astype(np.int64))
+
+    def _indices(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         lead = configs.shape[:-1]
         zero = np.zeros(lead + (1,), dtype=np.int64)
         total = np.cumsum(configs, axis=-1)
@@ -123,7 +144,7 @@ class Structure:
     @cached_property
     def all_indices(self) -> tuple[np.ndarray, np.ndarray]:
         """Step and swing indices (J**n, n) of every configuration."""
-        steps, swings = self.indices(self.all_configs)
+        steps, swings = self._indices(self.all_configs.astype(np.int64))
         return steps.astype(np.int32), swings.astype(np.int32)
 
 
