@@ -78,12 +78,13 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
     choices = []
     penalty = dp_penalties(tables)
+    every = B == tables.neutral.size and np.array_equal(agents, np.arange(B))
     for k, (step, _, _, m_next, j_next) in enumerate(_depth_indices(st), start=1):
         # illegal transitions carry +inf; the step cost broadcasts over j_{k-1}
-        total = (value[..., None] + penalty[k - 1][agents]
-                 + step_cost[:, step[:, :1, :].reshape(step.shape[0], -1)][:, :, None, :])
+        total = value[..., None] + (penalty[k - 1] if every else penalty[k - 1][agents])
+        total += step_cost[:, step[:, :1, :].reshape(step.shape[0], -1)][:, :, None, :]
         best_prev = np.argmin(total, axis=2)  # over j_{k-1}: (B, M, J)
-        best = np.take_along_axis(total, best_prev[:, :, None, :], axis=2)[:, :, 0, :]
+        best = total.min(axis=2)
         M = step.shape[0]
         new = np.full((B, M + J - 1, J), np.inf)
         new[:, m_next, j_next] = best
