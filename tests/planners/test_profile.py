@@ -60,3 +60,20 @@ def test_shifted_translates_heights():
     q = p.shifted(1.5, -0.2)
     x = np.linspace(-1, 4, 51)
     assert np.allclose(q.height(x + 1.5), p.height(x) - 0.2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(-3, 3), st.floats(-1, 1)), min_size=2, max_size=15),
+       st.floats(-4, 1), st.floats(0.1, 8), st.sampled_from([0.01, 1 / 256, 0.1]),
+       st.booleans())
+def test_raster_cells_equal_the_exact_range_maxima(vertices, start, width, cell, jump_first):
+    vertices.sort(key=lambda v: v[0])
+    s = np.array([v[0] for v in vertices])
+    if jump_first:  # a vertical change right at the profile's start
+        s[1] = s[0]
+    p = GroundProfile(s, [v[1] for v in vertices])
+    raster = p.raster(start, start + width, cell)
+    count = max(1, int(np.ceil(width / cell)))
+    edges = start + cell * np.arange(count + 1)
+    # bitwise: the raster finds the cells from the vertices instead of searching every edge
+    assert np.array_equal(raster._heights, p.max_height(edges[:-1], edges[1:]))
