@@ -46,9 +46,8 @@ def dp_penalties(tables: StepTables) -> list[np.ndarray]:
     """
     cached = tables.__dict__.get("_dp_penalties")
     if cached is None:
-        rows = np.arange(tables.neutral.size)[:, None, None, None]
-        cached = [np.where(valid & tables.step_legal[rows, step] & tables.swing_ok[rows, swing],
-                           0.0, np.inf)
+        cached = [np.where(valid & np.take(tables.step_legal, step, axis=1)
+                           & np.take(tables.swing_ok, swing, axis=1), 0.0, np.inf)
                   for step, swing, valid, _, _ in _depth_indices(tables.struct)]
         tables.__dict__["_dp_penalties"] = cached
     return cached
@@ -82,7 +81,8 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     for k, (step, _, _, m_next, j_next) in enumerate(_depth_indices(st), start=1):
         # illegal transitions carry +inf; the step cost broadcasts over j_{k-1}
         total = value[..., None] + (penalty[k - 1] if every else penalty[k - 1][agents])
-        total += step_cost[:, step[:, :1, :].reshape(step.shape[0], -1)][:, :, None, :]
+        total += np.take(step_cost, step[:, :1, :].reshape(step.shape[0], -1), axis=1)[
+            :, :, None, :]
         best_prev = np.argmin(total, axis=2)  # over j_{k-1}: (B, M, J)
         best = total.min(axis=2)
         M = step.shape[0]
