@@ -261,6 +261,9 @@ class FootstepPlanner:
         from planners import plan_batch
 
         m = stance.shape[0]
+        if m == 0:
+            return PlannedSteps(*self._store.take(np.zeros(0, dtype=np.int64)),
+                                np.zeros(0, bool))
         if trailing is None:
             trailing = np.full(m, -0.6)
         # where the trailing foot is shapes the first swing curve, which must clear the
