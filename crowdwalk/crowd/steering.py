@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import point_segment_distance
+from crowdwalk.crowd.geometry import point_segment_distance, segment_distance
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -127,18 +127,6 @@ class StepChoice:
     move: np.ndarray
 
 
-def _crossing(p0, p1, q0, q1) -> np.ndarray:
-    """Whether segments p0–p1 and q0–q1 cross (arrays (..., 2) broadcast)."""
-    r, s = p1 - p0, q1 - q0
-    qp = q0 - p0
-    denom = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-    ok = np.abs(denom) > 1e-15
-    safe = np.where(ok, denom, 1.0)
-    t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / safe
-    u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / safe
-    return ok & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
-
-
 def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
     return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
@@ -230,12 +218,7 @@ def choose_steps(
             q1 = neighbours.end[pa, pk][:, None, None, :]
             p0 = position[pa][:, None, None, :]
             p1 = ends[pa]  # (P, C, L, 2)
-            d = np.minimum(
-                np.minimum(point_segment_distance(p1, q0, q1),
-                           point_segment_distance(q0, p0, p1)),
-                np.minimum(point_segment_distance(q1, p0, p1), gap0[pa, pk][:, None, None]),
-            )
-            d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (P, C, L)
+            d = segment_distance(p0, p1, q0, q1)  # (P, C, L)
             blocked = d < need[pa, pk][:, None, None]
             first = np.flatnonzero(np.concatenate([[True], pa[1:] != pa[:-1]]))
             ok[pa[first]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
