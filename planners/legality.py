@@ -63,9 +63,8 @@ def foot_support(ankle_s: np.ndarray, profile: GroundProfile, heel_offset, toe_o
     big = jump_s[np.abs(jump_dz) > config.support_tolerance]
     edges = np.searchsorted(big, hi, side="left") - np.searchsorted(big, lo, side="right")
     eps = 1e-9  # a riser exactly at the heel or toe is beside the foot, not under it
-    z_heel = profile.height(heel + eps)
-    z_toe = profile.height(toe - eps)
-    bump = profile.max_height(heel + eps, toe - eps) - np.maximum(z_heel, z_toe)
+    highest, z_heel, z_toe = profile.span_heights(heel + eps, toe - eps)
+    bump = highest - np.maximum(z_heel, z_toe)
     slope = np.abs(z_toe - z_heel) / (toe - heel)
     uneven = (bump > config.support_tolerance) | (slope > config.max_foot_slope)
     return np.where(edges > 0, int(Reason.EDGE), 0) | np.where(uneven, int(Reason.SLOPE), 0)

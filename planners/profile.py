@@ -123,18 +123,30 @@ class GroundProfile:
         Exact for the piecewise-linear profile, including both sides of vertical
         changes; vectorised with a sparse range-maximum table.
         """
+        return self.span_heights(a, b)[0]
+
+    def span_heights(self, a: np.ndarray, b: np.ndarray):
+        """:meth:`max_height` over ``[a, b]`` together with ``height(a)`` and
+        ``height(b)`` [m], which it needs anyway (one search per end)."""
         a = np.asarray(a, dtype=float)
-        b = np.maximum(np.asarray(b, dtype=float), a)
-        best = np.maximum(self.height(a), self.height(b))
+        b = np.asarray(b, dtype=float)
+        qa, qb = np.maximum(a, self.s[0]), np.maximum(b, self.s[0])
+        ia = np.searchsorted(self.s, qa, side="right") - 1
+        ib = np.searchsorted(self.s, qb, side="right") - 1
+        height_a = self.z[ia] + self._slopes[ia] * (qa - self.s[ia])  # = self.height(a)
+        height_b = self.z[ib] + self._slopes[ib] * (qb - self.s[ib])
+        empty = b < a  # the interval is [a, a]
+        best = np.maximum(height_a, np.where(empty, height_a, height_b))
         lo = np.searchsorted(self.s, a, side="left")
-        hi = np.searchsorted(self.s, b, side="right")  # vertices lo..hi-1 lie in [a, b]
+        # vertices lo..hi-1 lie in [a, max(a, b)]
+        hi = np.where(np.maximum(a, b) < self.s[0], 0, np.where(empty, ia, ib) + 1)
         count = hi - lo
         k = np.log2(np.maximum(count, 1)).astype(int)
         table = self._range_max_table
         last = table.shape[1] - 1
         inner = np.maximum(table[k, np.minimum(lo, last)],
                            table[k, np.clip(hi - (1 << k), 0, last)])
-        return np.where(count > 0, np.maximum(best, inner), best)
+        return np.where(count > 0, np.maximum(best, inner), best), height_a, height_b
 
     def raster(self, start: float, stop: float, cell: float = 0.01) -> HeightRaster:
         """A conservative raster of this profile over ``[start, stop]`` [m].
