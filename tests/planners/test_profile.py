@@ -72,8 +72,9 @@ def test_raster_cells_equal_the_exact_range_maxima(vertices, start, width, cell,
     if jump_first:  # a vertical change right at the profile's start
         s[1] = s[0]
     p = GroundProfile(s, [v[1] for v in vertices])
-    raster = p.raster(start, start + width, cell)
-    count = max(1, int(np.ceil(width / cell)))
+    stop = start + width
+    raster = p.raster(start, stop, cell)
+    count = max(1, int(np.ceil((stop - start) / cell)))
     edges = start + cell * np.arange(count + 1)
     # bitwise: the raster finds the cells from the vertices instead of searching every edge
     assert np.array_equal(raster._heights, p.max_height(edges[:-1], edges[1:]))
