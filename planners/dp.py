@@ -39,18 +39,17 @@ def _depth_indices(struct: Structure):
     return out
 
 
-def dp_penalties(tables: StepTables) -> list[np.ndarray]:
-    """Per depth, 0 where a transition (m_{k-1}, j_{k-1}) -> j_k is legal, else +inf.
+def dp_legal(tables: StepTables) -> list[np.ndarray]:
+    """Per depth, whether a transition (m_{k-1}, j_{k-1}) -> j_k is legal.
 
-    Shapes (A, M, P, J); computed once per set of tables and cached on it.
+    Shapes (A, M, P, J), bool; computed once per set of tables and cached on it.
     """
-    cached = tables.__dict__.get("_dp_penalties")
+    cached = tables.__dict__.get("_dp_legal")
     if cached is None:
-        rows = np.arange(tables.neutral.size)[:, None, None, None]
-        cached = [np.where(valid & tables.step_legal[rows, step] & tables.swing_ok[rows, swing],
-                           0.0, np.inf)
+        cached = [valid & np.take(tables.step_legal, step, axis=1)
+                  & np.take(tables.swing_ok, swing, axis=1)
                   for step, swing, valid, _, _ in _depth_indices(tables.struct)]
-        tables.__dict__["_dp_penalties"] = cached
+        tables.__dict__["_dp_legal"] = cached
     return cached
 
 
@@ -77,13 +76,15 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     step_cost = np.round(step_cost, 10)  # ties broken alike whatever the offsets
     value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
     choices = []
-    penalty = dp_penalties(tables)
+    legal = dp_legal(tables)
+    every = B == tables.neutral.size and np.array_equal(agents, np.arange(B))
     for k, (step, _, _, m_next, j_next) in enumerate(_depth_indices(st), start=1):
-        # illegal transitions carry +inf; the step cost broadcasts over j_{k-1}
-        total = (value[..., None] + penalty[k - 1][agents]
-                 + step_cost[:, step[:, :1, :].reshape(step.shape[0], -1)][:, :, None, :])
+        # illegal transitions cost +inf; the step cost broadcasts over j_{k-1}
+        total = value[..., None] + np.take(
+            step_cost, step[:, :1, :].reshape(step.shape[0], -1), axis=1)[:, :, None, :]
+        total[~(legal[k - 1] if every else legal[k - 1][agents])] = np.inf
         best_prev = np.argmin(total, axis=2)  # over j_{k-1}: (B, M, J)
-        best = np.take_along_axis(total, best_prev[:, :, None, :], axis=2)[:, :, 0, :]
+        best = total.min(axis=2)
         M = step.shape[0]
         new = np.full((B, M + J - 1, J), np.inf)
         new[:, m_next, j_next] = best

@@ -45,11 +45,15 @@ def leg_angles(hip_s, hip_z, ankle_s, ankle_z, leg: Leg, min_reach: float):
     dz = hip_z - ankle_z
     d = np.hypot(ds, dz)
     reachable = (d <= leg.length * (1 + 1e-9)) & (d >= min_reach)
-    dc = np.clip(d, np.maximum(min_reach, 1e-6), leg.length)
+    # np.minimum(np.maximum(...)) is np.clip without its per-call overhead (hot: several
+    # calls per step on a batch of many steps)
+    dc = np.minimum(np.maximum(d, np.maximum(min_reach, 1e-6)), leg.length)
     direction = np.arctan2(ds, dz)
     a, b = leg.thigh, leg.shank
-    at_hip = np.arccos(np.clip((a * a + dc * dc - b * b) / (2 * a * dc), -1.0, 1.0))
-    at_ankle = np.arccos(np.clip((b * b + dc * dc - a * a) / (2 * b * dc), -1.0, 1.0))
+    at_hip = np.arccos(np.minimum(np.maximum((a * a + dc * dc - b * b) / (2 * a * dc), -1.0),
+                                  1.0))
+    at_ankle = np.arccos(np.minimum(np.maximum((b * b + dc * dc - a * a) / (2 * b * dc),
+                                               -1.0), 1.0))
     return direction + at_hip, direction - at_ankle, reachable
 
 

@@ -24,7 +24,7 @@ from planners.energy import (
     walking_energy,
 )
 from planners.legality import Reason, foot_support, snap_to_support
-from planners.profile import GroundProfile
+from planners.profile import _VERTICAL, GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
 
 __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_profiles",
@@ -35,6 +35,8 @@ __all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_prof
 RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 #: Extra clearance of the reusable curves for straight sloped spans [m].
 SLOPE_EXTRA = 0.03
+#: Largest number of configurations J**n whose step and swing indices are tabulated.
+LOOKUP_CONFIGS = 65536
 #: Compute swing curves only for pairs a legal sequence of steps can use (False: for
 #: every pair of supported footholds; the results are the same, only slower).
 PRUNE_SWINGS = True
@@ -67,8 +69,27 @@ class Structure:
     swing_stride: np.ndarray  # (Np,) stride index j_{k-1} + j_k; -1 at depth 1
 
     def indices(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Step and swing indices (..., n) of configurations (..., n) of j's."""
+        """Step and swing indices (..., n) of configurations (..., n) of j's (each in
+        0..J-1); looked up in a table of every configuration when there are at most
+        ``LOOKUP_CONFIGS`` of them."""
         configs = np.asarray(configs, dtype=np.int64)
+        table = self._lookup
+        if table is None:
+            return self._indices(configs)
+        code = configs @ self._codes  # the configuration's row in all_configs
+        return table[0][code], table[1][code]
+
+    @cached_property
+    def _codes(self) -> np.ndarray:
+        return self.J ** np.arange(self.n - 1, -1, -1, dtype=np.int64)
+
+    @cached_property
+    def _lookup(self) -> tuple[np.ndarray, np.ndarray] | None:
+        if self.J**self.n > LOOKUP_CONFIGS:
+            return None
+        return self._indices(self.all_configs.astype(np.int64))
+
+    def _indices(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         lead = configs.shape[:-1]
         zero = np.zeros(lead + (1,), dtype=np.int64)
         total = np.cumsum(configs, axis=-1)
@@ -129,7 +150,7 @@ class Structure:
     @cached_property
     def all_indices(self) -> tuple[np.ndarray, np.ndarray]:
         """Step and swing indices (J**n, n) of every configuration."""
-        steps, swings = self.indices(self.all_configs)
+        steps, swings = self._indices(self.all_configs.astype(np.int64))
         return steps.astype(np.int32), swings.astype(np.int32)
 
 
@@ -192,17 +213,34 @@ def combine_profiles(profiles, lo: np.ndarray, hi: np.ndarray, origins: np.ndarr
         offset = np.floor(origins[0] / cell) * cell - origins[0]
         p = profiles[0]
         return (p if offset == 0 else GroundProfile(p.s + offset, p.z)), np.array([offset])
-    s_parts, z_parts, offsets = [], [], []
+    start, end = lo - 1.0, hi + 1.0  # (A,): cropped to the part that can be queried
+    offsets = np.empty(len(profiles))
     cursor = 0.0
-    for p, a, b, o in zip(profiles, lo, hi, origins, strict=True):
-        start, end = a - 1.0, b + 1.0  # cropped to the part that can be queried
-        inside = (p.s > start) & (p.s < end)
-        offset = np.ceil((cursor - start + o) / cell) * cell - o
-        s_parts.append(np.concatenate([[start], p.s[inside], [end]]) + offset)
-        z_parts.append(np.concatenate([p.height([start]), p.z[inside], p.height([end])]))
-        offsets.append(offset)
-        cursor = end + offset + 1.0
-    return GroundProfile(np.concatenate(s_parts), np.concatenate(z_parts)), np.array(offsets)
+    for a in range(offsets.size):  # each agent's offset follows the previous one's end
+        offsets[a] = np.ceil((cursor - start[a] + origins[a]) / cell) * cell - origins[a]
+        cursor = end[a] + offsets[a] + 1.0
+    sizes = np.array([p.s.size for p in profiles])
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    agent = np.repeat(np.arange(sizes.size), sizes)
+    s, z = np.concatenate([p.s for p in profiles]), np.concatenate([p.z for p in profiles])
+    # every profile's own slopes (GroundProfile._slopes, side by side)
+    ds, dz = np.diff(s), np.diff(z)
+    slope = np.zeros(s.size)
+    np.divide(dz, ds, out=slope[:-1], where=(ds > _VERTICAL) & (agent[1:] == agent[:-1]))
+
+    def heights(q):  # GroundProfile.height of each agent's own profile at q (A,)
+        q = np.maximum(q, s[bounds[:-1]])
+        at_or_below = np.add.reduceat((s <= q[agent]).astype(np.intp), bounds[:-1])
+        i = bounds[:-1] + at_or_below - 1
+        return z[i] + slope[i] * (q - s[i])
+
+    inside = np.flatnonzero((s > start[agent]) & (s < end[agent]))
+    rows = np.concatenate([np.arange(sizes.size), agent[inside], np.arange(sizes.size)])
+    rank = np.concatenate([np.full(sizes.size, -1), inside, np.full(sizes.size, s.size)])
+    order = np.lexsort((rank, rows))  # per agent: start, the vertices inside, end
+    out_s = np.concatenate([start, s[inside], end]) + offsets[rows]
+    out_z = np.concatenate([heights(start), z[inside], heights(end)])
+    return GroundProfile(out_s[order], out_z[order]), offsets
 
 
 class _LegArrays:
@@ -306,10 +344,13 @@ class StepTables:
         """
         steps, swings = self.struct.indices(configs)
         rows = agents.reshape((-1,) + (1,) * (configs.ndim - 1))
-        legal = (self.step_legal[rows, steps].all(axis=-1)
-                 & self.swing_ok[rows, swings].all(axis=-1))
-        energy = self.cost[rows, steps].sum(axis=-1)
-        length = self.progress[rows, steps].sum(axis=-1)
+        # gathers through flat indices (faster than indexing with broadcast row arrays)
+        at_step = rows * self.E.shape[1] + steps
+        at_swing = rows * self.swing_ok.shape[1] + swings
+        legal = (self.step_legal.ravel().take(at_step).all(axis=-1)
+                 & self.swing_ok.ravel().take(at_swing).all(axis=-1))
+        energy = self.cost.ravel().take(at_step).sum(axis=-1)
+        length = self.progress.ravel().take(at_step).sum(axis=-1)
         # Rounded to 1e-12 so that ties (mirror-image plans on level ground) are broken
         # the same way whatever the profile's offsets.
         return legal, np.round(length / energy, 12)

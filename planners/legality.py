@@ -63,9 +63,8 @@ def foot_support(ankle_s: np.ndarray, profile: GroundProfile, heel_offset, toe_o
     big = jump_s[np.abs(jump_dz) > config.support_tolerance]
     edges = np.searchsorted(big, hi, side="left") - np.searchsorted(big, lo, side="right")
     eps = 1e-9  # a riser exactly at the heel or toe is beside the foot, not under it
-    z_heel = profile.height(heel + eps)
-    z_toe = profile.height(toe - eps)
-    bump = profile.max_height(heel + eps, toe - eps) - np.maximum(z_heel, z_toe)
+    highest, z_heel, z_toe = profile.span_heights(heel + eps, toe - eps)
+    bump = highest - np.maximum(z_heel, z_toe)
     slope = np.abs(z_toe - z_heel) / (toe - heel)
     uneven = (bump > config.support_tolerance) | (slope > config.max_foot_slope)
     return np.where(edges > 0, int(Reason.EDGE), 0) | np.where(uneven, int(Reason.SLOPE), 0)
@@ -98,18 +97,30 @@ def snap_to_support(ankle_s: np.ndarray, window, profile: GroundProfile, heel_of
     if edges.size == 0:
         return ankle_s
     m = config.edge_margin + 1e-9  # 1 nm inside, so rounding cannot put the foot back
-    i = np.searchsorted(edges, ankle_s)
-    picks = np.clip(i[..., None] + np.arange(-neighbours, neighbours)[None, None, :], 0,
+    heel = np.broadcast_to(np.asarray(heel_offset, dtype=float), ankle_s.shape)
+    toe = np.broadcast_to(np.asarray(toe_offset, dtype=float), ankle_s.shape)
+    # a supported foothold stays (no move is shorter); only the others look for one
+    bad = foot_support(ankle_s, profile, heel, toe, config) != 0
+    if not bad.any():
+        return ankle_s
+    at = ankle_s[bad]  # (B,)
+    i = np.searchsorted(edges, at)
+    picks = np.clip(i[:, None] + np.arange(-neighbours, neighbours)[None, :], 0,
                     edges.size - 1)
-    e = edges[picks]  # (A, N, 2*neighbours)
-    heel = np.broadcast_to(np.asarray(heel_offset, dtype=float), ankle_s.shape)[..., None]
-    toe = np.broadcast_to(np.asarray(toe_offset, dtype=float), ankle_s.shape)[..., None]
-    candidates = np.concatenate([ankle_s[..., None], e + heel + m, e - toe - m], axis=-1)
-    shift = np.abs(candidates - ankle_s[..., None])
-    within = shift <= np.asarray(window)[..., None] if np.ndim(window) else shift <= window
-    reason = foot_support(candidates, profile, heel, toe, config)
-    cost = np.where(within & (reason == 0), shift, np.inf)
+    e = edges[picks]  # (B, 2*neighbours)
+    heel, toe = heel[bad][:, None], toe[bad][:, None]
+    candidates = np.concatenate([at[:, None], e + heel + m, e - toe - m], axis=-1)
+    shift = np.abs(candidates - at[:, None])
+    limit = np.broadcast_to(np.asarray(window, dtype=float), ankle_s.shape)[bad]
+    # only the candidates within the window are tested (most edges are further away)
+    near = shift <= limit[:, None]
+    rows, cols = np.nonzero(near)
+    supported = np.zeros(near.shape, dtype=bool)
+    supported[rows, cols] = foot_support(candidates[rows, cols], profile, heel[rows, 0],
+                                         toe[rows, 0], config) == 0
+    cost = np.where(supported, shift, np.inf)
     best = np.argmin(cost, axis=-1)
-    found = np.isfinite(np.take_along_axis(cost, best[..., None], axis=-1)[..., 0])
-    chosen = np.take_along_axis(candidates, best[..., None], axis=-1)[..., 0]
-    return np.where(found, chosen, ankle_s)
+    rows = np.arange(at.size)
+    out = ankle_s.copy()
+    out[bad] = np.where(np.isfinite(cost[rows, best]), candidates[rows, best], at)
+    return out

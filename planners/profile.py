@@ -123,18 +123,30 @@ class GroundProfile:
         Exact for the piecewise-linear profile, including both sides of vertical
         changes; vectorised with a sparse range-maximum table.
         """
+        return self.span_heights(a, b)[0]
+
+    def span_heights(self, a: np.ndarray, b: np.ndarray):
+        """:meth:`max_height` over ``[a, b]`` together with ``height(a)`` and
+        ``height(b)`` [m], which it needs anyway (one search per end)."""
         a = np.asarray(a, dtype=float)
-        b = np.maximum(np.asarray(b, dtype=float), a)
-        best = np.maximum(self.height(a), self.height(b))
+        b = np.asarray(b, dtype=float)
+        qa, qb = np.maximum(a, self.s[0]), np.maximum(b, self.s[0])
+        ia = np.searchsorted(self.s, qa, side="right") - 1
+        ib = np.searchsorted(self.s, qb, side="right") - 1
+        height_a = self.z[ia] + self._slopes[ia] * (qa - self.s[ia])  # = self.height(a)
+        height_b = self.z[ib] + self._slopes[ib] * (qb - self.s[ib])
+        empty = b < a  # the interval is [a, a]
+        best = np.maximum(height_a, np.where(empty, height_a, height_b))
         lo = np.searchsorted(self.s, a, side="left")
-        hi = np.searchsorted(self.s, b, side="right")  # vertices lo..hi-1 lie in [a, b]
+        # vertices lo..hi-1 lie in [a, max(a, b)]
+        hi = np.where(np.maximum(a, b) < self.s[0], 0, np.where(empty, ia, ib) + 1)
         count = hi - lo
         k = np.log2(np.maximum(count, 1)).astype(int)
         table = self._range_max_table
         last = table.shape[1] - 1
         inner = np.maximum(table[k, np.minimum(lo, last)],
                            table[k, np.clip(hi - (1 << k), 0, last)])
-        return np.where(count > 0, np.maximum(best, inner), best)
+        return np.where(count > 0, np.maximum(best, inner), best), height_a, height_b
 
     def raster(self, start: float, stop: float, cell: float = 0.01) -> HeightRaster:
         """A conservative raster of this profile over ``[start, stop]`` [m].
@@ -145,7 +157,26 @@ class GroundProfile:
         """
         count = max(1, int(np.ceil((stop - start) / cell)))
         edges = start + cell * np.arange(count + 1)
-        return HeightRaster(start, cell, self.max_height(edges[:-1], edges[1:]), self.s)
+        # the same maximum as max_height(edges[:-1], edges[1:]) -- the heights at both
+        # cell edges and at the vertices inside -- found from the vertices' cells rather
+        # than by searching every edge: vertex v lies in the closed cells k with
+        # edges[k] <= s_v <= edges[k + 1]
+        last = count + 1
+        f = np.clip(np.ceil((self.s - start) / cell), 0, last).astype(np.intp)
+        # f: the first edge >= s_v (corrected where rounding put it one edge off)
+        f += (f < last) & (edges[np.minimum(f, count)] < self.s)
+        f -= (f > 0) & (edges[np.clip(f - 1, 0, count)] >= self.s)
+        g = np.where((f < last) & (edges[np.minimum(f, count)] == self.s), f, f - 1)
+        # g: the last edge <= s_v; vertex v is at or below edge k when f_v <= k
+        at_or_below = np.cumsum(np.bincount(f, minlength=last + 1))[:last]
+        i = np.maximum(at_or_below - 1, np.searchsorted(self.s, self.s[0], side="right") - 1)
+        q = np.maximum(edges, self.s[0])
+        at_edges = self.z[i] + self._slopes[i] * (q - self.s[i])  # = self.height(edges)
+        cells = np.maximum(at_edges[:-1], at_edges[1:])
+        inside = (f <= count) & (g >= 0)
+        np.maximum.at(cells, np.maximum(f[inside] - 1, 0), self.z[inside])
+        np.maximum.at(cells, np.minimum(g[inside], count - 1), self.z[inside])
+        return HeightRaster(start, cell, cells, self.s)
 
     def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Number of profile vertices in the closed intervals ``[a, b]`` [m] (same shapes)."""
@@ -156,11 +187,13 @@ class GroundProfile:
                 f"z=[{self.z.min():g}, {self.z.max():g}] m)")
 
 
-def _range_max_table(values: np.ndarray) -> np.ndarray:
+def _range_max_table(values: np.ndarray, levels: int | None = None) -> np.ndarray:
     """Sparse table (levels, n) for range-maximum queries: row k holds the maximum of
-    ``values`` (n,) over the 2**k entries from each index (fewer at the end)."""
+    ``values`` (n,) over the 2**k entries from each index (fewer at the end). All
+    ``floor(log2(n)) + 1`` levels by default, or the first ``levels`` of them."""
     n = values.size
-    levels = int(np.floor(np.log2(n))) + 1
+    top = int(np.floor(np.log2(n))) + 1
+    levels = top if levels is None else min(levels, top)
     table = np.empty((levels, n))
     table[0] = values
     width = 1
@@ -207,7 +240,10 @@ class HeightRaster:
         c = heights.size
         cells = np.clip(((vertex_s - self.start) / self.cell).astype(np.intp), 0, c - 1)
         self._vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
-        self._table = _range_max_table(heights)
+        self._heights = heights
+        # the levels of the range-maximum table are built as queries need them (swing
+        # queries span a few dozen cells, the raster tens of thousands)
+        self._table = heights[None, :]
         self._log2 = np.zeros(c + 1, dtype=np.intp)
         self._log2[2:] = np.floor(np.log2(np.arange(2, c + 1))).astype(np.intp)
 
@@ -233,5 +269,8 @@ class HeightRaster:
         np.clip(ia, 0, c - 1, out=ia)
         np.clip(ib, ia, c - 1, out=ib)
         k = self._log2[ib - ia + 1]
+        if k.size and k.max() >= self._table.shape[0]:
+            self._table = _range_max_table(self._heights, int(k.max()) + 1)
+            flat = self._table.ravel()
         row = k * c
         return np.maximum(flat.take(row + ia), flat.take(row + ib - (1 << k) + 1))

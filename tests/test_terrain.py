@@ -265,6 +265,18 @@ def test_batched_profiles_equal_single_profiles(lines):
         np.testing.assert_allclose(z, z1, rtol=0, atol=1e-12)
 
 
+@FAST
+@given(lines=st.lists(st.tuples(st.floats(-15, 15), st.floats(-15, 15), st.floats(-15, 15),
+                                st.floats(-15, 15)), min_size=1, max_size=8))
+def test_stacked_straight_lines_equal_the_list_of_polylines(lines):
+    ter = demo_terrain()
+    stacked = np.array(lines).reshape(-1, 2, 2)
+    stacked[::3, 1] = stacked[::3, 0]  # some lines are a single point
+    for (s, z), (s1, z1) in zip(ter.profiles(stacked), ter.profiles(list(stacked)),
+                                strict=True):
+        assert np.array_equal(s, s1) and np.array_equal(z, z1)
+
+
 @settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 10_000), n_blocks=st.integers(17, 60))
 def test_many_features_grid_index_matches_plain_override(seed, n_blocks):

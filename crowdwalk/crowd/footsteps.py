@@ -7,10 +7,11 @@ turns it (receding horizon). The planner is the cost centre, so identical planni
 problems are answered from a cache. The key is the planner, the leg (2 cm body-height
 classes), the speed (5 cm/s classes), the trailing foot (1 mm; left out on level ground,
 where it only shapes a swing curve that has nothing to clear) and the ground profile
-*relative to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged): a
-reused plan's footholds lie within 0.5 mm of where the planner would put them on that
-ground. On level ground every step of an agent is the same problem, so an agent plans
-there a few times.
+*relative to the stance foot* (s and z − z₀ rounded to 1 mm, straight runs merged; on
+level ground only its height, since level ground is the same ground whatever the
+profile's extent): a reused plan's footholds lie within 0.5 mm of where the planner
+would put them on that ground. On level ground every step of every agent of a leg and
+speed class is the same problem, so it is planned once.
 """
 
 from __future__ import annotations
@@ -55,16 +56,110 @@ class PlannedSteps:
     from_cache: np.ndarray
 
 
-def _simplify(s: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Drop profile vertices where the ground runs on straight (same slope on both sides,
-    no height jump): they do not change the ground, only the cache key."""
-    if s.size <= 2:
-        return s, z
-    ds0, ds1 = s[1:-1] - s[:-2], s[2:] - s[1:-1]
-    dz0, dz1 = z[1:-1] - z[:-2], z[2:] - z[1:-1]
-    straight = (ds0 > 0) & (ds1 > 0) & (np.abs(dz0 * ds1 - dz1 * ds0) <= 1e-9 * ds0 * ds1)
-    keep = np.concatenate([[True], ~straight, [True]])
-    return s[keep], z[keep]
+def _relative_profiles(arrays, stance_z: np.ndarray):
+    """The agents' profiles relative to their stance feet, concatenated.
+
+    Parameters
+    ----------
+    arrays : list of (s, z) pairs
+        Ground profiles along the local paths [m], s = 0 ``_BEHIND`` behind the stance
+        foot.
+    stance_z : (m,)
+        Heights of the stance footholds [m].
+
+    Returns
+    -------
+    s, z : (V,)
+        Vertices of all profiles, s relative to the stance foot and z to its height [m];
+        vertices where the ground runs on straight (same slope on both sides, no height
+        jump) are dropped: they do not change the ground, only the cache key.
+    bounds : (m + 1,) int
+        Agent i's vertices are ``bounds[i]:bounds[i + 1]``.
+    """
+    sizes = np.array([len(a[0]) for a in arrays])
+    agent = np.repeat(np.arange(len(arrays)), sizes)
+    s = np.concatenate([a[0] for a in arrays]) - _BEHIND
+    z = np.concatenate([a[1] for a in arrays]) - stance_z[agent]
+    inner = np.zeros(s.size, bool)
+    if s.size > 2:
+        ds0, ds1 = s[1:-1] - s[:-2], s[2:] - s[1:-1]
+        dz0, dz1 = z[1:-1] - z[:-2], z[2:] - z[1:-1]
+        inner[1:-1] = ((agent[:-2] == agent[1:-1]) & (agent[2:] == agent[1:-1])
+                       & (ds0 > 0) & (ds1 > 0)
+                       & (np.abs(dz0 * ds1 - dz1 * ds0) <= 1e-9 * ds0 * ds1))
+    keep = ~inner
+    bounds = np.concatenate([[0], np.cumsum(np.bincount(agent[keep], minlength=len(arrays)))])
+    return s[keep], z[keep], bounds
+
+
+def _cache_keys(s, z, bounds, planner, leg, speed, trailing) -> list[bytes]:
+    """Cache keys of m planning problems.
+
+    Parameters
+    ----------
+    s, z, bounds
+        The relative profiles of :func:`_relative_profiles`.
+    planner, leg, speed, trailing : (m,) int
+        Planner code, leg class, speed class (5 cm/s) and trailing foot [mm].
+
+    Returns
+    -------
+    list of bytes
+        Per agent the header (planner, leg, speed, level flag, trailing foot, vertex
+        count) followed by the vertices' s and z rounded to ``_S_QUANTUM`` and
+        ``_Z_QUANTUM``. Level ground (one straight horizontal segment) is the same
+        ground whatever the profile's extent (planners.GroundProfile continues level
+        past its ends): its key holds its height only. There the trailing foot changes
+        only the first swing curve, which the Animator does not need (nothing to clear):
+        it is left out as well.
+    """
+    m = bounds.size - 1
+    count = np.diff(bounds)
+    first, last = bounds[:-1], bounds[1:] - 1
+    level = (count == 2) & (np.abs(z[last] - z[first]) < 1e-9)
+    qs = np.round(s / _S_QUANTUM).astype(np.int64)
+    qz = np.round(z / _Z_QUANTUM).astype(np.int64)
+    n = np.where(level, 0, count)  # vertices in the key
+    head = np.column_stack([planner, leg, speed, level, np.where(level, 0, trailing), n])
+    width = head.shape[1] + np.where(level, 1, 2 * count)
+    mat = np.zeros((m, int(width.max())), dtype=np.int64)
+    mat[:, :head.shape[1]] = head
+    agent = np.repeat(np.arange(m), count)
+    j = np.arange(s.size) - first[agent]  # vertex index within its profile
+    full = ~level[agent]
+    col = head.shape[1] + j
+    mat[agent[full], col[full]] = qs[full]
+    mat[agent[full], (col + count[agent])[full]] = qz[full]
+    mat[level, head.shape[1]] = qz[first[level]]
+    return [row[:w].tobytes() for row, w in zip(mat, width.tolist(), strict=True)]
+
+
+class _PlanStore:
+    """The cached plans' steps as growing arrays (rows), gathered per agent at once."""
+
+    def __init__(self, horizon: int) -> None:
+        self.size = 0
+        self.ok = np.zeros(64, bool)
+        self.sl = np.zeros((64, horizon))
+        self.sh = np.zeros((64, horizon))
+        self.swing = np.zeros((64, horizon, 4, 2))
+        self.energy = np.zeros((64, horizon))
+
+    def add(self, steps: tuple) -> int:
+        """Append one plan's (ok, step lengths, heights, swings, energies); its row."""
+        if self.size == self.ok.shape[0]:
+            for name in ("ok", "sl", "sh", "swing", "energy"):
+                old = getattr(self, name)
+                setattr(self, name, np.concatenate([old, np.zeros_like(old)]))
+        row = self.size
+        self.ok[row], self.sl[row], self.sh[row], self.swing[row], self.energy[row] = steps
+        self.size += 1
+        return row
+
+    def take(self, rows: np.ndarray) -> tuple:
+        """(ok, sl, sh, swing, energy) of the plans at ``rows`` (m,) (copies)."""
+        return (self.ok[rows], self.sl[rows], self.sh[rows], self.swing[rows],
+                self.energy[rows])
 
 
 def _steps_of(plan, horizon: int) -> tuple:
@@ -121,10 +216,18 @@ class FootstepPlanner:
         self.lookahead = float(lookahead)
         self.config = config
         self.horizon = int(horizon)
-        self._cache: dict[bytes, tuple] = {}
+        self._cache: dict[bytes, int] = {}  # key -> row of ``_store``
+        self._store = _PlanStore(self.horizon)
+        self._planner_codes: dict[str, int] = {}
         self.calls = 0
         self.hits = 0
         self.retries = 0
+
+    def _codes(self, names: list[str]) -> np.ndarray:
+        """Stable integer codes (m,) of planner names (for the cache keys)."""
+        for name in set(names) - self._planner_codes.keys():
+            self._planner_codes[name] = len(self._planner_codes)
+        return np.array([self._planner_codes[name] for name in names], dtype=np.int64)
 
     def plan(
         self,
@@ -158,21 +261,17 @@ class FootstepPlanner:
         from planners import plan_batch
 
         m = stance.shape[0]
-        H = self.horizon
-        ok = np.zeros(m, bool)
-        sl, sh = np.zeros((m, H)), np.zeros((m, H))
-        swing = np.full((m, H, 4, 2), np.nan)
-        energy = np.zeros((m, H))
-        cached = np.zeros(m, bool)
+        if m == 0:
+            return PlannedSteps(*self._store.take(np.zeros(0, dtype=np.int64)),
+                                np.zeros(0, bool))
         if trailing is None:
             trailing = np.full(m, -0.6)
         # where the trailing foot is shapes the first swing curve, which must clear the
         # ground: planned at 1 mm (in the key only off level ground, see below)
         trailing = np.clip(np.round(np.asarray(trailing, float), 3), -2.9, -0.01)
         # speed classes of 5 cm/s for the planner (the walker keeps its own speed)
-        speed = np.round(np.asarray(speed, float) / 0.05) * 0.05
-        keys: list[bytes] = []
-        profiles = []
+        speed_class = np.round(np.asarray(speed, float) / 0.05).astype(np.int64)
+        speed = speed_class * 0.05
         ahead = np.full(m, self.lookahead)
         if self.clearance is not None:
             # the local path ends where it leaves the walkable area: the walker turns
@@ -190,36 +289,24 @@ class FootstepPlanner:
             arrays = self.terrain.profiles(lines)  # one batched terrain pass
         else:
             arrays = [self.terrain.profile_arrays(line) for line in lines]
-        for i in range(m):  # cache keys and profile objects are per agent
-            s, z = _simplify(*arrays[i])
-            s = s - _BEHIND
-            z = z - stance_z[i]
-            # on level ground the trailing foot changes only the first swing curve, which
-            # the Animator does not need there (nothing to clear): leave it out of the key
-            level = s.size == 2 and abs(z[1] - z[0]) < 1e-9
-            key = b"|".join([
-                str(planner[i]).encode(), np.int64(leg[i]).tobytes(),
-                np.round(speed[i], 3).tobytes(), b"" if level else trailing[i].tobytes(),
-                np.round(s / _S_QUANTUM).astype(np.int64).tobytes(),
-                np.round(z / _Z_QUANTUM).astype(np.int64).tobytes(),
-            ])
-            keys.append(key)
-            profiles.append((s, z))
-        todo = [i for i in range(m) if keys[i] not in self._cache]
+        s_all, z_all, bounds = _relative_profiles(arrays, np.asarray(stance_z, float))
+        names = [str(p) for p in planner]
+        keys = _cache_keys(s_all, z_all, bounds, self._codes(names), np.asarray(leg),
+                           speed_class, np.round(trailing * 1000).astype(np.int64))
+        rows = np.array([self._cache.get(k, -1) for k in keys], dtype=np.int64)
+        todo = np.flatnonzero(rows < 0)
         self.calls += m
-        self.hits += m - len(todo)
-        if todo:
+        self.hits += m - todo.size
+        if todo.size:
             from planners import GroundProfile
 
-            by_planner: dict[str, list[int]] = {}
-            for i in todo:
-                by_planner.setdefault(str(planner[i]), []).append(i)
-            for name, idx in by_planner.items():
-                unique: dict[bytes, int] = {}
-                for i in idx:
-                    unique.setdefault(keys[i], i)
+            by_planner: dict[str, dict[bytes, int]] = {}
+            for i in todo.tolist():  # the first agent of each new problem plans it
+                by_planner.setdefault(names[i], {}).setdefault(keys[i], i)
+            for name, unique in by_planner.items():
                 first = list(unique.values())
-                grounds = [GroundProfile(*profiles[i]) for i in first]
+                grounds = [GroundProfile(s_all[bounds[i]:bounds[i + 1]],
+                                         z_all[bounds[i]:bounds[i + 1]]) for i in first]
                 legs = [self.legs[leg[i]] for i in first]
                 speeds = [float(speed[i]) for i in first]
                 behind = [float(trailing[i]) for i in first]
@@ -240,10 +327,9 @@ class FootstepPlanner:
                     for k, p in zip(retry, again, strict=True):
                         plans[k] = p
                 for i, plan in zip(first, plans, strict=True):
-                    self._cache[keys[i]] = _steps_of(plan, H)
-        planned_now = set(todo)
-        for i in range(m):
-            hit = self._cache[keys[i]]
-            ok[i], sl[i], sh[i], swing[i], energy[i] = hit
-            cached[i] = i not in planned_now
+                    self._cache[keys[i]] = self._store.add(_steps_of(plan, self.horizon))
+            rows[todo] = [self._cache[keys[i]] for i in todo.tolist()]
+        cached = np.ones(m, bool)
+        cached[todo] = False
+        ok, sl, sh, swing, energy = self._store.take(rows)
         return PlannedSteps(ok, sl, sh, swing, energy, cached)

@@ -7,18 +7,30 @@ import numpy as np
 __all__ = ["moving_distance", "point_segment_distance", "segment_distance"]
 
 
-def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+def _distance_to(apx, apy, abx, aby) -> np.ndarray:
+    """Distance [m] from points at offsets ``ap`` from segment starts to segments of
+    direction ``ab`` (components, broadcast); in place where it can (large temporaries
+    cost page faults)."""
+    denom = abx * abx + aby * aby
+    t = np.atleast_1d(apx * abx)  # an array (not a scalar) for the in-place steps below
+    t += apy * aby
+    t /= np.where(denom > 0, denom, 1.0)
+    np.minimum(np.maximum(t, 0.0, out=t), 1.0, out=t)  # the nearest point's parameter
+    dx = np.atleast_1d(t * abx)  # the offset from the nearest point
+    np.subtract(apx, dx, out=dx)
+    t *= aby
+    np.subtract(apy, t, out=t)
+    dx *= dx
+    t *= t
+    dx += t
+    return np.sqrt(dx, out=dx).reshape(np.broadcast_shapes(np.shape(apx), np.shape(abx)))
 
 
 def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance [m] from points ``p`` to segments ``a``–``b``; arrays (..., 2) broadcast,
     result (...)."""
-    abx, aby = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-    apx, apy = p[..., 0] - a[..., 0], p[..., 1] - a[..., 1]
-    denom = abx * abx + aby * aby
-    t = np.clip((apx * abx + apy * aby) / np.where(denom > 0, denom, 1.0), 0.0, 1.0)
-    return np.hypot(apx - t * abx, apy - t * aby)
+    return _distance_to(p[..., 0] - a[..., 0], p[..., 1] - a[..., 1],
+                        b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])
 
 
 def segment_distance(
@@ -29,17 +41,18 @@ def segment_distance(
     Arrays (..., 2) broadcast against each other; result (...). Degenerate segments
     (points) are allowed. Zero when the segments cross.
     """
-    d = np.minimum(
-        np.minimum(point_segment_distance(p0, q0, q1), point_segment_distance(p1, q0, q1)),
-        np.minimum(point_segment_distance(q0, p0, p1), point_segment_distance(q1, p0, p1)),
-    )
-    r, s = p1 - p0, q1 - q0
-    denom = _cross(r, s)
-    qp = q0 - p0
+    # p0-p1's direction is shared by the distances of q0 and q1 to it and the crossing
+    rx, ry = p1[..., 0] - p0[..., 0], p1[..., 1] - p0[..., 1]
+    sx, sy = q1[..., 0] - q0[..., 0], q1[..., 1] - q0[..., 1]
+    ax, ay = q0[..., 0] - p0[..., 0], q0[..., 1] - p0[..., 1]  # q0 - p0
+    d = np.minimum(point_segment_distance(p0, q0, q1), point_segment_distance(p1, q0, q1))
+    d = np.minimum(d, _distance_to(ax, ay, rx, ry))
+    d = np.minimum(d, _distance_to(q1[..., 0] - p0[..., 0], q1[..., 1] - p0[..., 1], rx, ry))
+    denom = rx * sy - ry * sx
     ok = np.abs(denom) > 1e-15
     safe = np.where(ok, denom, 1.0)
-    t = _cross(qp, s) / safe
-    u = _cross(qp, r) / safe
+    t = (ax * sy - ay * sx) / safe
+    u = (ax * ry - ay * rx) / safe
     crossing = ok & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
     return np.where(crossing, 0.0, d)
 

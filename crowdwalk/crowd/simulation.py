@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -52,6 +53,10 @@ from crowdwalk.population import Population, cadence_at, step_length_at
 __all__ = ["CrowdParams", "CrowdSimulation", "WAITING", "ACTIVE", "ARRIVED"]
 
 WAITING, ACTIVE, ARRIVED = 0, 1, 2
+
+#: Fields of ``planners.Leg`` the crowd gathers per agent (``length`` = thigh + shank).
+_LEG_FIELDS = ("thigh", "shank", "foot_length", "heel_offset", "toe_offset", "ankle_height",
+               "length")
 
 #: Weidmann (1993): horizontal speed on stairs, up and down, over level speed 1.34 m/s.
 STAIR_UP_FACTOR = 0.610 / 1.34
@@ -231,6 +236,9 @@ class CrowdSimulation:
         heights, self.leg_index = np.unique(np.round(population.body_height / 0.02) * 0.02,
                                             return_inverse=True)
         self.legs = [Leg.from_body_height(float(h)) for h in heights]
+        # the legs' segment lengths per class, gathered per agent as arrays [m]
+        self._leg_columns = {name: np.array([getattr(leg, name) for leg in self.legs])
+                             for name in _LEG_FIELDS}
         self.planner_of = population.planner
         self.clearance = ClearanceField.from_area(self.routes.walkable_area)
         if planner_config is None:
@@ -257,6 +265,7 @@ class CrowdSimulation:
         self.wall_commands = 0.0  # gait Animator step commands
         self._pending: list[dict] = []  # step commands not yet sent to the Animator
         self._step_rows: list[dict[str, np.ndarray]] = []
+        self._edges: dict | None = None  # corridor sample points (_edge_samples)
 
     # -- setup ---------------------------------------------------------------------
 
@@ -574,8 +583,8 @@ class CrowdSimulation:
         st = self.state
         a = idx[rows]
         d = direction[rows]
-        heel = np.array([self.legs[k].heel_offset for k in self.leg_index[a]])
-        toe = np.array([self.legs[k].toe_offset for k in self.leg_index[a]])
+        legs = self._legs_of(a)
+        heel, toe = legs.heel_offset, legs.toe_offset
         c = st.stance[a] + length[:, None] * d
         pts = np.concatenate([c - heel[:, None] * d, c, c + toe[:, None] * d])
         z = self.terrain.height(pts).reshape(3, -1)
@@ -588,21 +597,23 @@ class CrowdSimulation:
         st.shortened[a[even]] += 1
         return rows[even]
 
+    def _legs_of(self, a: np.ndarray) -> SimpleNamespace:
+        """The legs of agents ``a`` (k,) as a leg whose fields are (k,) arrays [m] (what
+        the planners' vectorised functions accept in place of a ``planners.Leg``)."""
+        k = self.leg_index[a]
+        return SimpleNamespace(**{name: col[k] for name, col in self._leg_columns.items()})
+
     def _step_energy(self, a: np.ndarray, length: np.ndarray, rise: np.ndarray) -> np.ndarray:
         """Chen & Li Eq. 4 energy [J/kg] of steps not planned by the planner (shortened or
-        positioning steps): the planners' energy model, one call per leg class."""
+        positioning steps): the planners' energy model, one call for all legs."""
         from planners.energy import step_energy
 
         cfg = self.footsteps.config
-        out = np.zeros(a.size)
-        for k in np.unique(self.leg_index[a]):
-            m = self.leg_index[a] == k
-            leg = self.legs[k]
-            zero = np.zeros(int(m.sum()))
-            summit = np.maximum(zero, rise[m]) + leg.ankle_height + 0.75 * cfg.swing_lift
-            out[m] = step_energy(zero, zero, length[m], rise[m], summit, leg,
-                                 self.pop.free_speed[a[m]], cfg)[3]
-        return out
+        leg = self._legs_of(a)
+        zero = np.zeros(a.size)
+        summit = np.maximum(zero, rise) + leg.ankle_height + 0.75 * cfg.swing_lift
+        return step_energy(zero, zero, length, rise, summit, leg, self.pop.free_speed[a],
+                           cfg)[3]
 
     def _commit(self, idx, te, t, move, direction, sl, sh, energy, swing) -> None:
         st, prm = self.state, self.params
@@ -648,8 +659,8 @@ class CrowdSimulation:
             if apart.size:
                 here = st.pos1[apart]
                 d = np.column_stack([np.cos(st.heading[apart]), np.sin(st.heading[apart])])
-                heel = np.array([self.legs[k].heel_offset for k in self.leg_index[apart]])
-                toe = np.array([self.legs[k].toe_offset for k in self.leg_index[apart]])
+                legs = self._legs_of(apart)
+                heel, toe = legs.heel_offset, legs.toe_offset
                 pts = np.concatenate([here - (heel + 0.03)[:, None] * d, here,
                                       here + (toe + 0.03)[:, None] * d])
                 z = self.terrain.height(pts).reshape(3, -1)
@@ -759,7 +770,7 @@ class CrowdSimulation:
                                                   foothold[block] + reach * d[block]], axis=1))
             polys = np.array([features[k].footprint for k in own[block]], dtype=object)
             chord = shapely.length(shapely.intersection(lines, polys))
-            longest = np.array([1.05 * self.legs[k].length for k in self.leg_index[a[block]]])
+            longest = 1.05 * self._legs_of(a[block]).length
             obstacle[block] = chord <= longest
         return kind, obstacle
 
@@ -815,6 +826,19 @@ class CrowdSimulation:
 
     # -- re-routing ---------------------------------------------------------------
 
+    def _edge_samples(self) -> dict:
+        """Points about 1 m apart along every corridor of the route graph (k, 2) [m] and
+        its width [m], by edge (computed once: the graph does not change)."""
+        if self._edges is None:
+            self._edges = {}
+            for u, v, data in self.routes.graph.edges(data=True):
+                line = data["geometry"]
+                k = max(2, int(np.ceil(line.length)) + 1)
+                pts = np.array([line.interpolate(f, normalized=True).coords[0]
+                                for f in np.linspace(0, 1, k)])
+                self._edges[(u, v)] = (pts, data["width"])
+        return self._edges
+
     def _reroute(self, blocked: np.ndarray, t: float) -> None:
         """Agents without progress for ``reroute_after`` seconds look for a cheaper route from the
         last route node they passed, with every corridor's cost raised by the time its
@@ -830,14 +854,10 @@ class CrowdSimulation:
         now, _ = st.position(t, act)
         tree = cKDTree(now)
         extra = {}
-        for u, v, data in g.edges(data=True):
-            line = data["geometry"]
-            k = max(2, int(np.ceil(line.length)) + 1)
-            pts = np.array([line.interpolate(f, normalized=True).coords[0]
-                            for f in np.linspace(0, 1, k)])
-            near = tree.query_ball_point(pts, r=max(0.5 * data["width"], 0.5))
+        for (u, v), (pts, width) in self._edge_samples().items():
+            near = tree.query_ball_point(pts, r=max(0.5 * width, 0.5))
             count = len(set().union(*near)) if len(near) else 0
-            extra[(u, v)] = count / (1.3 * data["width"]) * 1.34
+            extra[(u, v)] = count / (1.3 * width) * 1.34
 
         def weight(a, b, data):
             return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)

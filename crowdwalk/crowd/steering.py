@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import moving_distance, point_segment_distance
+from crowdwalk.crowd.geometry import moving_distance, point_segment_distance, segment_distance
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -138,18 +138,6 @@ class StepChoice:
     move: np.ndarray
 
 
-def _crossing(p0, p1, q0, q1) -> np.ndarray:
-    """Whether segments p0–p1 and q0–q1 cross (arrays (..., 2) broadcast)."""
-    r, s = p1 - p0, q1 - q0
-    qp = q0 - p0
-    denom = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
-    ok = np.abs(denom) > 1e-15
-    safe = np.where(ok, denom, 1.0)
-    t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / safe
-    u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / safe
-    return ok & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
-
-
 def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
     return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
@@ -243,36 +231,30 @@ def choose_steps(
         gap0 = point_segment_distance(position[:, None, :], neighbours.now, neighbours.end)
         reach = np.linalg.norm(ends - position[:, None, None, :], axis=-1).max(axis=(1, 2))
         relevant = neighbours.valid & (gap0 - need < reach[:, None] + 1e-9)
-        k = int(relevant.sum(axis=1).max())
-        if k:
-            order = np.argsort(~relevant, axis=1, kind="stable")[:, :k]  # relevant first
-            take = np.take_along_axis
-            q0 = take(neighbours.now, order[..., None], axis=1)[:, None, None, :, :]
-            q1 = take(neighbours.end, order[..., None], axis=1)[:, None, None, :, :]
-            rel = take(relevant, order, axis=1)[:, None, None, :]
-            p0 = position[:, None, None, None, :]
-            p1 = ends[:, :, :, None, :]
+        # the relevant (agent, neighbour) pairs only, not every agent padded to the most
+        # crowded one's count
+        pa, pk = np.nonzero(relevant)  # (P,), agent-major
+        if pa.size:
+            q0 = neighbours.now[pa, pk][:, None, None, :]  # (P, 1, 1, 2)
+            q1 = neighbours.end[pa, pk][:, None, None, :]
+            p0 = position[pa][:, None, None, :]
+            p1 = ends[pa]  # (P, C, L, 2)
             if neighbours.remaining is not None and step_time is not None:
                 # in time: both bodies move along their sweeps from now on and then stand
                 # (the candidate's body from ``position`` to ``ends`` over the step)
-                dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])
+                dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])[pa]
                 late = np.zeros(m) if lag is None else np.asarray(lag, dtype=float)
-                vel = (p1 - p0) / dur[:, None, :, None, None]
-                gone = np.minimum(late[:, None], dur)  # (m, L)
-                tq = take(neighbours.remaining, order, axis=1)[:, None, None, :]
+                gone = np.minimum(late[pa][:, None], dur)  # (P, L)
+                vel = (p1 - p0) / dur[:, None, :, None]
+                tq = neighbours.remaining[pa, pk][:, None, None]  # (P, 1, 1)
                 vq = (q1 - q0) / np.where(tq > 0, tq, 1.0)[..., None]
-                d = moving_distance(p0 + gone[:, None, :, None, None] * vel, vel,
-                                    (dur - gone)[:, None, :, None], q0, vq, tq)
+                d = moving_distance(p0 + gone[:, None, :, None] * vel, vel,
+                                    (dur - gone)[:, None, :], q0, vq, tq)  # (P, C, L)
             else:
-                d = np.minimum(
-                    np.minimum(point_segment_distance(p1, q0, q1), point_segment_distance(
-                        q0, p0, p1)),
-                    np.minimum(point_segment_distance(q1, p0, p1),
-                               take(gap0, order, axis=1)[:, None, None, :]),
-                )
-                d = np.where(_crossing(p0, p1, q0, q1), 0.0, d)  # (m, C, L, k)
-            clear = (d >= take(need, order, axis=1)[:, None, None, :]) | ~rel
-            ok = ok & clear.all(axis=-1)
+                d = segment_distance(p0, p1, q0, q1)  # (P, C, L)
+            blocked = d < need[pa, pk][:, None, None]
+            first = np.flatnonzero(np.concatenate([[True], pa[1:] != pa[:-1]]))
+            ok[pa[first]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
     n_free = np.cumprod(ok, axis=2).sum(axis=2)  # (m, C) feasible lengths from the short end
     free = np.where(n_free > 0, lengths[np.maximum(n_free - 1, 0)], 0.0)
 

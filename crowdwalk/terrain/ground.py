@@ -245,29 +245,20 @@ class Terrain:
 
     def profiles(self, polylines) -> list[tuple[np.ndarray, np.ndarray]]:
         """:meth:`profile_arrays` for many polylines in one batched pass (one terrain query
-        for all of them): a list of (s, z) pairs [m]."""
-        lines = [_points(pl, "Terrain", "polyline") for pl in polylines]
-        a_list, b_list, line_of, s0_list, singles = [], [], [], [], {}
-        for li, pl in enumerate(lines):
-            if len(pl) < 2:
-                raise invalid("Terrain", "polyline", "at least 2 points [m]", len(pl))
-            seg = np.linalg.norm(np.diff(pl, axis=0), axis=1)
-            keep = np.concatenate([[True], seg > 1e-9])  # drop repeated points
-            pl, seg = pl[keep], seg[seg > 1e-9]
-            if len(pl) < 2:
-                singles[li] = pl[:1]
-                continue
-            a_list.append(pl[:-1])
-            b_list.append(pl[1:])
-            line_of.append(np.full(len(seg), li))
-            s0_list.append(np.concatenate([[0.0], np.cumsum(seg)[:-1]]))
+        for all of them): a list of (s, z) pairs [m]. ``polylines`` is a sequence of
+        (k, 2) arrays [m], or an (m, 2, 2) array of straight lines (prepared without a
+        Python loop)."""
+        if isinstance(polylines, np.ndarray) and polylines.shape[1:] == (2, 2):
+            lines = polylines.astype(float, copy=False)  # m straight lines, stacked
+            a, b, line_of, s_seg0, singles = _straight_segments(lines)
+        else:
+            lines = [_points(pl, "Terrain", "polyline") for pl in polylines]
+            a, b, line_of, s_seg0, singles = _polyline_segments(lines)
         out: list = [None] * len(lines)
         for li, pt in singles.items():
             out[li] = (np.zeros(1), self.height(pt))
-        if not a_list:
+        if a.size == 0:
             return out
-        a, b = np.concatenate(a_list), np.concatenate(b_list)
-        line_of, s_seg0 = np.concatenate(line_of), np.concatenate(s0_list)
         seg_len = np.linalg.norm(b - a, axis=1)
         m = len(a)
         index = self._breaks
@@ -334,3 +325,36 @@ class Terrain:
         from crowdwalk.terrain.meshing import ground_mesh
 
         return ground_mesh(self)
+
+
+def _straight_segments(lines: np.ndarray):
+    """:func:`_polyline_segments` for m straight lines (m, 2, 2) [m], vectorised."""
+    seg = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
+    long = seg > 1e-9
+    singles = {int(li): lines[li, :1] for li in np.flatnonzero(~long)}
+    return (lines[long, 0], lines[long, 1], np.flatnonzero(long), np.zeros(int(long.sum())),
+            singles)
+
+
+def _polyline_segments(lines):
+    """Segments of polylines (list of (k, 2)) [m]: starts and ends (S, 2), line index and
+    arc length of each start along its line (S,) [m], and the lines that are one point
+    ({line: (1, 2)}); repeated points are dropped."""
+    a_list, b_list, line_of, s0_list, singles = [], [], [], [], {}
+    for li, pl in enumerate(lines):
+        if len(pl) < 2:
+            raise invalid("Terrain", "polyline", "at least 2 points [m]", len(pl))
+        seg = np.linalg.norm(np.diff(pl, axis=0), axis=1)
+        keep = np.concatenate([[True], seg > 1e-9])  # drop repeated points
+        pl, seg = pl[keep], seg[seg > 1e-9]
+        if len(pl) < 2:
+            singles[li] = pl[:1]
+            continue
+        a_list.append(pl[:-1])
+        b_list.append(pl[1:])
+        line_of.append(np.full(len(seg), li))
+        s0_list.append(np.concatenate([[0.0], np.cumsum(seg)[:-1]]))
+    if not a_list:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0), singles
+    return (np.concatenate(a_list), np.concatenate(b_list), np.concatenate(line_of),
+            np.concatenate(s0_list), singles)

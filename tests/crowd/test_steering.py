@@ -104,3 +104,35 @@ def test_follower_steps_into_the_room_its_leader_vacates():
     me = vel * np.minimum(t, dur)
     leader = now[0] + (end[0] - now[0]) / 0.5 * np.minimum(t, 0.5)
     assert np.linalg.norm(me - leader, axis=1).min() >= 2 * R - 1e-9
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.lists(st.tuples(st.floats(-2.5, 2.5), st.floats(-2.5, 2.5),
+                                   st.floats(-0.4, 0.4), st.floats(-0.4, 0.4)),
+                         min_size=0, max_size=6), min_size=2, max_size=5))
+def test_deciding_together_equals_deciding_alone(crowds):
+    # agents with different numbers of neighbours, decided in one batch (the swept-body
+    # test runs over the relevant (agent, neighbour) pairs only) and one at a time
+    k = max(len(c) for c in crowds)
+    m = len(crowds)
+    now, end = np.zeros((m, max(k, 1), 2)), np.zeros((m, max(k, 1), 2))
+    valid = np.zeros((m, max(k, 1)), bool)
+    for i, c in enumerate(crowds):
+        if c:
+            arr = np.array(c)
+            now[i, :len(c)], end[i, :len(c)] = arr[:, :2], arr[:, :2] + arr[:, 2:]
+            valid[i, :len(c)] = True
+    position = np.zeros((m, 2))
+    args = dict(stance=np.tile([0.1, 0.0], (m, 1)), heading=np.zeros(m),
+                radius=np.full(m, R), route_direction=np.tile([1.0, 0.0], (m, 1)),
+                target=np.tile([3.0, 0.0], (m, 1)), nominal_step=np.full(m, 0.7))
+    nbs = Neighbours(valid=valid, now=now, end=end, velocity=(end - now) / 0.5,
+                     radius=np.full(valid.shape, R))
+    together = choose_steps(position, neighbours=nbs, clearance=ROOM, **args)
+    for i in range(m):
+        alone = choose_steps(position[i:i + 1], neighbours=Neighbours(
+            *(a[i:i + 1] for a in (nbs.valid, nbs.now, nbs.end, nbs.velocity, nbs.radius))),
+            clearance=ROOM, **{key: v[i:i + 1] for key, v in args.items()})
+        assert together.move[i] == alone.move[0]
+        assert together.free_length[i] == alone.free_length[0]
+        assert np.array_equal(together.direction[i], alone.direction[0])

@@ -60,3 +60,34 @@ def test_shifted_translates_heights():
     q = p.shifted(1.5, -0.2)
     x = np.linspace(-1, 4, 51)
     assert np.allclose(q.height(x + 1.5), p.height(x) - 0.2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(-3, 3), st.floats(-1, 1)), min_size=2, max_size=15),
+       st.floats(-4, 1), st.floats(0.1, 8), st.sampled_from([0.01, 1 / 256, 0.1]),
+       st.booleans())
+def test_raster_cells_equal_the_exact_range_maxima(vertices, start, width, cell, jump_first):
+    vertices.sort(key=lambda v: v[0])
+    s = np.array([v[0] for v in vertices])
+    if jump_first:  # a vertical change right at the profile's start
+        s[1] = s[0]
+    p = GroundProfile(s, [v[1] for v in vertices])
+    stop = start + width
+    raster = p.raster(start, stop, cell)
+    count = max(1, int(np.ceil((stop - start) / cell)))
+    edges = start + cell * np.arange(count + 1)
+    # bitwise: the raster finds the cells from the vertices instead of searching every edge
+    assert np.array_equal(raster._heights, p.max_height(edges[:-1], edges[1:]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(-3, 3), st.floats(-1, 1)), min_size=2, max_size=12),
+       st.lists(st.tuples(st.floats(-4, 4), st.floats(-0.5, 2)), min_size=1, max_size=10))
+def test_span_heights_are_the_range_maximum_and_both_end_heights(vertices, intervals):
+    vertices.sort(key=lambda v: v[0])
+    p = GroundProfile([v[0] for v in vertices], [v[1] for v in vertices])
+    a = np.array([i[0] for i in intervals])
+    b = a + np.array([i[1] for i in intervals])  # some intervals empty (b < a)
+    highest, at_a, at_b = p.span_heights(a, b)
+    assert np.array_equal(highest, p.max_height(a, b))
+    assert np.array_equal(at_a, p.height(a)) and np.array_equal(at_b, p.height(b))

@@ -1,0 +1,59 @@
+"""The crowd's footstep planner: cache keys relative to the stance foot, served plans."""
+
+import numpy as np
+import shapely
+
+from crowdwalk.crowd.clearance import ClearanceField
+from crowdwalk.crowd.footsteps import FootstepPlanner
+from crowdwalk.terrain import StairFlight, Terrain
+from planners import GroundProfile, Leg, PlannerConfig, plan
+
+CONFIG = PlannerConfig(n_steps=3, min_step_ratio=0.15)
+LEGS = [Leg.from_body_height(1.70), Leg.from_body_height(1.80)]
+
+
+def _planner(terrain, area=None):
+    clearance = None if area is None else ClearanceField.from_area(area)
+    return FootstepPlanner(terrain, LEGS, config=CONFIG, horizon=3, clearance=clearance)
+
+
+def _plan(fp, stance, stance_z, direction, leg, speed, trailing):
+    m = len(stance)
+    return fp.plan(np.asarray(stance, float), np.full(m, stance_z),
+                   np.tile(np.asarray(direction, float), (m, 1)), np.full(m, leg),
+                   np.full(m, speed), np.full(m, "best_first"), np.full(m, trailing))
+
+
+def test_level_ground_of_any_extent_is_planned_once_per_leg_and_speed():
+    # agents at different distances from a wall: their local paths (and profiles) end at
+    # different lengths, but level ground is the same problem for all of them
+    area = shapely.box(0, -5, 20, 5)
+    fp = _planner(Terrain((0, -5, 20, 5), 0.3), area)
+    stance = [[x, 0.0] for x in (2.0, 17.0, 18.0, 18.5, 19.0)]
+    first = _plan(fp, stance, 0.3, [1.0, 0.0], 0, 1.3, -0.6)
+    assert fp.calls - fp.hits == len(stance)  # all new in this tick (one planner run)
+    assert first.ok.all()
+    again = _plan(fp, [[x + 0.5, 1.0] for x, _ in stance], 0.3, [1.0, 0.0], 0, 1.3, -0.4)
+    assert again.from_cache.all()  # other extents and trailing feet: still level ground
+    assert np.array_equal(again.step_length, first.step_length)
+    other = _plan(fp, stance[:1], 0.3, [1.0, 0.0], 1, 1.3, -0.6)
+    assert not other.from_cache.any()  # another leg class is another problem
+
+
+def test_served_plan_is_the_planners_plan_for_the_agents_own_ground():
+    # down a flight: the cache must tell apart stance feet at different places on a tread
+    flight = StairFlight((0.0, 0.0), 0.0, 3.0, 0.30, 0.17, 10, z0=1.7, up=False)
+    terrain = Terrain((-5, -5, 10, 5), 0.0, (flight,))
+    fp = _planner(terrain)
+    xs = np.array([0.42, 0.47, 0.72])  # the last one on the next tread, 0.30 further
+    z = terrain.height(np.column_stack([xs, np.zeros(3)]))
+    got = [_plan(fp, [[x, 0.0]], zi, [1.0, 0.0], 0, 1.3, -0.3) for x, zi in zip(
+        xs, z, strict=True)]
+    assert not got[1].from_cache[0]  # 5 cm further along: a different problem
+    for x, zi, g in zip(xs, z, got, strict=True):
+        s, zz = terrain.profile_arrays(np.array([[x - 1.0, 0.0], [x + 3.0, 0.0]]))
+        want = plan(GroundProfile(s - 1.0, zz - zi), LEGS[0], 1.3, config=CONFIG,
+                    trailing=-0.3)
+        assert g.ok[0] and want.ok
+        np.testing.assert_allclose(g.step_length[0], want.step_lengths, atol=1e-9)
+        np.testing.assert_allclose(g.step_height[0], np.diff(want.footholds_z), atol=1e-9)
