@@ -27,15 +27,22 @@ def _flat(xy: np.ndarray) -> np.ndarray:
     return np.zeros(len(xy))
 
 
-def bench(n: int, frames: int = 20, fps: float = 25.0) -> dict[str, float]:
-    """Time n agents: command (first steps) and pose (``frames`` calls)."""
-    rng = np.random.default_rng(0)
+def _walkers(n: int, seed: int):
+    """n bodies (1.50-1.95 m), speeds (1.0-1.6 m/s), start points (n, 2) and straight
+    60 m paths (n, 2, 2) [m] in random directions."""
+    rng = np.random.default_rng(seed)
     body = Body.from_heights(rng.uniform(1.50, 1.95, n))
     speed = rng.uniform(1.0, 1.6, n)
     start = np.column_stack([rng.uniform(0, 50, n), rng.uniform(0, 50, n)])
     heading = rng.uniform(-np.pi, np.pi, n)
     ahead = start + 60.0 * np.column_stack([np.cos(heading), np.sin(heading)])
     paths = np.stack([start, ahead], axis=1)
+    return body, speed, start, paths
+
+
+def bench(n: int, frames: int = 20, fps: float = 25.0) -> dict[str, float]:
+    """Time n agents: command (first steps) and pose (``frames`` calls)."""
+    body, speed, start, paths = _walkers(n, seed=0)
     animator = Animator(body, ground=_flat)
     metagait = MetaGait(n, base_toe_out=animator.style.toe_out)
     level = level_step_length(body.leg_length, speed)
@@ -93,13 +100,7 @@ class _TimedAnimator(Animator):
 
 def walking(n: int, seconds: float = 3.0, fps: float = 25.0) -> dict[str, float]:
     """CPU time per frame [ms] of the Animator for n agents walking straight paths."""
-    rng = np.random.default_rng(1)
-    body = Body.from_heights(rng.uniform(1.50, 1.95, n))
-    speed = rng.uniform(1.0, 1.6, n)
-    start = np.column_stack([rng.uniform(0, 50, n), rng.uniform(0, 50, n)])
-    heading = rng.uniform(-np.pi, np.pi, n)
-    ahead = start + 60.0 * np.column_stack([np.cos(heading), np.sin(heading)])
-    paths = np.stack([start, ahead], axis=1)
+    body, speed, _, paths = _walkers(n, seed=1)
     animator = _TimedAnimator(body, ground=_flat, t0=1.0)
     animate_paths(body, paths, _flat, speed, seconds, fps, animator=animator)
     f = max(animator.frames, 1)
