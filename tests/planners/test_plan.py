@@ -200,6 +200,7 @@ _GROUNDS = {
     "stairs down": GroundProfile.stairs(-0.17, 0.30, 6, first_edge=3.0),
     "curb": GroundProfile([-2, 2.9, 2.9, 20], [0, 0, 0.15, 0.15]),
     "low block": GroundProfile([-2, 3.2, 3.2, 3.5, 3.5, 20], [0, 0, 0.1, 0.1, 0, 0]),
+    "ramp": GroundProfile([-2, 2.0, 7.0, 20], [0, 0, 0.4, 0.4]),  # 8 % up
 }
 _CROWD = PlannerConfig(n_steps=3, min_step_ratio=0.15)  # crowdwalk.crowd's planner config
 
