@@ -69,6 +69,12 @@ _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which 
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
 _SOLE_SAMPLES = 8  # ground samples along the sole, heel to toe tip
+_SOLE_HEEL_BALL = np.linspace(0.0, 1.0, 8)  # swing-sole samples, heel → ball
+_SOLE_BALL_TOE = np.array([0.5, 1.0])  # ... ball → toe tip
+_EDGE_JUMP = 0.005  # ground step between two sole samples that is located exactly [m]
+_EDGE_BISECT = 6  # bisections locating it (1/64 of the sample spacing)
+_LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
+_LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
 
 
@@ -670,24 +676,81 @@ class Animator:
                                           + up * np.sin(toe_pitch)[:, None])  # fmt: skip
         return tip - ball_to_tip - ankle_to_ball, toe_angle
 
+    def _swing_sole(self, a: np.ndarray, walked) -> np.ndarray:
+        """Points (k, q, 3) [m] along the swing foot's sole of agents a (k,): heel → ball
+        → toe tip (the foot is a segment: at a riser edge its middle can be inside the
+        step while heel, ball and toe are not)."""
+        k = a.size
+        body = self.body.take(a)
+        sw = LEG_JOINTS[np.where(self._stance_left[a], 1, 0)]
+        rows = np.arange(k)
+        ankle = walked.positions[rows, sw[:, 2]]
+        ball = walked.positions[rows, sw[:, 4]]
+        r_sub = walked.rotations[rows, sw[:, 3]]
+        r_mtp = walked.rotations[rows, sw[:, 4]]
+        heel = ankle - r_sub[:, :, 0] * body.heel_offset[:, None] \
+            - r_sub[:, :, 2] * body.ankle_height[:, None]
+        tip = ball + r_mtp[:, :, 0] * (body.toe_offset - body.ball_offset)[:, None]
+        hb = heel[:, None] + _SOLE_HEEL_BALL[None, :, None] * (ball - heel)[:, None]
+        bt = ball[:, None] + _SOLE_BALL_TOE[None, :, None] * (tip - ball)[:, None]
+        return np.concatenate([hb, bt], axis=1)
+
+    def _sole_depth(self, a: np.ndarray, walked) -> np.ndarray:
+        """Deepest point (k,) [m] of the swing sole below the ground (negative: clear).
+
+        The sole is sampled (``_swing_sole``); between two neighbouring samples whose
+        ground differs by more than ``_EDGE_JUMP`` (a riser or curb edge between them) the
+        edge is located by bisection (``_EDGE_BISECT`` batched ground calls, for those
+        pairs only) and the sole is measured just on its high side — the corner a sole
+        crossing an edge cuts, which samples alone miss by up to their spacing times the
+        foot's pitch.
+        """
+        sole = self._swing_sole(a, walked)
+        g = self._ground_at(a, sole)
+        depth = (g - sole[:, :, 2]).max(axis=1)
+        jump = np.abs(np.diff(g, axis=1)) > _EDGE_JUMP
+        if not jump.any():
+            return depth
+        r, i = np.nonzero(jump)
+        p0, p1 = sole[r, i], sole[r, i + 1]
+        g0, g1 = g[r, i], g[r, i + 1]
+        lo, hi = np.zeros(r.size), np.ones(r.size)
+        for _ in range(_EDGE_BISECT):
+            mid = 0.5 * (lo + hi)
+            pm = p0 + mid[:, None] * (p1 - p0)
+            gm = self._ground_at(a[r], pm[:, None, :])[:, 0]
+            near0 = np.abs(gm - g0) <= np.abs(gm - g1)
+            lo, hi = np.where(near0, mid, lo), np.where(near0, hi, mid)
+        t = np.where(g1 > g0, hi, lo)  # the high side of the edge
+        pt = p0 + t[:, None] * (p1 - p0)
+        np.maximum.at(depth, r, self._ground_at(a[r], pt[:, None, :])[:, 0] - pt[:, 2])
+        return depth
+
     def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked):
-        """Re-solve agents whose swing foot dips below the ground, ankle raised by the
-        depth (IK on the swing leg)."""
-        pts = foot_points(self.body.take(a), walked.positions, walked.rotations)
-        side = np.where(self._stance_left[a], 1, 0)
-        feet = pts[np.arange(a.size), side]
-        depth = (self._ground_at(a, feet) - feet[:, :, 2]).max(axis=1)
+        """Re-solve agents whose swing sole (heel to toe tip, sampled) dips below the
+        ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
+        is checked again and raised further (the swing leg's IK does not translate the
+        foot exactly: reach, knee plane), up to ``_LIFT_ROUNDS`` times."""
+        depth = self._sole_depth(a, walked)
         sink = np.flatnonzero(depth > 1e-4)
         if sink.size == 0:
             return walked, 0
-        again = self._walk(a[sink], phase[sink], corrected=True, lift=depth[sink] + 1e-3)
-        # the walker's arrays are fresh per call: merge in place
-        for name in ("root_position", "root_rotation", "local", "positions", "rotations",
-                     "contact", "converged", "solves"):  # fmt: skip
-            getattr(walked, name)[sink] = getattr(again, name)
-        for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
-            getattr(walked.warm, name)[sink] = getattr(again.warm, name)
-        return walked, sink.size
+        lifted = sink.size
+        lift = np.zeros(a.size)
+        for _ in range(_LIFT_ROUNDS):
+            lift[sink] += depth[sink] + _LIFT_MARGIN
+            again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink])
+            # the walker's arrays are fresh per call: merge in place
+            for name in ("root_position", "root_rotation", "local", "positions", "rotations",
+                         "contact", "converged", "solves"):  # fmt: skip
+                getattr(walked, name)[sink] = getattr(again, name)
+            for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
+                getattr(walked.warm, name)[sink] = getattr(again.warm, name)
+            depth[sink] = self._sole_depth(a[sink], again)
+            sink = sink[depth[sink] > 1e-4]
+            if sink.size == 0:
+                break
+        return walked, lifted
 
     def _standing(self, a: np.ndarray):
         """A neutral standing pose above each agent's stance foothold."""
