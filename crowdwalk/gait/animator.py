@@ -69,10 +69,14 @@ _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which 
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
 _SOLE_SAMPLES = 8  # ground samples along the sole, heel to toe tip
-_SOLE_HEEL_BALL = np.linspace(0.0, 1.0, 8)  # swing-sole samples, heel → ball
-_SOLE_BALL_TOE = np.array([0.5, 1.0])  # ... ball → toe tip
+_SOLE_HEEL_BALL = np.linspace(0.0, 1.0, 5)  # swing-sole samples, heel → ball (≤ 5 cm apart)
+_SOLE_BALL_TOE = np.array([1.0])  # ... and the toe tip (edges between: bisected)
 _EDGE_JUMP = 0.005  # ground step between two sole samples that is located exactly [m]
 _EDGE_BISECT = 6  # bisections locating it (1/64 of the sample spacing)
+_LIFT_GRID = np.linspace(0.0, 1.0, 13)  # step phases sampled for the anticipated lift
+_LIFT_SUB = np.array([0.25, 0.5, 0.75])  # sole positions sampled between two of them
+_LIFT_WIDTH = 0.2  # half-width of each sample's lift bump, fraction of the step
+_LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the landing)
 _LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
 _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
@@ -258,6 +262,7 @@ class Animator:
         self._d1 = np.zeros((n, 3))
         self._bezier = np.zeros((n, 4, 3))
         self._use_bezier = np.zeros(n, bool)
+        self._lift_need = np.zeros((n, _LIFT_GRID.size))
         self._hip_fix = np.zeros((n, 3))
         self._hip_drop = np.zeros((n, 3))
         self._warm_ankle = np.zeros((n, 2))
@@ -271,7 +276,7 @@ class Animator:
         self._prev_positions = np.zeros((n, nj, 3))
         self._prev_contact = np.ones((n, 2), bool)
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
-                      "lifted": 0}  # fmt: skip
+                      "lifted": 0, "lift_steps": 0}  # fmt: skip
 
     # -- public -----------------------------------------------------------------------
     @property
@@ -363,6 +368,7 @@ class Animator:
         self._hip_fix[a] = 0.0
         self._hip_drop[a] = 0.0
         self._use_bezier[a] = False
+        self._lift_need[a] = 0.0
         self._warm_start_swap(a, had)
         self._commanded[a] = True
 
@@ -408,13 +414,18 @@ class Animator:
         self._d1[a] = ankle_land - ankle1 - self._hip_drop[a]
 
         # Swing clearance: would the corrected data-driven foot touch the ground? Only
-        # steps over uneven ground (something above the line between the footholds) are
-        # sampled, from toe-off to just before the landing.
+        # steps over uneven ground (something above the line from the trailing foot to
+        # the stance foothold, or from there to the target: the swing starts two
+        # placements back) are sampled, from toe-off to just before the landing.
+        swing_from = np.where(had[:, None], trail[0], cmd.start)
+        toes = (body.toe_offset[:, None]
+                * np.stack([np.cos(cmd.heading), np.sin(cmd.heading)], axis=1))
+        bumpy = (self._bumpy(swing_from, cmd.start, toes)
+                 | self._bumpy(cmd.start, cmd.target, toes))  # fmt: skip
         if cmd.swing_bezier is not None:
             has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
             self._bezier[a[has]] = cmd.swing_bezier[has]
-            if has.any():
-                has[has] = self._bumpy(cmd.start[has], cmd.target[has])
+            has &= bumpy
             if has.any():
                 ab = a[has]
                 k = ab.size
@@ -430,6 +441,35 @@ class Animator:
                 clearance = gap.min(axis=1).reshape(_CHECK_SPAN.size, k).min(axis=0)
                 self._use_bezier[ab] = clearance < _CLEARANCE
                 self.stats["bezier_steps"] += int(self._use_bezier[ab].sum())
+
+        # Anticipated clearance: over uneven ground, where the final swing (data, blends,
+        # Bezier) would still put the sole below the ground, the ankle is raised by a
+        # smooth envelope over the step's phase (``_lift_envelope``) that starts before
+        # the contact and ends after it — a toe reaching a riser face is otherwise lifted
+        # only once inside it, a jump of the whole depth between two frames.
+        if bumpy.any():
+            ab = a[bumpy]
+            k = ab.size
+            idx = np.tile(ab, _LIFT_GRID.size)
+            ph = np.minimum(0.5 * np.repeat(_LIFT_GRID, k), _PHASE_END)
+            check = self._walk(idx, ph, corrected=True)
+            sole = self._swing_sole(idx, check).reshape(_LIFT_GRID.size, k, -1, 3)
+            # between two samples the sole moves about linearly: its depth there too
+            # (a toe crossing a riser face between two samples), sub-sampled
+            w = _LIFT_SUB[:, None, None, None, None]
+            between = (1.0 - w) * sole[None, :-1] + w * sole[None, 1:]  # (u, g-1, k, q, 3)
+            u, gm = between.shape[:2]
+            pts = np.concatenate([sole.reshape(-1, *sole.shape[2:]),
+                                  between.reshape(-1, *sole.shape[2:])])
+            depth = self._points_depth(np.tile(ab, _LIFT_GRID.size + u * gm), pts)
+            at = depth[:_LIFT_GRID.size * k].reshape(_LIFT_GRID.size, k)
+            mid = depth[_LIFT_GRID.size * k:].reshape(u, gm, k).max(axis=0)  # (g-1, k)
+            # a sample lifts for itself and for the intervals on either side of it
+            at[:-1] = np.maximum(at[:-1], mid)
+            at[1:] = np.maximum(at[1:], mid)
+            need = np.where(at > 0.0, at + _LIFT_MARGIN, 0.0).T
+            self._lift_need[ab] = need
+            self.stats["lift_steps"] += int((need > 0).any(axis=1).sum())
         self.stats["commands"] += m
 
     def pose(self, t: float, agents: np.ndarray | None = None) -> PoseFrame:
@@ -549,13 +589,19 @@ class Animator:
                         np.column_stack([heel_xy, zh]) + hb[:, None] * d)  # fmt: skip
         return StanceFoot(ball, yaw, slope)
 
-    def _bumpy(self, start: np.ndarray, target: np.ndarray) -> np.ndarray:
+    def _bumpy(self, start: np.ndarray, target: np.ndarray,
+               reach: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
         """(m,) bool: the ground between two footholds (m, 3) rises more than 1 cm above
-        the straight line joining them (a step, a block, a nosing in between)."""
+        the straight line joining them (a step, a block, a nosing in between); with
+        ``reach`` (m, 2) [m] also along that line shifted by each row's xy offsets (where
+        the toes and heel pass: a sideways step beside a riser)."""
         if self.ground is None:
             return np.abs(target[:, 2] - start[:, 2]) > 0.01
         s = np.linspace(0.0, 1.0, 16)
         line = start[:, None, :] + s[None, :, None] * (target - start)[:, None, :]
+        if reach is not None:
+            line = np.concatenate([line, line + np.pad(reach, ((0, 0), (0, 1)))[:, None],
+                                   line - np.pad(reach, ((0, 0), (0, 1)))[:, None]], axis=1)
         z = np.asarray(self.ground(line[..., :2].reshape(-1, 2)), dtype=float)
         return (z.reshape(line.shape[:2]) - line[..., 2]).max(axis=1) > 0.01
 
@@ -629,6 +675,9 @@ class Animator:
             if pinned.any():
                 goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
                                                                 sw[pinned])  # fmt: skip
+            envelope = self._lift_envelope(a, tau)
+            if envelope is not None:
+                lift = envelope if lift is None else lift + envelope
             if lift is not None:
                 offset[:, 2] += lift
                 target[:, 2] += lift
@@ -646,6 +695,25 @@ class Animator:
             swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
             swing_toe_angle=toes,
         )  # fmt: skip
+
+    def _lift_envelope(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray | None:
+        """Anticipated swing-ankle lift (k,) [m] of agents a at step phases tau (k,): the
+        upper envelope of the lifts needed at the ``_LIFT_GRID`` samples, each spread over
+        ±``_LIFT_WIDTH`` of the step by a smooth bump (1 at its sample, C¹ zero at the
+        ends); None when no agent needs one."""
+        need = self._lift_need[a]
+        rows = np.flatnonzero(need.any(axis=1))
+        if rows.size == 0:
+            return None
+        x = np.abs(tau[rows, None] - _LIFT_GRID[None, :]) / _LIFT_WIDTH
+        bump = 1.0 - _smoothstep(x)
+        # zero at the step's ends: the trailing foot leaves, and the landing foot
+        # arrives, where the stance feet are (the per-frame pass covers what remains)
+        t = tau[rows]
+        ends = _smoothstep(t / _LIFT_WIDTH) * _smoothstep((1.0 - t) / _LIFT_LAND)
+        out = np.zeros(a.size)
+        out[rows] = (need[rows] * bump).max(axis=1) * ends
+        return out
 
     def _pinned_ankle(self, a: np.ndarray, phase: np.ndarray, swing_angles: np.ndarray):
         """Ankle (k, 3) [m] and toe angle (k,) [rad] of the trailing foot in push-off.
@@ -705,7 +773,10 @@ class Animator:
         crossing an edge cuts, which samples alone miss by up to their spacing times the
         foot's pitch.
         """
-        sole = self._swing_sole(a, walked)
+        return self._points_depth(a, self._swing_sole(a, walked))
+
+    def _points_depth(self, a: np.ndarray, sole: np.ndarray) -> np.ndarray:
+        """:meth:`_sole_depth` of sole points (k, q, 3) [m] of agents a (k,)."""
         g = self._ground_at(a, sole)
         depth = (g - sole[:, :, 2]).max(axis=1)
         jump = np.abs(np.diff(g, axis=1)) > _EDGE_JUMP
