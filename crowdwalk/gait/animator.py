@@ -17,8 +17,19 @@ Around the walker the Animator adds what a crowd needs:
 - **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
   Bezier swing curve and the data-driven swing foot would come within 2 mm of the ground
   between toe-off and landing (stair nosings, blocks), the swing ankle follows the
-  Bezier instead (blended in after toe-off, out before the landing). Every frame, a
-  swing foot that still dips below the ground is lifted by the depth (IK again).
+  Bezier instead (blended in after toe-off, out before the landing). Steps are "over
+  uneven ground" when the ground rises above the line from the trailing foot to the
+  stance foothold or from there to the target, along the ankles' or the toes' path.
+- **Whole-sole clearance (deviation: the papers give none for unplanned steps).** The
+  planner's Bezier is for the ankle of the steps it planned; shortened and positioning
+  steps have none, and toes and the sole's middle can cut an edge the ankle clears.
+  The swing sole is a segment, sampled heel → ball → toe tip, with every ground edge
+  between two samples located by bisection. Over uneven ground, at the command, the
+  final swing is sampled over the step (and linearly between the samples); where the
+  sole would be below the ground the ankle goal is raised by a smooth envelope of bumps
+  over the step's phase (gone at its start and over the last tenth, so the feet leave
+  and land where the stance feet are). Every frame, a swing sole still below the ground
+  is lifted by its depth (IK again), re-checked and lifted further, up to three times.
 - **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
   the stance hip starts where the previous step left the root and rejoins the data over
   the first half of the step (sagittal two-link IK of the stance leg).

@@ -231,3 +231,52 @@ def test_sharp_corners_spin_on_the_stance_foot_without_fallbacks():
     yaw = [np.arctan2(*quaternion_to_matrix(f.root_quaternion)[:, :, 0][:, 1::-1].T)
            for f in frames]  # fmt: skip
     assert np.abs(np.diff(np.unwrap(np.array(yaw), axis=0), axis=0)).max() < np.radians(15)
+
+
+def _sole_depth(body, frame, ground, foot):
+    """Deepest point [m] of one foot's sole (heel → ball → toe tip, 2 mm apart) below
+    ``ground`` (a step function: dense samples find its edges)."""
+    rot = forward_kinematics(body, frame.root_position,
+                             quaternion_to_matrix(frame.root_quaternion),
+                             quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+    heel, ball, tip = foot_points(body, frame.positions, rot)[0, foot]
+    u = np.linspace(0.0, 1.0, 101)[:, None]
+    sole = np.concatenate([heel + u * (ball - heel), ball + u * (tip - ball)])
+    return float((ground(sole[:, :2]) - sole[:, 2]).max())
+
+
+@pytest.mark.parametrize("case", ["curb up", "threshold"])
+def test_unplanned_swing_sole_never_enters_a_curb_or_a_threshold(case):
+    """Crowd steps the planner did not plan (shortened, positioning: no Bezier) whose
+    trailing foot swings up a 15 cm curb, or over a 10 cm threshold between two level
+    footholds: no point of the swing sole (heel to toe tip, not only the joints) goes more
+    than 5 mm below the ground, over the whole step (before the whole-sole clearance:
+    up to 2-8 cm, the toes or the sole's middle cutting the edge)."""
+    body = Body.from_heights([1.75])
+    if case == "curb up":
+        def ground(xy):
+            return np.where(xy[:, 0] > 0.98, 0.15, 0.0)
+
+        # the stance foot just up the curb, the trailing foot below it swings up past
+        # the edge (quickstart's raised sidewalk)
+        steps = [(0.0, 0.45, 0.0), (0.45, 1.05, 0.15), (1.05, 1.70, 0.15)]
+    else:
+        def ground(xy):
+            return np.where((xy[:, 0] > 0.50) & (xy[:, 0] < 0.80), 0.10, 0.0)
+
+        steps = [(0.0, 0.30, 0.0), (0.30, 0.95, 0.0), (0.95, 1.55, 0.0)]
+    animator = Animator(body, ground=ground)
+    worst, y, t = 0.0, 0.045, 0.0
+    z0 = 0.0
+    for s, (x0, x1, z1) in enumerate(steps):
+        foot = s % 2  # 0: the left foot swings
+        start = [[x0, -y if foot == 0 else y, z0]]
+        target = [[x1, y if foot == 0 else -y, z1]]
+        animator.command(_command([0], t, foot, start, target, duration=0.6))
+        for f in range(30):
+            frame = animator.pose(t + f / 50.0)
+            if s:
+                worst = max(worst, _sole_depth(body, frame, ground, foot))
+        t += 0.6
+        z0 = z1
+    assert worst <= 5e-3
