@@ -23,9 +23,10 @@ Around the walker the Animator adds what a crowd needs:
 - **Whole-sole clearance (deviation: the papers give none for unplanned steps).** The
   planner's Bezier is for the ankle of the steps it planned; shortened and positioning
   steps have none, and toes and the sole's middle can cut an edge the ankle clears.
-  The swing sole is a segment, sampled heel → ball → toe tip, with every ground edge
-  between two samples located by bisection. Over uneven ground, at the command, the
-  final swing is sampled over the step (and linearly between the samples); where the
+  The swing sole is a segment, sampled heel → ball → toe tip, and sampled again
+  finely (2 mm) between two samples whose ground differs (an edge between them). Over
+  uneven ground, at the command, the final swing is sampled over the step (and
+  linearly between the samples); where the
   sole would be below the ground the ankle goal is raised by a smooth envelope of bumps
   over the step's phase (gone at its start and over the last tenth, so the feet leave
   and land where the stance feet are). Every frame, a swing sole still below the ground
@@ -81,10 +82,10 @@ _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
 _SOLE_SAMPLES = 8  # ground samples along the sole, heel to toe tip
 _SOLE_HEEL_BALL = np.linspace(0.0, 1.0, 5)  # swing-sole samples, heel → ball (≤ 5 cm apart)
-_SOLE_BALL_TOE = np.array([1.0])  # ... and the toe tip (edges between: bisected)
-_EDGE_JUMP = 0.005  # ground step between two sole samples that is located exactly [m]
-_EDGE_BISECT = 6  # bisections locating it (1/64 of the sample spacing)
-_LIFT_GRID = np.linspace(0.0, 1.0, 13)  # step phases sampled for the anticipated lift
+_SOLE_BALL_TOE = np.array([1.0])  # ... and the toe tip (edges between: sub-sampled)
+_EDGE_JUMP = 0.005  # ground step between two sole samples that is looked into [m]
+_EDGE_SUB = (np.arange(24) + 0.5) / 24  # where it is looked for between the two
+_LIFT_GRID = np.linspace(0.0, 1.0, 9)  # step phases sampled for the anticipated lift
 _LIFT_SUB = np.array([0.25, 0.5, 0.75])  # sole positions sampled between two of them
 _LIFT_WIDTH = 0.2  # half-width of each sample's lift bump, fraction of the step
 _LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the landing)
@@ -779,10 +780,9 @@ class Animator:
 
         The sole is sampled (``_swing_sole``); between two neighbouring samples whose
         ground differs by more than ``_EDGE_JUMP`` (a riser or curb edge between them) the
-        edge is located by bisection (``_EDGE_BISECT`` batched ground calls, for those
-        pairs only) and the sole is measured just on its high side — the corner a sole
-        crossing an edge cuts, which samples alone miss by up to their spacing times the
-        foot's pitch.
+        sole is sampled again, ``_EDGE_SUB`` (one batched ground call, for those pairs
+        only): the corner a sole crossing an edge cuts, which samples alone miss by up to
+        their spacing times the foot's pitch, is found to 1/24 of the spacing (2 mm).
         """
         return self._points_depth(a, self._swing_sole(a, walked))
 
@@ -795,17 +795,9 @@ class Animator:
             return depth
         r, i = np.nonzero(jump)
         p0, p1 = sole[r, i], sole[r, i + 1]
-        g0, g1 = g[r, i], g[r, i + 1]
-        lo, hi = np.zeros(r.size), np.ones(r.size)
-        for _ in range(_EDGE_BISECT):
-            mid = 0.5 * (lo + hi)
-            pm = p0 + mid[:, None] * (p1 - p0)
-            gm = self._ground_at(a[r], pm[:, None, :])[:, 0]
-            near0 = np.abs(gm - g0) <= np.abs(gm - g1)
-            lo, hi = np.where(near0, mid, lo), np.where(near0, hi, mid)
-        t = np.where(g1 > g0, hi, lo)  # the high side of the edge
-        pt = p0 + t[:, None] * (p1 - p0)
-        np.maximum.at(depth, r, self._ground_at(a[r], pt[:, None, :])[:, 0] - pt[:, 2])
+        pts = p0[:, None] + _EDGE_SUB[None, :, None] * (p1 - p0)[:, None]  # (e, u, 3)
+        gap = self._ground_at(a[r], pts) - pts[:, :, 2]
+        np.maximum.at(depth, r, gap.max(axis=1))
         return depth
 
     def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked):
