@@ -26,11 +26,11 @@ Around the walker the Animator adds what a crowd needs:
   The swing sole is a segment, sampled heel → ball → toe tip, and sampled again
   finely (2 mm) between two samples whose ground differs (an edge between them). Over
   uneven ground, at the command, the final swing is sampled over the step (and
-  linearly between the samples); where the
-  sole would be below the ground the ankle goal is raised by a smooth envelope of bumps
-  over the step's phase (gone at its start and over the last tenth, so the feet leave
-  and land where the stance feet are). Every frame, a swing sole still below the ground
-  is lifted by its depth (IK again), re-checked and lifted further, up to three times.
+  linearly between the samples); where the sole would be below the ground the ankle
+  goal is raised by a smooth envelope of bumps over the step's phase (gone at its start
+  and over the last tenth, so the feet leave and land where the stance feet are).
+  Every frame, a swing sole still below the ground is lifted by its depth (IK again),
+  re-checked and lifted further, up to three times.
 - **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
   the stance hip starts where the previous step left the root and rejoins the data over
   the first half of the step (sagittal two-link IK of the stance leg).
