@@ -432,8 +432,9 @@ class Animator:
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         toes = (body.toe_offset[:, None]
                 * np.stack([np.cos(cmd.heading), np.sin(cmd.heading)], axis=1))
-        bumpy = (self._bumpy(swing_from, cmd.start, toes)
-                 | self._bumpy(cmd.start, cmd.target, toes))  # fmt: skip
+        both = self._bumpy(np.concatenate([swing_from, cmd.start]),
+                           np.concatenate([cmd.start, cmd.target]), np.tile(toes, (2, 1)))
+        bumpy = both[:m] | both[m:]
         if cmd.swing_bezier is not None:
             has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
             self._bezier[a[has]] = cmd.swing_bezier[has]
