@@ -82,19 +82,7 @@ class CrowdParams:
         Lateral distance of each foot's centre from the walking line [m] (stride width
         about 0.1 m, normative.json).
     wait_time : float
-        How long an agent stands before deciding again when it cannot step [s] (unless
-        woken earlier, below).
-    wake_range, reaction_time : float
-        A standing agent within ``wake_range`` [m] of a walker ahead of it (within 90°
-        of its walking direction) that commits a step decides again ``reaction_time``
-        [s] later instead of at the end of its wait: people in a queue start when they
-        see the one ahead go, a human reaction time later (about 0.1-0.2 s), not at a
-        fixed polling interval; followers in line even fall into step with the one
-        ahead (Jelić et al. 2012, Phys. Rev. E 86, 046111). The range is about one step
-        plus two body radii. Measured on ``scenarios/bottleneck.yaml`` (1 m, seeds
-        4-19): 1.63 /s without waking, 1.73 /s with it (woken by any neighbour: 1.79 /s,
-        but then a flight of stairs packs fuller than the queue at its foot; with
-        0.15 s: 1.68-1.71 /s). ``wake_range`` 0 turns waking off.
+        How long an agent stands before deciding again when it cannot step [s].
     target_distance : float
         How far ahead along the route the steering target lies [m].
     centre_pull : float
@@ -126,8 +114,6 @@ class CrowdParams:
     radius_ratio: float = 0.105
     foot_half_width: float = 0.05
     wait_time: float = 0.25
-    wake_range: float = 1.2
-    reaction_time: float = 0.1
     target_distance: float = 2.0
     centre_pull: float = 0.25
     arrive_distance: float = 0.6
@@ -737,7 +723,6 @@ class CrowdSimulation:
                           np.column_stack([foothold, new_z]), L, H, swing[go], d,
                           side)
         st.stance_foot[a] = np.column_stack([foothold, new_z])
-        self._wake(a, t)
         kind, on_obstacle = self._ground_type(a, foothold, d)
         self._step_rows.append({
             "agent": a, "step": st.steps[a].copy(), "time": t0 + duration,
@@ -751,35 +736,6 @@ class CrowdSimulation:
             "from_x": st.trail[a][:, 0], "from_y": st.trail[a][:, 1],
             "swing": swing[go],
         })
-
-    def _wake(self, movers: np.ndarray, t: float) -> None:
-        """Standing agents within ``wake_range`` of the agents ``movers`` (k,), which
-        have just committed a step from ``pos0``, decide again ``reaction_time`` after
-        ``t`` [s] instead of at the end of their wait (which shortens their standing
-        time accordingly)."""
-        prm, st = self.params, self.state
-        if prm.wake_range <= 0 or movers.size == 0:
-            return
-        wake_at = t + prm.reaction_time
-        # standing agents (a step resets ``stuck``) whose wait ends later than that
-        waiting = np.flatnonzero((st.status == ACTIVE) & (st.stuck > 0)
-                                 & (st.t1 > wake_at + 1e-9))
-        if waiting.size == 0:
-            return
-        k = min(4, movers.size)
-        dist, nb = cKDTree(st.pos0[movers]).query(st.pos1[waiting], k=k,
-                                                  distance_upper_bound=prm.wake_range)
-        dist, nb = dist.reshape(waiting.size, k), nb.reshape(waiting.size, k)
-        near = np.isfinite(dist)
-        # only a walker ahead (in the stander's walking direction) going is the cue
-        rel = st.pos0[movers[np.where(near, nb, 0)]] - st.pos1[waiting][:, None, :]
-        face = np.column_stack([np.cos(st.heading[waiting]), np.sin(st.heading[waiting])])
-        ahead = near & (np.einsum("wkj,wj->wk", rel, face) > 0)
-        w = waiting[ahead.any(axis=1)]
-        saved = st.t1[w] - wake_at
-        st.t1[w] = wake_at
-        st.wait[w] -= saved
-        st.stuck[w] -= saved
 
     def _durations(self, a: np.ndarray, L: np.ndarray, H: np.ndarray) -> np.ndarray:
         """Duration [s] of steps of length ``L`` and rise ``H`` (k,) [m] by agents ``a``."""
