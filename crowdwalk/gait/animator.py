@@ -776,8 +776,9 @@ class Animator:
         bt = ball[:, None] + _SOLE_BALL_TOE[None, :, None] * (tip - ball)[:, None]
         return np.concatenate([hb, bt], axis=1)
 
-    def _sole_depth(self, a: np.ndarray, walked) -> np.ndarray:
-        """Deepest point (k,) [m] of the swing sole below the ground (negative: clear).
+    def _points_depth(self, a: np.ndarray, sole: np.ndarray) -> np.ndarray:
+        """Deepest point (k,) [m] of sole points ``sole`` (k, q, 3) [m] of agents a (k,) below
+        the ground (negative: clear).
 
         The sole is sampled (``_swing_sole``); between two neighbouring samples whose
         ground differs by more than ``_EDGE_JUMP`` (a riser or curb edge between them) the
@@ -785,10 +786,6 @@ class Animator:
         only): the corner a sole crossing an edge cuts, which samples alone miss by up to
         their spacing times the foot's pitch, is found to 1/24 of the spacing (2 mm).
         """
-        return self._points_depth(a, self._swing_sole(a, walked))
-
-    def _points_depth(self, a: np.ndarray, sole: np.ndarray) -> np.ndarray:
-        """:meth:`_sole_depth` of sole points (k, q, 3) [m] of agents a (k,)."""
         g = self._ground_at(a, sole)
         depth = (g - sole[:, :, 2]).max(axis=1)
         jump = np.abs(np.diff(g, axis=1)) > _EDGE_JUMP
@@ -806,7 +803,7 @@ class Animator:
         ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
         is checked again and raised further (the swing leg's IK does not translate the
         foot exactly: reach, knee plane), up to ``_LIFT_ROUNDS`` times."""
-        depth = self._sole_depth(a, walked)
+        depth = self._points_depth(a, self._swing_sole(a, walked))
         sink = np.flatnonzero(depth > 1e-4)
         if sink.size == 0:
             return walked, 0
@@ -821,7 +818,7 @@ class Animator:
                 getattr(walked, name)[sink] = getattr(again, name)
             for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
                 getattr(walked.warm, name)[sink] = getattr(again.warm, name)
-            depth[sink] = self._sole_depth(a[sink], again)
+            depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]
             if sink.size == 0:
                 break
