@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["moving_distance", "point_segment_distance", "segment_distance"]
+__all__ = ["moving_distance", "point_segment_distance", "segment_distance", "step_distance"]
 
 
 def _distance_to(apx, apy, abx, aby) -> np.ndarray:
@@ -83,3 +83,21 @@ def moving_distance(a: np.ndarray, va: np.ndarray, ta: np.ndarray, b: np.ndarray
     w2 = np.where((ta < tb)[..., None], -vb, va)  # after the first stops, the other moves
     d = np.minimum(d, _closest_on_piece(r1, w2, t2 - t1))
     return d  # the last piece (both standing) is the end of the second one
+
+
+def step_distance(start: np.ndarray, end: np.ndarray, duration: np.ndarray,
+                  elapsed: np.ndarray, q_now: np.ndarray, q_end: np.ndarray,
+                  q_remaining: np.ndarray) -> np.ndarray:
+    """Closest approach [m], from now on, of a body stepping and a neighbour (both stand at
+    their ends afterwards): :func:`moving_distance` of steps given by their ends.
+
+    The body moves linearly from ``start`` to ``end`` (..., 2) [m] over ``duration`` (...)
+    [s], of which ``elapsed`` (...) [s] have passed (its heel strike was that long ago);
+    the neighbour moves from ``q_now`` to ``q_end`` in the ``q_remaining`` (...) [s] it
+    has left (0: standing). Arrays broadcast; result (...).
+    """
+    gone = np.minimum(elapsed, duration)
+    velocity = (end - start) / duration[..., None]
+    q_velocity = (q_end - q_now) / np.where(q_remaining > 0, q_remaining, 1.0)[..., None]
+    return moving_distance(start + gone[..., None] * velocity, velocity, duration - gone,
+                           q_now, q_velocity, q_remaining)

@@ -44,7 +44,7 @@ from scipy.spatial import cKDTree
 
 from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.footsteps import FootstepPlanner
-from crowdwalk.crowd.geometry import moving_distance, segment_distance
+from crowdwalk.crowd.geometry import segment_distance, step_distance
 from crowdwalk.crowd.navigation import RouteTable
 from crowdwalk.crowd.steering import Neighbours, SteeringParams, choose_steps
 from crowdwalk.errors import invalid
@@ -561,13 +561,9 @@ class CrowdSimulation:
             if go.size and nbs.valid.shape[1]:
                 end = st.stance[idx[go]] + 0.5 * sl[go, None] * choice.direction[go]
                 dur = self._durations(idx[go], sl[go], sh[go])
-                vel = (end - pos[go]) / dur[:, None]
-                gone = np.minimum(t - te[go], dur)
-                rem = nbs.remaining[go]
-                vq = (nbs.end[go] - nbs.now[go]) / np.where(rem > 0, rem, 1.0)[..., None]
-                gap = moving_distance((pos[go] + gone[:, None] * vel)[:, None, :],
-                                      vel[:, None, :], (dur - gone)[:, None], nbs.now[go],
-                                      vq, rem)
+                gap = step_distance(pos[go, None, :], end[:, None, :], dur[:, None],
+                                    (t - te[go])[:, None], nbs.now[go], nbs.end[go],
+                                    nbs.remaining[go])
                 clash = ((gap < self.radius[idx[go], None] + nbs.radius[go])
                          & nbs.valid[go]).any(axis=1)
                 move[go[clash]] = False
@@ -633,11 +629,10 @@ class CrowdSimulation:
                 i, j = pairs[:, 0], pairs[:, 1]
                 # in time (from now on), as in the test against the neighbours
                 dur = self._durations(a, sl[mv], sh[mv])
-                vel = (end - start) / dur[:, None]
                 gone = np.minimum(t - te[mv], dur)
-                now = start + gone[:, None] * vel
-                gap = moving_distance(now[i], vel[i], (dur - gone)[i], now[j], vel[j],
-                                      (dur - gone)[j])
+                now = start + gone[:, None] * ((end - start) / dur[:, None])  # each one now
+                gap = step_distance(start[i], end[i], dur[i], (t - te[mv])[i], now[j], end[j],
+                                    (dur - gone)[j])
                 bad = gap < self.radius[a[i]] + self.radius[a[j]]
                 if bad.any():
                     # the later heel strike (then the higher id) yields and waits

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import moving_distance, point_segment_distance, segment_distance
+from crowdwalk.crowd.geometry import point_segment_distance, segment_distance, step_distance
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -244,12 +244,8 @@ def choose_steps(
                 # (the candidate's body from ``position`` to ``ends`` over the step)
                 dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])[pa]
                 late = np.zeros(m) if lag is None else np.asarray(lag, dtype=float)
-                gone = np.minimum(late[pa][:, None], dur)  # (P, L)
-                vel = (p1 - p0) / dur[:, None, :, None]
-                tq = neighbours.remaining[pa, pk][:, None, None]  # (P, 1, 1)
-                vq = (q1 - q0) / np.where(tq > 0, tq, 1.0)[..., None]
-                d = moving_distance(p0 + gone[:, None, :, None] * vel, vel,
-                                    (dur - gone)[:, None, :], q0, vq, tq)  # (P, C, L)
+                d = step_distance(p0, p1, dur[:, None, :], late[pa][:, None, None], q0, q1,
+                                  neighbours.remaining[pa, pk][:, None, None])  # (P, C, L)
             else:
                 d = segment_distance(p0, p1, q0, q1)  # (P, C, L)
             blocked = d < need[pa, pk][:, None, None]
