@@ -102,8 +102,16 @@ class GroundProfile:
 
     def height(self, s: np.ndarray | float) -> np.ndarray:
         """Ground height [m] at arc lengths ``s`` [m] (any shape), right-continuous."""
+        return self._height_on(*self._locate(s))
+
+    def _locate(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """Arc lengths ``s`` [m] clamped to the start, and the vertex beginning the segment
+        each lies on (right-continuous at vertical changes)."""
         q = np.maximum(np.asarray(s, dtype=float), self.s[0])
-        i = np.searchsorted(self.s, q, side="right") - 1
+        return q, np.searchsorted(self.s, q, side="right") - 1
+
+    def _height_on(self, q: np.ndarray, i: np.ndarray) -> np.ndarray:
+        """Height [m] at ``q`` [m] on the segments beginning at vertices ``i``."""
         return self.z[i] + self._slopes[i] * (q - self.s[i])
 
     @cached_property
@@ -130,11 +138,9 @@ class GroundProfile:
         ``height(b)`` [m], which it needs anyway (one search per end)."""
         a = np.asarray(a, dtype=float)
         b = np.asarray(b, dtype=float)
-        qa, qb = np.maximum(a, self.s[0]), np.maximum(b, self.s[0])
-        ia = np.searchsorted(self.s, qa, side="right") - 1
-        ib = np.searchsorted(self.s, qb, side="right") - 1
-        height_a = self.z[ia] + self._slopes[ia] * (qa - self.s[ia])  # = self.height(a)
-        height_b = self.z[ib] + self._slopes[ib] * (qb - self.s[ib])
+        qa, ia = self._locate(a)
+        qb, ib = self._locate(b)
+        height_a, height_b = self._height_on(qa, ia), self._height_on(qb, ib)
         empty = b < a  # the interval is [a, a]
         best = np.maximum(height_a, np.where(empty, height_a, height_b))
         lo = np.searchsorted(self.s, a, side="left")
@@ -170,8 +176,7 @@ class GroundProfile:
         # g: the last edge <= s_v; vertex v is at or below edge k when f_v <= k
         at_or_below = np.cumsum(np.bincount(f, minlength=last + 1))[:last]
         i = np.maximum(at_or_below - 1, np.searchsorted(self.s, self.s[0], side="right") - 1)
-        q = np.maximum(edges, self.s[0])
-        at_edges = self.z[i] + self._slopes[i] * (q - self.s[i])  # = self.height(edges)
+        at_edges = self._height_on(np.maximum(edges, self.s[0]), i)  # = self.height(edges)
         cells = np.maximum(at_edges[:-1], at_edges[1:])
         inside = (f <= count) & (g >= 0)
         np.maximum.at(cells, np.maximum(f[inside] - 1, 0), self.z[inside])
