@@ -14,7 +14,7 @@ import numba as nb
 import numpy as np
 
 from crowdwalk.body import JOINT, LEG_JOINTS
-from crowdwalk.gait.complexes import _matmul, _rodrigues, _wrap
+from crowdwalk.gait.complexes import _matmul, _rodrigues, _times_rotation_y, _wrap
 
 __all__ = ["assemble_joints"]
 
@@ -143,8 +143,7 @@ def _assemble(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_
                 knee = _two_link_ik(hip_sw[i], goal[i], r_thigh_sw[i], thigh[i], shank[i],
                                     thigh_ik)  # fmt: skip
                 r_thigh = thigh_ik
-            _rot_y(knee, m)
-            _matmul(r_thigh, m, shank_sw)
+            _times_rotation_y(r_thigh, np.cos(knee), np.sin(knee), shank_sw)
         knee_out[i] = knee
         # swing talocrural for the foot elevation (heel→toe is π/2 + φ from the vertical)
         ch, sh = np.cos(heading[i]), np.sin(heading[i])
