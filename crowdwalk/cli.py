@@ -22,6 +22,22 @@ app = typer.Typer(
 )
 
 
+def _version(value: bool) -> None:
+    if value:
+        from crowdwalk import __version__
+
+        typer.echo(f"crowdwalk {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                 help="Print the version and exit."),
+) -> None:
+    """Crowds of walking people that plan their footsteps."""
+
+
 def _fail(message: str, code: int) -> None:
     typer.echo(f"crowdwalk: {message}", err=True)
     raise typer.Exit(code)
