@@ -57,7 +57,9 @@ def friendly_errors(func):
         except FileNotFoundError as exc:
             _fail(f"file not found: {exc.filename or exc}", 2)
         except (ValueError, OSError) as exc:
-            _fail(str(exc), 2)
+            from crowdwalk.checks import plain
+
+            _fail(plain(str(exc)).splitlines()[0] if str(exc) else type(exc).__name__, 2)
 
     return wrapper
 
@@ -71,11 +73,11 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario YAML file.")) -
     """Check a scenario file against the schema and build its world."""
     from collections import Counter
 
+    from crowdwalk.checks import world_and_population
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     sc = load_scenario(scenario)
-    world = build_world(sc)
+    world, _ = world_and_population(sc)
     n = sum(g.count for g in sc.groups)
     x0, y0, x1, y1 = world.terrain.bounds
     kinds = Counter(f.type for f in sc.terrain.features)
@@ -147,12 +149,12 @@ def _sim_progress(quiet: bool, label: str):
 def _check_before_running(scenario: Path, overrides) -> None:
     """Check the overrides, load the scenario and build its world (milliseconds), so that
     bad input ends with its one-line message before a progress bar is drawn."""
+    from crowdwalk.checks import world_and_population
     from crowdwalk.crowd.run import check_overrides
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     check_overrides(overrides)
-    build_world(load_scenario(scenario))
+    world_and_population(load_scenario(scenario))
 
 
 def _term_as_interrupt() -> None:
