@@ -6,10 +6,10 @@ Every walker of a crowd has its own style, held as a struct-of-arrays (:class:`S
 - **Locomotion parameters** (§3, Fig. 7): step length [m], step frequency [steps/s] and
   velocity [m/s], tied by velocity = step length × step frequency. In *normal* mode the
   step length follows the walker's current speed through the measured normal-mode
-  relation (:func:`normal_step_length`) and the frequency is their ratio. In *locked*
-  mode one parameter is held (``lock: {step_length: 0.75}``); a second given parameter
-  sets one of the two sliders (the paper's proud walk: velocity 4 km/h locked, step length
-  0.75 m), the third follows from the product.
+  relation (:func:`normal_step_length`, ``planners.normal_mode``) and the frequency is
+  their ratio. In *locked* mode one parameter is held (``lock: {step_length: 0.75}``);
+  a second given parameter sets one of the two sliders (the paper's proud walk: velocity
+  4 km/h locked, step length 0.75 m), the third follows from the product.
 - **15 locomotion attributes** (§3, Fig. 8) in five arm, two torso, two pelvis and six
   leg attributes (:data:`ATTRIBUTES`, each with its unit, default and range).
 - **Presets** after Fig. 11 (:data:`PRESETS`): normal, proud, muscle_man, marching,
@@ -19,7 +19,7 @@ In scenario files a group says ``style: {preset: <name>, <attribute>: <value> or
 sd}}`` and ``lock: {...}``; angles are degrees there and radians here. The paper's own
 normalising formulae for normal mode are in its ref. [3] (Bruderlin & Calvert 1989), which
 is not among the project's sources; normal mode uses the measured step-length relation
-instead (``planners.normal_mode`` when present, else the crowd's Fukuchi et al. 2018 fit).
+of ``planners.normal_mode`` instead (Alexander's power law fitted to WBDS).
 """
 
 from __future__ import annotations
@@ -225,12 +225,12 @@ class Style:
         return replace(self, **{k: np.broadcast_to(np.asarray(v, dtype.get(k, float)), (n,)).copy()
                                 for k, v in columns.items()})
 
-    def locomotion(self, speed: np.ndarray, leg_length: np.ndarray
+    def locomotion(self, speed: np.ndarray, body_height: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
         """Step length [m] and step frequency [steps/s] (n,) at current speeds (n,) [m/s].
 
-        Normal mode: the step length of the measured relation at ``speed`` for the leg
-        length (n,) [m] (hip to sole); the frequency is speed / step length. A held step
+        Normal mode: the step length of the measured relation at ``speed`` for bodies
+        (n,) [m] (:func:`normal_step_length`); the frequency is speed / step length. A held step
         length stays; a held frequency gives step length = speed / frequency (§3).
         """
         v = np.maximum(np.asarray(speed, dtype=float), 1e-3)
@@ -238,7 +238,7 @@ class Style:
         held_f = np.isfinite(self.step_frequency) & ~held_l
         sl = np.where(held_l, self.step_length,
                       np.where(held_f, v / np.where(held_f, self.step_frequency, 1.0),
-                               normal_step_length(v, leg_length)))
+                               normal_step_length(v, body_height)))
         return sl, v / sl
 
     @property
@@ -248,21 +248,13 @@ class Style:
         return names[self.preset]
 
 
-def normal_step_length(speed: np.ndarray, leg_length: np.ndarray) -> np.ndarray:
-    """Normal-mode step length [m] at ``speed`` (n,) [m/s] for legs (n,) [m] (hip to sole).
+def normal_step_length(speed: np.ndarray, body_height: np.ndarray) -> np.ndarray:
+    """Normal-mode step length [m] at ``speed`` (n,) [m/s] for bodies (n,) [m]: the
+    measured relation ``planners.normal_mode.step_length`` (WBDS fit) at the body's leg
+    length."""
+    from planners.normal_mode import leg_length_from_height, step_length
 
-    ``planners.normal_mode.step_length`` (the locomotion issue's measured relation) when
-    the installed planners have it; until then the crowd's Fukuchi et al. (2018) fit
-    (``crowdwalk.population.step_length_at``) scaled by leg length from the 1.71 m body it
-    describes.
-    """
-    try:
-        from planners.normal_mode import step_length
-    except ImportError:
-        from crowdwalk.population import step_length_at
-
-        return step_length_at(speed) * np.asarray(leg_length, float) / (0.53 * 1.71)
-    return step_length(speed, leg_length)
+    return step_length(speed, leg_length_from_height(body_height))
 
 
 # --- the scenario file's edge -----------------------------------------------------------

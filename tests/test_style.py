@@ -101,19 +101,18 @@ def test_bad_styles_name_the_field(style, lock, text):
 
 def test_normal_mode_follows_the_relation_and_locks_hold():
     h = np.full(5, 1.75)
-    leg = 0.53 * h
     speed = np.linspace(0.6, 1.8, 5)
     normal = Style.default(h, 1.34)
-    sl, f = normal.locomotion(speed, leg)
-    np.testing.assert_allclose(sl, normal_step_length(speed, leg))
+    sl, f = normal.locomotion(speed, h)
+    np.testing.assert_allclose(sl, normal_step_length(speed, h))
     np.testing.assert_allclose(sl * f, speed)
     assert np.all(np.diff(sl) > 0) and np.all(np.diff(f) > 0)  # both grow with speed
     locked = normal.with_values(step_length=0.75, lock=LOCKS.index("step_length"))
-    sl, f = locked.locomotion(speed, leg)
+    sl, f = locked.locomotion(speed, h)
     np.testing.assert_allclose(sl, 0.75)
     np.testing.assert_allclose(f, speed / 0.75)
     cadence = normal.with_values(step_frequency=2.0, lock=LOCKS.index("step_frequency"))
-    sl, f = cadence.locomotion(speed, leg)
+    sl, f = cadence.locomotion(speed, h)
     np.testing.assert_allclose(f, 2.0)
     np.testing.assert_allclose(sl, speed / 2.0)
 
