@@ -165,7 +165,7 @@ def lattice_points(area, n: int, density: float, rng: np.random.Generator, *,
     """``n`` points of a hexagonal lattice at ``density`` [1/m²] inside ``area``.
 
     The lattice (spacing ``sqrt(2 / (sqrt(3) density))`` [m]) gets a random phase and
-    orientation from ``rng``; of the points inside ``area`` the ``n`` nearest to ``front``
+    orientation from ``rng`` (up to 8 draws until ``n`` points fit); of the points inside ``area`` the ``n`` nearest to ``front``
     (2,) [m] (default: the area's centroid) are kept, so a crowd starts as one block at the
     given density next to where it goes.
 
@@ -182,11 +182,14 @@ def lattice_points(area, n: int, density: float, rng: np.random.Generator, *,
     k = int(np.ceil(reach / a)) + 1
     i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1))
     uv = np.column_stack([(i + 0.5 * (j % 2)).ravel() * a, j.ravel() * a * np.sqrt(3) / 2])
-    turn = rng.uniform(0, 2 * np.pi)
-    rot = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
-    pts = centre + (uv + rng.uniform(0, a, 2)) @ rot.T
     shapely.prepare(area)
-    pts = pts[shapely.contains_xy(area, pts[:, 0], pts[:, 1])]
+    for _ in range(8):  # a few phases: in a small area the lattice's fit depends on them
+        turn = rng.uniform(0, 2 * np.pi)
+        rot = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+        pts = centre + (uv + rng.uniform(0, a, 2)) @ rot.T
+        pts = pts[shapely.contains_xy(area, pts[:, 0], pts[:, 1])]
+        if len(pts) >= n:
+            break
     if len(pts) < n:
         raise invalid("Group", "density", f"at least {n / max(area.area, 1e-9):.2f} /m² for "
                       f"{n} agents in {area.area:.1f} m² (the lattice holds {len(pts)})",

@@ -233,11 +233,13 @@ def _ring(density: float, width: float, radius: float, duration: float, seed: in
                           np.column_stack([r1 * np.cos(a[::-1]), r1 * np.sin(a[::-1])])])
         from shapely import Polygon
 
-        area = Polygon(poly).buffer(-0.25).area
-        count = max(1, int(round(density * area)))
+        # the sector's share of the ring at ``density``, packed into the spawn area
+        # (which keeps 0.25 m off the walls) at the density that takes
+        count = max(1, int(round(density * width * 2 * radius * np.sin(np.pi / sectors))))
+        packed = count / Polygon(poly).buffer(-0.25).area
         dest = [names[(k + 1 + j) % sectors] for j in range(laps * sectors)]
         groups.append(_group(f"s{k}", count, poly.round(4).tolist(), dest,
-                             speed=(1.34, 0.05), density=float(min(6.0, density * 1.02))))
+                             speed=(1.34, 0.05), density=float(min(6.0, packed * 1.3))))
     ext = radius + width + 1
     # the measurement area: a 2 m long convex piece of the ring (a trapezoid) on +y
     half = 1.0 / radius
