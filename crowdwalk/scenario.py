@@ -38,6 +38,7 @@ from crowdwalk.behaviours import (
     WaitingAreaSpec,
 )
 from crowdwalk.errors import InputError, existing_file
+from crowdwalk.style import GaitName, LockSpec, StyleSpec
 
 __all__ = [
     "Scenario",
@@ -392,6 +393,9 @@ class Group(_Model):
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
     planner: PlannerName = "best_first"
+    gait: GaitName = Field("elevation_angles", description="gait engine of the group")
+    style: StyleSpec | None = Field(None, description="KLAW style (crowdwalk.style)")
+    lock: LockSpec | None = Field(None, description="locked locomotion parameter(s)")
 
     @model_validator(mode="after")
     def _somewhere(self):
