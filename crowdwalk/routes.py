@@ -226,8 +226,8 @@ def lattice_points(area, n: int, density: float, rng: np.random.Generator, *,
 
     The lattice (spacing ``sqrt(2 / (sqrt(3) density))`` [m]) gets a random phase and
     orientation from ``rng`` (up to 8 draws until ``n`` points fit); of the points inside
-    ``area`` the ``n`` nearest to ``front`` (2,) [m] (default: the area's centroid) are kept, so a crowd starts as one block at the
-    given density next to where it goes.
+    ``area`` the ``n`` nearest to ``front`` (2,) [m] (default: the area's centroid) are
+    kept, so a crowd starts as one block at the given density next to where it goes.
 
     Returns
     -------
