@@ -47,6 +47,7 @@ __all__ = [
     "Spread",
     "normal_step_length",
     "sample_styles",
+    "summary_by_style",
 ]
 
 GaitName = Literal["elevation_angles", "klaw", "ko_badler"]
@@ -396,3 +397,32 @@ def sample_styles(groups, group: np.ndarray, body_height: np.ndarray, free_speed
                 cols["velocity"][rows] = v
     return Style(**cols)
 
+
+
+def summary_by_style(agents: list[dict]) -> dict[str, dict]:
+    """Per style (the agents' ``style`` key, a preset name or ``"custom"``): agents,
+    arrived, mean travel time [s], energy per metre [J/(kg m)] (steps' energy over the
+    distance walked), mean step length [m] and cadence [steps/s] of the agents in a
+    run summary's ``agents`` list that stepped."""
+    out: dict[str, dict] = {}
+    for name in sorted({a.get("style", "") for a in agents}):
+        rows = [a for a in agents if a.get("style", "") == name and a["steps"] > 0]
+        if not rows:
+            continue
+        travel = [a["travel_time_s"] for a in rows if a["travel_time_s"] is not None]
+        dist = sum(a["distance_m"] for a in rows)
+
+        def mean(key, rows=rows):
+            values = [a[key] for a in rows if a.get(key) is not None]
+            return float(np.mean(values)) if values else None
+
+        out[name or "custom"] = {
+            "agents": len(rows), "arrived": len(travel),
+            "gait": sorted({a.get("gait", "elevation_angles") for a in rows}),
+            "travel_time_s": float(np.mean(travel)) if travel else None,
+            "energy_per_metre_J_per_kg_m": (sum(a["energy_J_per_kg"] for a in rows) / dist
+                                            if dist > 0 else None),
+            "mean_step_length_m": mean("mean_step_length_m"),
+            "cadence_steps_per_s": mean("cadence_steps_per_s"),
+        }
+    return out
