@@ -105,7 +105,7 @@ ATTRIBUTES: tuple[Attribute, ...] = (
               "KLAW's knee_bend (§2.2): least knee flexion in single stance"),
     Attribute("knee_impact", "deg", 3.0, 0.0, 30.0,
               "knee flexion at heel strike"),
-    Attribute("toe_clearance", "m", 0.02, 0.005, 0.25,
+    Attribute("toe_clearance", "m", 0.02, 0.005, 0.08,
               "least height of the swing foot above the ground (planner and gait engine)"),
     Attribute("foot_angle", "deg", 7.0, -15.0, 30.0,
               "toe-out of the feet from the walking direction"),
@@ -197,7 +197,8 @@ class Style:
                 bad = x[~((x >= a.lo - 1e-9) & (x <= a.hi + 1e-9))][0]
                 raise invalid("Style", a.name, f"in [{a.lo:g}, {a.hi:g}] [{a.unit}]", float(bad))
         if np.any(self.elbow_max < self.elbow_min - 1e-12):
-            raise invalid("Style", "elbow_max", ">= elbow_min", np.rad2deg(self.elbow_max).min())
+            raise invalid("Style", "elbow_max", ">= elbow_min [deg]",
+                          float(np.rad2deg(self.elbow_max).min()))
         if not np.all(self.velocity > 0):
             raise invalid("Style", "velocity", "> 0 [m/s]", float(self.velocity.min()))
 
