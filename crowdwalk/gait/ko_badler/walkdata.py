@@ -285,6 +285,14 @@ class WalkData:
         """A copy with some fields changed."""
         return replace(self, **changes)
 
+    def take(self, index) -> WalkData:
+        """The walkers at ``index`` of a batched walk (integer or boolean array)."""
+        seqs = {k: q.with_values(q.v[index]) for k, q in self.sequences().items()}
+        return self.replace(body=self.body.take(index),
+                            step_length=self.step_length[index],
+                            previous_step_length=self.previous_step_length[index],
+                            **seqs)  # fmt: skip
+
     def sequences(self) -> dict[str, TimedSequence]:
         """The six timed sequences by name (H, F1, F2, F3, M, A order)."""
         return {k: getattr(self, k) for k in SEQUENCES}
