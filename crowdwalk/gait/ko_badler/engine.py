@@ -20,7 +20,7 @@ consecutive foothold pairs, timed by H's x; heading turns linearly over the step
 ElevWalker §4.4); the floor under each point is the line between the footholds it moves
 between (hip height follows the ground); the swing ankle is lifted to the planner's
 Bezier swing curve where that is higher; the pelvis is lowered where a leg would not
-reach (``stats["lowered"]``).
+reach (``stats["lowered"]`` frames, by at most ``stats["lowered_max"]`` [m]).
 """
 
 from __future__ import annotations
@@ -169,7 +169,8 @@ class KoBadlerEngine:
         self._psi1 = np.zeros(n)
         self._bezier = np.full((n, 4, 3), np.nan)
         self._commanded = np.zeros(n, bool)
-        self.stats = {"commands": 0, "poses": 0, "lowered": 0, "bezier_lifted": 0}
+        self.stats = {"commands": 0, "poses": 0, "lowered": 0, "lowered_max": 0.0,
+                      "bezier_lifted": 0}  # fmt: skip
 
     @property
     def skeleton(self) -> tuple[tuple[str, ...], np.ndarray]:
@@ -302,8 +303,9 @@ class KoBadlerEngine:
             h = pelvis + sgn * half * left_dir
             flat = np.linalg.norm((ankle_p - h)[:, :2], axis=1)
             top = ankle_p[:, 2] + np.sqrt(np.maximum(reach**2 - flat**2, 0.0))
-            low = pelvis[:, 2] > top
-            self.stats["lowered"] += int(low.sum())
+            low = pelvis[:, 2] - top
+            self.stats["lowered"] += int((low > 0).sum())
+            self.stats["lowered_max"] = max(self.stats["lowered_max"], float(low.max()))
             pelvis[:, 2] = np.minimum(pelvis[:, 2], top)
         hip_st = pelvis + side * half * left_dir
         hip_sw = pelvis - side * half * left_dir
