@@ -77,6 +77,9 @@ class Population:
         Tuples of route node names, visited in order.
     route_start : (n, 2) float
         Where the agent's route polyline begins [m] (NaN: at the origin node).
+    gait_names : tuple of str, optional
+        Gait engine per group (``crowdwalk.gait.engine.GAIT_ENGINES``; default
+        ``elevation_angles`` for every group).
     """
 
     group: np.ndarray
@@ -89,6 +92,7 @@ class Population:
     origin: np.ndarray
     destinations: np.ndarray
     route_start: np.ndarray
+    gait_names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         n = self.group.size
@@ -110,6 +114,12 @@ class Population:
     def planner(self) -> np.ndarray:
         """Planner name per agent (n,)."""
         return np.asarray(self.planner_names, dtype=object)[self.group]
+
+    @property
+    def gait(self) -> np.ndarray:
+        """Gait engine name per agent (n,)."""
+        names = self.gait_names or ("elevation_angles",) * len(self.group_names)
+        return np.asarray(names, dtype=object)[self.group]
 
     def take(self, index: np.ndarray) -> Population:
         """The sub-population at ``index``."""
@@ -181,6 +191,7 @@ class Population:
             group=np.concatenate(parts["group"]).astype(np.int64),
             group_names=tuple(g.name for g in scenario.groups),
             planner_names=tuple(g.planner for g in scenario.groups),
+            gait_names=tuple(g.gait for g in scenario.groups),
             body_height=np.concatenate(parts["height"]),
             free_speed=np.concatenate(parts["speed"]),
             spawn_time=np.concatenate(parts["time"]).astype(float),

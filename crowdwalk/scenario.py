@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal, get_args
+from typing import Annotated, Literal
 
 import numpy as np
 import yaml
@@ -30,6 +30,7 @@ from pydantic import (
 )
 
 from crowdwalk.errors import InputError, existing_file
+from planners import PLANNERS
 
 __all__ = [
     "Scenario",
@@ -46,8 +47,8 @@ __all__ = [
     "PLANNER_NAMES",
 ]
 
-PlannerName = Literal["best_first", "fixed", "optimal"]
-PLANNER_NAMES: tuple[str, ...] = get_args(PlannerName)
+PLANNER_NAMES: tuple[str, ...] = tuple(sorted(PLANNERS))
+PlannerName = Literal[PLANNER_NAMES]  # the planners' names (planners.PLANNERS)
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
@@ -372,6 +373,17 @@ class Group(_Model):
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
     planner: PlannerName = "best_first"
+    gait: str = Field("elevation_angles",
+                      description="gait engine (crowdwalk.gait.engine.GAIT_ENGINES)")
+
+    @field_validator("gait")
+    @classmethod
+    def _gait_engine(cls, v: str) -> str:
+        from crowdwalk.gait.engine import GAIT_ENGINES
+
+        if v not in GAIT_ENGINES:
+            raise ValueError(f"gait must be one of {sorted(GAIT_ENGINES)}; got {v!r}")
+        return v
 
     @field_validator("body_height")
     @classmethod
