@@ -30,6 +30,7 @@ from pydantic import (
 )
 
 from crowdwalk.errors import InputError, existing_file
+from crowdwalk.style import GaitName, LockSpec, StyleSpec
 from planners import PLANNERS
 
 __all__ = [
@@ -373,17 +374,9 @@ class Group(_Model):
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
     planner: PlannerName = "best_first"
-    gait: str = Field("elevation_angles",
-                      description="gait engine (crowdwalk.gait.engine.GAIT_ENGINES)")
-
-    @field_validator("gait")
-    @classmethod
-    def _gait_engine(cls, v: str) -> str:
-        from crowdwalk.gait.engine import GAIT_ENGINES
-
-        if v not in GAIT_ENGINES:
-            raise ValueError(f"gait must be one of {sorted(GAIT_ENGINES)}; got {v!r}")
-        return v
+    gait: GaitName = Field("elevation_angles", description="gait engine of the group")
+    style: StyleSpec | None = Field(None, description="KLAW style (crowdwalk.style)")
+    lock: LockSpec | None = Field(None, description="locked locomotion parameter(s)")
 
     @field_validator("body_height")
     @classmethod
