@@ -46,7 +46,7 @@ __all__ = [
     "PLANNER_NAMES",
 ]
 
-PlannerName = Literal["best_first", "fixed", "optimal"]
+PlannerName = Literal["best_first", "best_first_multistart", "fixed", "optimal"]
 PLANNER_NAMES: tuple[str, ...] = get_args(PlannerName)
 
 Vec2 = tuple[float, float]
@@ -371,7 +371,7 @@ class Group(_Model):
     destinations: list[str] = Field(min_length=1, description="route nodes, visited in order")
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
-    planner: PlannerName = "best_first"
+    planner: PlannerName = "best_first_multistart"
 
     @field_validator("body_height")
     @classmethod
