@@ -92,6 +92,25 @@ def _evaluate(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off
 
 
 @nb.njit(cache=True, nogil=True)
+def _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
+    """Legality of configuration ``q`` (n,) for agent ``a`` (stops at the first illegal
+    step)."""
+    m_prev = 0
+    m_prev2 = 0
+    j_prev = 0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            return False
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return True
+
+
+@nb.njit(cache=True, nogil=True)
 def _code(q, J):
     c = 0
     for k in range(q.size):
@@ -114,6 +133,9 @@ def _find_init(step_legal, swing_ok, cost, progress, J, step_off, swing_off, str
     visited = np.zeros(total, dtype=np.bool_)
     queue = np.empty(total, dtype=np.int64)
     q = np.empty(n, dtype=np.int64)
+    place = np.empty(n, dtype=np.int64)  # code change of step k by one interval
+    for k in range(n):
+        place[k] = J ** (n - 1 - k)
     for a in range(A):
         visited[:] = False
         start = _code(configs[a], J)
@@ -125,25 +147,20 @@ def _find_init(step_legal, swing_ok, cost, progress, J, step_off, swing_off, str
             head += 1
             _decode(c, n, J, q)
             checks[a] += 1
-            legal, _ = _evaluate(a, q, step_legal, swing_ok, cost, progress, J, step_off,
-                                 swing_off, strides)
-            if legal:
+            if _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
                 configs[a, :] = q
                 found[a] = True
                 break
             expanded[a] += 1
             for k in range(n):
-                for d in (-1, 1):
-                    v = q[k] + d
-                    if v < 0 or v >= J:
-                        continue
-                    q[k] = v
-                    c2 = _code(q, J)
-                    q[k] -= d
-                    if not visited[c2]:
-                        visited[c2] = True
-                        queue[tail] = c2
-                        tail += 1
+                if q[k] > 0 and not visited[c - place[k]]:
+                    visited[c - place[k]] = True
+                    queue[tail] = c - place[k]
+                    tail += 1
+                if q[k] < J - 1 and not visited[c + place[k]]:
+                    visited[c + place[k]] = True
+                    queue[tail] = c + place[k]
+                    tail += 1
 
 
 @nb.njit(cache=True, nogil=True)

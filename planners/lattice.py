@@ -24,15 +24,13 @@ from planners.energy import (
     walking_energy,
 )
 from planners.legality import Reason, foot_support, snap_to_support
-from planners.profile import _VERTICAL, GroundProfile
+from planners.profile import _VERTICAL, RASTER_CELL, GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
 
 __all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables",
            "combine_profiles", "grid", "neutral_index"]
 
 
-#: Cell of the conservative height raster used for swing collision checks [m].
-RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 #: Extra clearance of the reusable curves for straight sloped spans [m].
 SLOPE_EXTRA = 0.03
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
