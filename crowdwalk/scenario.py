@@ -30,6 +30,7 @@ from pydantic import (
 )
 
 from crowdwalk.errors import InputError, existing_file
+from crowdwalk.style import GaitName, LockSpec, StyleSpec
 
 __all__ = [
     "Scenario",
@@ -372,6 +373,9 @@ class Group(_Model):
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
     planner: PlannerName = "best_first_multistart"
+    gait: GaitName = Field("elevation_angles", description="gait engine of the group")
+    style: StyleSpec | None = Field(None, description="KLAW style (crowdwalk.style)")
+    lock: LockSpec | None = Field(None, description="locked locomotion parameter(s)")
 
     @field_validator("body_height")
     @classmethod
