@@ -97,11 +97,14 @@ def key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg: Le
     leg at 99 % of its length (knees nearly straight at heel strike and toe-off).
     Compiled (:func:`_key_frames`), one step at a time.
     """
-    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (
+    arrays = [np.asarray(x, dtype=float) for x in (
         stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg.thigh, leg.shank,
-        leg.toe_offset, leg.ankle_height, nominal_lift)))
-    shape = arrays[0].shape
-    flat = [np.ascontiguousarray(x).reshape(-1) for x in arrays]
+        leg.toe_offset, leg.ankle_height, nominal_lift)]
+    shape = np.broadcast_shapes(*(x.shape for x in arrays))
+    # numba gets contiguous writeable (n,) arrays: the inputs as they are where they can,
+    # copies of broadcast ones
+    flat = [x.reshape(-1) if x.shape == shape and x.flags.c_contiguous and x.flags.writeable
+            else np.broadcast_to(x, shape).flatten() for x in arrays]
     thigh = np.empty(flat[0].size)
     calf = np.empty(flat[0].size)
     reachable = np.empty(flat[0].size, dtype=np.bool_)
