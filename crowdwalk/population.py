@@ -161,7 +161,8 @@ class Population:
         """
         from shapely.geometry import Polygon
 
-        from crowdwalk.routes import spawn_points
+        from crowdwalk.exits import choose_exits
+        from crowdwalk.routes import lattice_points, spawn_points
 
         parts: dict[str, list] = {k: [] for k in (
             "group", "height", "speed", "time", "xy", "origin", "dest", "start")}
@@ -183,18 +184,27 @@ class Population:
             inner = area.buffer(-0.25)  # keep bodies off the walls
             if inner.area > 0.05 * area.area:
                 area = inner
-            try:
-                xy = spawn_points(area, n, rng, min_spacing=0.5)
-            except ValueError:  # more agents than fit at once: they enter one by one
-                xy = spawn_points(area, n, rng, min_spacing=0.0)
+            if g.density is not None:
+                front = routes.node_xy((g.destinations or g.exit_choice.among)[0])
+                xy = lattice_points(area, n, g.density, rng, front=front)
+            else:
+                try:
+                    xy = spawn_points(area, n, rng, min_spacing=0.5)
+                except ValueError:  # more agents than fit at once: they enter one by one
+                    xy = spawn_points(area, n, rng, min_spacing=0.0)
             parts["group"].append(np.full(n, gi))
             parts["height"].append(heights)
             parts["speed"].append(speeds)
-            parts["time"].append(g.spawn_times.times(n))
+            times = g.spawn_times.times(n, rng)
+            parts["time"].append(times)
             parts["xy"].append(xy)
             parts["origin"].append(np.full(n, origin, dtype=object))
             dest = np.empty(n, dtype=object)
             dest[:] = [tuple(g.destinations)] * n
+            if g.exit_choice is not None:
+                here = g.destinations[-1] if g.destinations else origin
+                exits = choose_exits(g.exit_choice, routes, here, xy, speeds, times, rng)
+                dest[:] = [(*g.destinations, e) for e in exits]
             parts["dest"].append(dest)
             parts["start"].append(np.tile(start, (n, 1)))
         group = np.concatenate(parts["group"]).astype(np.int64)
