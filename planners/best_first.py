@@ -29,7 +29,8 @@ def _run(kernel, tables: StepTables, configs: np.ndarray, found: np.ndarray) -> 
     A = tables.neutral.size
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
-    kernel(tables.step_legal, tables.swing_ok, tables.cost, tables.progress, st.J,
+    kernel(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
+           np.ascontiguousarray(tables.progress), st.J,
            np.asarray(st.step_offset, dtype=np.int64), np.asarray(st.swing_offset, dtype=np.int64),
            np.asarray(st.swing_strides, dtype=np.int64), configs, found, expanded, checks)
     return SearchResult(configs, found, expanded, checks)

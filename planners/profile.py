@@ -264,6 +264,14 @@ class HeightRaster:
         ib = np.clip(((np.asarray(b) - self.start) * scale).astype(np.intp), ia, c - 1)
         return self.vertex_cum[ib + 1] - self.vertex_cum[ia]
 
+    def table(self, levels: int) -> np.ndarray:
+        """The range-maximum table (at least ``levels`` levels, as many as the cells
+        allow) of the cell heights, shape (L, c): row k holds the maximum of the 2**k
+        cells from each cell."""
+        if self._table.shape[0] < levels:
+            self._table = _range_max_table(self.heights, levels)
+        return self._table
+
     def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Highest ground [m] over ``[a, b]`` [m] (same shapes), never underestimated.
 

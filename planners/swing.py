@@ -149,20 +149,21 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile, leg: Leg,
     influence = np.stack([3 * t_mid * (1 - t_mid) ** 2, 3 * t_mid**2 * (1 - t_mid)])
     basis = np.ascontiguousarray(bernstein(t).T)  # (4, T)
     controls = np.empty((C, 4, 2))
+    summit = np.empty((C, 2))
     ok = np.zeros(C, dtype=np.bool_)
     rounds = np.zeros(C, dtype=np.int64)
     _adjust(start_s, _per_curve(start_z, C), end_s, _per_curve(end_z, C), *feet,
-            profile.start, profile.cell, profile.heights, profile.vertex_cum, basis,
+            profile.start, profile.cell, profile.table(TABLE_LEVELS), profile.vertex_cum,
+            basis,
             influence, config.clearance, config.swing_lift, config.max_swing_lift,
-            config.max_foot_slope, config.max_adjustments, controls, ok, rounds)
-    pts_z = controls[..., 1] @ basis
-    best = np.argmax(pts_z, axis=1)
-    summit = np.stack([(controls[..., 0] @ basis)[np.arange(C), best],
-                       pts_z[np.arange(C), best]], axis=-1)
+            config.max_foot_slope, config.max_adjustments, controls, summit, ok, rounds)
     return SwingResult(controls, ok, summit, rounds)
 
 
 _jit = nb.njit(cache=True, nogil=True)
+#: Levels of the raster's range-maximum table the kernel uses: spans up to 2**7 cells
+#: (0.5 m) take two look-ups, longer ones a few more.
+TABLE_LEVELS = 7
 
 
 @_jit
@@ -172,15 +173,23 @@ def _round9(x):
 
 
 @_jit
-def _raster_max(a, b, start, scale, heights):
-    """:meth:`HeightRaster.max_height` of one interval [m]."""
-    c = heights.size
+def _raster_max(a, b, start, scale, table):
+    """:meth:`HeightRaster.max_height` of one interval [m], from the raster's
+    range-maximum table (L, c)."""
+    levels, c = table.shape
     ia = min(max(int((a - start) * scale), 0), c - 1)
     ib = min(max(int((b - start) * scale), ia), c - 1)
-    best = heights[ia]
-    for i in range(ia + 1, ib + 1):
-        best = max(best, heights[i])
-    return best
+    span = ib - ia + 1
+    k = 0
+    while (2 << k) <= span and k + 1 < levels:
+        k += 1
+    width = 1 << k
+    best = table[k, ia]
+    i = ia + width
+    while i + width <= ib + 1:  # spans longer than the table's widest level
+        best = max(best, table[k, i])
+        i += width
+    return max(best, table[k, ib - width + 1])
 
 
 @_jit
@@ -193,11 +202,12 @@ def _raster_vertices(a, b, start, scale, vertex_cum):
 
 
 @_jit
-def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cell, heights,
+def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cell, table,
             vertex_cum, basis, influence, clearance, swing_lift, max_swing_lift,
-            max_foot_slope, max_adjustments, controls, ok, rounds):
+            max_foot_slope, max_adjustments, controls, out_summit, ok, rounds):
     """§5.2 adjustment of each curve (see :func:`adjust_swings`); fills ``controls``
-    (C, 4, 2), ``ok`` (C,) and ``rounds`` (C,)."""
+    (C, 4, 2), ``out_summit`` (C, 2) (the highest sample of the final curve), ``ok`` (C,)
+    and ``rounds`` (C,)."""
     T = basis.shape[1]
     scale = 1.0 / cell
     ps = np.empty(T)
@@ -227,12 +237,12 @@ def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cel
                 z_lo = min(pz[i], pz[i + 1])
                 in_zone = (s_hi <= p0s + zone) or (s_lo >= p3s - zone)
                 if in_zone:
-                    ground = _raster_max(s_lo, s_hi, r_start, scale, heights)
+                    ground = _raster_max(s_lo, s_hi, r_start, scale, table)
                     straight = _raster_vertices(s_lo, s_hi, r_start, scale, vertex_cum) == 0
                     need = -(max_foot_slope * (s_hi - s_lo) if straight else 0.0)
                 else:
                     ground = _raster_max(s_lo - heel[c], s_hi + toe[c], r_start, scale,
-                                         heights)
+                                         table)
                     need = clearance
                 deficit[i] = need - (z_lo - ankle[c] - ground)
                 if deficit[i] > 1e-9:
@@ -282,6 +292,15 @@ def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cel
                     inside = False
             if not inside:
                 break
+        high = -np.inf  # the final curve's highest sample
+        for i in range(T):
+            zi = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
+                  + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
+            if zi > high:
+                high = zi
+                out_summit[c, 0] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
+                                    + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
+        out_summit[c, 1] = high
 
 
 class _FootView:
