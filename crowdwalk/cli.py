@@ -270,6 +270,21 @@ def export_bvh_command(
     typer.echo(f"wrote {path}")
 
 
+@app.command("gait-report")
+@friendly_errors
+def gait_report_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    plot: Path = typer.Option(None, "--plot", help="PNG of the joint curves to write."),
+) -> None:
+    """Gait of a run's walkers against Winter, WBDS and Bovi (measured from the run)."""
+    from crowdwalk.gait_report import plot_curves, report_table, run_figures
+
+    figures = run_figures(run_dir)
+    typer.echo(report_table(figures))
+    if plot is not None:
+        typer.echo(f"wrote {plot_curves(figures, plot)}")
+
+
 # --- viewer (issue 6): view, render -------------------------------------------------
 
 _COLOR_HELP = "Colour footprints by: energy, planner or agent."
