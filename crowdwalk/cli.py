@@ -315,12 +315,14 @@ def export_bvh_command(
     agent: int = typer.Option(..., "--agent", help="Agent id to export."),
     out: Path = typer.Option(..., "--out", help="BVH file to write."),
     scale: float = typer.Option(100.0, "--scale", help="BVH units per metre (100: cm)."),
+    naming: str = typer.Option("common", "--names", help="Joint names: common (Hips, "
+                               "LeftFoot, ...: found by BVH tools) or hanim (H-Anim)."),
 ) -> None:
     """Write one agent's full-body motion as a BVH file."""
     from crowdwalk.export_bvh import export_bvh
 
     _warn_incomplete(run_dir)
-    path = export_bvh(run_dir, agent, out, scale=scale)
+    path = export_bvh(run_dir, agent, out, scale=scale, naming=naming)
     typer.echo(f"wrote agent {agent}'s motion to {path}; next: import it in Blender "
                "(File > Import > Motion Capture) or any BVH reader")
 
