@@ -327,6 +327,29 @@ def export_bvh_command(
                "(File > Import > Motion Capture) or any BVH reader")
 
 
+@app.command("export-gltf")
+@friendly_errors
+def export_gltf_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    out: Path = typer.Option(..., "--out", help="glTF binary (.glb) to write."),
+    agents: str = typer.Option("", "--agents", help="Comma-separated agent ids (default: all)."),
+    naming: str = typer.Option("common", "--names", help="Joint names: common or hanim."),
+) -> None:
+    """Write every walker (one animated skeleton each) as one glTF binary."""
+    from crowdwalk.export_gltf import export_gltf
+
+    _warn_incomplete(run_dir)
+    from crowdwalk.errors import invalid
+
+    try:
+        ids = [int(a) for a in agents.split(",") if a.strip()] or None
+    except ValueError:
+        raise invalid("export-gltf", "agents", "comma-separated agent ids", agents) from None
+    path = export_gltf(run_dir, out, agents=ids, naming=naming)
+    typer.echo(f"wrote {path} (one animated skeleton per walker); next: import it in Blender "
+               "(File > Import > glTF 2.0), Unity or Unreal")
+
+
 @app.command("gait-report")
 @friendly_errors
 def gait_report_command(
