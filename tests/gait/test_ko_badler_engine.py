@@ -120,3 +120,22 @@ def test_legs_reach_their_feet_and_knees_bend_forward(walked):
     flex = np.concatenate(flex)
     assert flex.min() >= 0 and 50 < flex.max() < 75
     assert engine.stats["poses"] > 0 and np.isfinite(frames[-1][-1].joints).all()
+
+
+def test_swing_ankle_rises_to_the_planner_curve_over_a_step_up():
+    """On a step up the swing ankle is never below the planner's Bezier (and lands)."""
+    steps, dur = straight_steps(3, 0.6, 1.0)
+    rise = 0.15
+    last = steps[-1]
+    last.target = last.target + [0.0, 0.0, rise]
+    trail = steps[-2].start[0]
+    ctrl = np.array([trail + [0, 0, 0.08], trail + [0.3, 0, 0.45],
+                     last.target[0] + [-0.3, 0, 0.45], last.target[0] + [0, 0, 0.08]])
+    last.swing_bezier = ctrl[None]
+    engine = KoBadlerEngine(Body.from_heights(np.array([1.75])))
+    frames = walk(engine, steps, dur, per_step=40)
+    swing = JOINT["l_talocrural"] if last.foot[0] == 0 else JOINT["r_talocrural"]
+    z = np.array([f.positions[0, swing, 2] for f in frames[-1]])
+    assert engine.stats["bezier_lifted"] > 0
+    assert z.max() > 0.3  # the curve's peak, far above the unplanned swing (about 0.15 m)
+    assert z[-1] - rise < 0.12  # it lands on the raised foothold, not on the curve
