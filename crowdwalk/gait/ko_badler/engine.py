@@ -62,6 +62,10 @@ _REACH = 0.999  # longest hip–ankle distance, fraction of thigh + shank
 _TOE_RELAX = 0.3  # step fraction after toe-off over which the swing toes straighten
 _EPS = 1e-9
 _PATH = np.linspace(0.0, 1.0, 17)  # ground samples along the swing path
+# Least toe clearance in mid swing [m]: Winter DA (1992), Foot trajectory in human gait,
+# Phys Ther 72:45-53 (1.29 ± 0.45 cm). The prototype's rigid marker foot with straight toes
+# would pass 1.2-1.5 cm below the floor in mid swing (its toe marker is 1.1 cm above the sole line).
+_TOE_CLEARANCE = 0.0129
 _UNEVEN = 0.01  # ground this far above the foothold line: the step is over uneven ground [m]
 
 
@@ -175,7 +179,7 @@ class KoBadlerEngine:
         self._use_bezier = np.zeros(n, bool)
         self._commanded = np.zeros(n, bool)
         self.stats = {"commands": 0, "poses": 0, "lowered": 0, "lowered_max": 0.0,
-                      "bezier_lifted": 0}  # fmt: skip
+                      "bezier_lifted": 0, "toe_lifted": 0}  # fmt: skip
 
     @property
     def skeleton(self) -> tuple[tuple[str, ...], np.ndarray]:
@@ -240,6 +244,22 @@ class KoBadlerEngine:
         z = np.asarray(self.ground(line[..., :2].reshape(-1, 2))).reshape(line.shape[:2])
         return np.max(z - line[..., 2], axis=1) > _UNEVEN
 
+    def _toe_clearance_lift(self, cond, ankle_y, foot, toe_pitch, swing) -> np.ndarray:
+        """Lift [m] (k,) of the swing ankle so that its sole (heel, ball, toe tip) clears
+        the floor line by ``_TOE_CLEARANCE`` in mid swing; ``swing`` (k,) is the phase in
+        [TOM, HSM⁺] as 0…1 (smooth window: 0 at toe-off and from 0.85 on, the landing)."""
+        c, s_ = np.cos(foot), np.sin(foot)
+        heel = ankle_y - cond.heel * s_ - cond.ankle_height * c
+        ball = ankle_y + cond.ball * s_ - cond.ankle_height * c
+        toe = ball + cond.toes * np.sin(toe_pitch)
+        low = np.minimum(np.minimum(heel, ball), toe)
+        x = np.clip(swing, 0.0, 1.0)
+        rise, fall = np.clip(x / 0.15, 0, 1), np.clip((0.85 - x) / 0.15, 0, 1)
+        window = rise * rise * (3 - 2 * rise) * fall * fall * (3 - 2 * fall)
+        lift = window * np.maximum(_TOE_CLEARANCE - low, 0.0)
+        self.stats["toe_lifted"] += int(np.count_nonzero(lift > 0))
+        return lift
+
     # -- poses ------------------------------------------------------------------------
     def _seq(self, name: str, a: np.ndarray, s: np.ndarray) -> np.ndarray:
         q = getattr(self.own, name)
@@ -288,7 +308,9 @@ class KoBadlerEngine:
         p_ankle_st = on_print(start, self._yaw_stance[a], ankle_st)
         u = np.clip((ankle_fly[:, 0] + before) / (before + length), 0.0, 1.0)
         fly = trail + u[:, None] * (target - trail)
-        fly[:, 2] += ankle_fly[:, 1]
+        lift = self._toe_clearance_lift(cond, ankle_fly[:, 1], f_fly, toe_fly,
+                                        (s - tom) / (1 - tom))  # fmt: skip
+        fly[:, 2] += ankle_fly[:, 1] + lift
         bez = self._bezier[a]
         has_bez = self._use_bezier[a] & ~push
         if has_bez.any():
