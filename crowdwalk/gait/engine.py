@@ -87,6 +87,7 @@ class GaitEngine(Protocol):
 #: ground=GroundHeight) -> GaitEngine`` (imported only when the engine is used).
 GAIT_ENGINES: dict[str, str] = {
     "elevation_angles": "crowdwalk.gait.animator:Animator",
+    "ko_badler": "crowdwalk.gait.ko_badler.engine:KoBadlerEngine",
 }
 
 

@@ -159,3 +159,35 @@ def test_swing_toes_clear_the_floor_in_mid_swing(walked):
                                                                     body.ball_offset)
             toe_z = ball[:, 2] + toes * np.sin(pitch)
             assert np.all(np.minimum(ball[:, 2], toe_z) > 0.0129 - 1e-6)
+
+
+def test_crowd_run_with_gait_ko_badler(tmp_path):
+    """``gait: ko_badler`` in a scenario: crowdwalk run poses the walker with this engine."""
+    from crowdwalk.crowd.run import run_scenario
+    from crowdwalk.record import open_run
+
+    scenario = tmp_path / "lone.yaml"
+    scenario.write_text(LONE_WALKER, encoding="utf-8")
+    summary = run_scenario(scenario, tmp_path / "run")
+    assert summary["poses"] == "written"
+    run = open_run(tmp_path / "run")
+    frames = list(run.poses())
+    assert len(frames) >= 50
+    last = frames[-1]
+    assert np.isfinite(last.positions).all() and last.positions[0, 0, 0] > 2.0
+
+
+LONE_WALKER = """\
+name: lone
+terrain: {extent: [-1, -2, 21, 2], base: 0.0}
+routes:
+  nodes:
+    - {name: start, xy: [1.0, 0.0], area: [[0.5, -0.5], [1.5, -0.5], [1.5, 0.5], [0.5, 0.5]]}
+    - {name: end, xy: [18.0, 0.0]}
+  edges: [{from: start, to: end, width: 3.0}]
+groups:
+  - {name: walker, count: 1, spawn: start, destinations: [end], planner: fixed,
+     body_height: {mean: 1.75, sd: 0.0}, free_speed: {mean: 1.33, sd: 0.0}, gait: ko_badler}
+simulation: {duration: 3.0, seed: 1, dt: 0.04, fps: 20}
+outputs: {poses: true}
+"""

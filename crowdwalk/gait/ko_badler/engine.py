@@ -42,6 +42,7 @@ from crowdwalk.body import (
 )
 from crowdwalk.errors import invalid
 from crowdwalk.gait.elevwalker import GaitStyle
+from crowdwalk.gait.engine import PoseFrame
 from crowdwalk.gait.ko_badler.generalize import (
     body_generalization,
     hip_height_at_heel_strike,
@@ -265,10 +266,8 @@ class KoBadlerEngine:
         q = getattr(self.own, name)
         return interpolation(q.with_values(self._values[name][a]), s)
 
-    def pose(self, t: float, agents: np.ndarray):
-        """Poses of ``agents`` (k,) at time ``t`` [s] as a PoseFrame."""
-        from crowdwalk.gait.animator import PoseFrame
-
+    def pose(self, t: float, agents: np.ndarray) -> PoseFrame:
+        """Poses of ``agents`` (k,) at time ``t`` [s]."""
         a = np.atleast_1d(np.asarray(agents, dtype=np.intp))
         if not np.all(self._commanded[a]):
             raise invalid("KoBadlerEngine", "agents", "agents that received a step", a)
