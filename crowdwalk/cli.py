@@ -22,6 +22,22 @@ app = typer.Typer(
 )
 
 
+def _version(value: bool) -> None:
+    if value:
+        from crowdwalk import __version__
+
+        typer.echo(f"crowdwalk {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                 help="Print the version and exit."),
+) -> None:
+    """Crowds of walking people that plan their footsteps."""
+
+
 def _fail(message: str, code: int) -> None:
     typer.echo(f"crowdwalk: {message}", err=True)
     raise typer.Exit(code)
@@ -41,7 +57,9 @@ def friendly_errors(func):
         except FileNotFoundError as exc:
             _fail(f"file not found: {exc.filename or exc}", 2)
         except (ValueError, OSError) as exc:
-            _fail(str(exc), 2)
+            from crowdwalk.checks import plain
+
+            _fail(plain(str(exc)).splitlines()[0] if str(exc) else type(exc).__name__, 2)
 
     return wrapper
 
@@ -55,11 +73,11 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario YAML file.")) -
     """Check a scenario file against the schema and build its world."""
     from collections import Counter
 
+    from crowdwalk.checks import world_and_population
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     sc = load_scenario(scenario)
-    world = build_world(sc)
+    world, _ = world_and_population(sc)
     n = sum(g.count for g in sc.groups)
     x0, y0, x1, y1 = world.terrain.bounds
     kinds = Counter(f.type for f in sc.terrain.features)
@@ -131,12 +149,12 @@ def _sim_progress(quiet: bool, label: str):
 def _check_before_running(scenario: Path, overrides) -> None:
     """Check the overrides, load the scenario and build its world (milliseconds), so that
     bad input ends with its one-line message before a progress bar is drawn."""
+    from crowdwalk.checks import world_and_population
     from crowdwalk.crowd.run import check_overrides
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     check_overrides(overrides)
-    build_world(load_scenario(scenario))
+    world_and_population(load_scenario(scenario))
 
 
 def _term_as_interrupt() -> None:
