@@ -15,7 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.crowd.simulation import ARRIVED, WAITING, CrowdParams, CrowdSimulation
+from crowdwalk.crowd.simulation import (
+    ARRIVED,
+    WAITING,
+    CrowdParams,
+    CrowdSimulation,
+    build_parts,
+)
 from crowdwalk.errors import invalid
 from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
 
@@ -108,8 +114,9 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
             pose_note = "written"
         except ImportError as exc:  # a build without the gait package: say so, go on
             pose_note = f"not available in this build ({exc})"
-    sim = CrowdSimulation(world, pop, dt=sc.simulation.dt, fps=fps, duration=duration,
-                          params=params, gait=gait)
+    parts = build_parts(world, pop, params=params)
+    sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
+                          duration=duration, params=params, gait=gait)
     return sc, world, sim, pose_note, text
 
 
