@@ -22,6 +22,22 @@ app = typer.Typer(
 )
 
 
+def _version(value: bool) -> None:
+    if value:
+        from crowdwalk import __version__
+
+        typer.echo(f"crowdwalk {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                 help="Print the version and exit."),
+) -> None:
+    """Crowds of walking people that plan their footsteps."""
+
+
 def _fail(message: str, code: int) -> None:
     typer.echo(f"crowdwalk: {message}", err=True)
     raise typer.Exit(code)
@@ -41,7 +57,9 @@ def friendly_errors(func):
         except FileNotFoundError as exc:
             _fail(f"file not found: {exc.filename or exc}", 2)
         except (ValueError, OSError) as exc:
-            _fail(str(exc), 2)
+            from crowdwalk.checks import plain
+
+            _fail(plain(str(exc)).splitlines()[0] if str(exc) else type(exc).__name__, 2)
 
     return wrapper
 
@@ -55,11 +73,11 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario YAML file.")) -
     """Check a scenario file against the schema and build its world."""
     from collections import Counter
 
+    from crowdwalk.checks import world_and_population
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     sc = load_scenario(scenario)
-    world = build_world(sc)
+    world, _ = world_and_population(sc)
     n = sum(g.count for g in sc.groups)
     x0, y0, x1, y1 = world.terrain.bounds
     kinds = Counter(f.type for f in sc.terrain.features)
@@ -131,12 +149,12 @@ def _sim_progress(quiet: bool, label: str):
 def _check_before_running(scenario: Path, overrides) -> None:
     """Check the overrides, load the scenario and build its world (milliseconds), so that
     bad input ends with its one-line message before a progress bar is drawn."""
+    from crowdwalk.checks import world_and_population
     from crowdwalk.crowd.run import check_overrides
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     check_overrides(overrides)
-    build_world(load_scenario(scenario))
+    world_and_population(load_scenario(scenario))
 
 
 def _term_as_interrupt() -> None:
@@ -217,6 +235,37 @@ def compare(
         typer.echo(f"Report: {report}")
 
 
+# --- measurement and verification (issue 14): analyse, verify ---------------------
+
+
+@app.command()
+@friendly_errors
+def analyse(run_dir: Path = typer.Argument(..., help="Run folder.")) -> None:
+    """Analyse the scenario's measurement lines and areas with PedPy into RUN/analysis/."""
+    from crowdwalk.analysis import analyse_run
+
+    result = analyse_run(run_dir)
+    for kind in ("lines", "areas"):
+        for row in result[kind]:
+            typer.echo(f"{kind[:-1]} {row['name']}: " + ", ".join(
+                f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                for k, v in row.items() if k != "name"))
+
+
+@app.command()
+@friendly_errors
+def verify(
+    full: bool = typer.Option(False, "--full", help="Every case at full size (minutes)."),
+    out: Path = typer.Option(Path("docs/verification.md"), "--out", help="Markdown table."),
+    only: str = typer.Option("", "--only", help="Comma-separated case names."),
+) -> None:
+    """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
+    from crowdwalk.verify import run_verification
+
+    run_verification(full=full, out=out, only=[s for s in only.split(",") if s],
+                     echo=typer.echo)
+
+
 # --- gait export (issue 4): export-bvh ----------------------------------------------
 
 
@@ -233,6 +282,21 @@ def export_bvh_command(
 
     path = export_bvh(run_dir, agent, out, scale=scale)
     typer.echo(f"wrote {path}")
+
+
+@app.command("gait-report")
+@friendly_errors
+def gait_report_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    plot: Path = typer.Option(None, "--plot", help="PNG of the joint curves to write."),
+) -> None:
+    """Gait of a run's walkers against Winter, WBDS and Bovi (measured from the run)."""
+    from crowdwalk.gait_report import plot_curves, report_table, run_figures
+
+    figures = run_figures(run_dir)
+    typer.echo(report_table(figures))
+    if plot is not None:
+        typer.echo(f"wrote {plot_curves(figures, plot)}")
 
 
 # --- viewer (issue 6): view, render -------------------------------------------------

@@ -23,13 +23,24 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    PrivateAttr,
     ValidationError,
     ValidationInfo,
     field_validator,
     model_validator,
 )
 
+from crowdwalk import behaviours
+from crowdwalk.behaviours import (
+    EventSpec,
+    ExitChoice,
+    MeasurementSpec,
+    ObstacleSpec,
+    WaitingAreaSpec,
+)
+from crowdwalk.checks import MAX_ROUTE_NODES
 from crowdwalk.errors import InputError, existing_file
+from crowdwalk.style import GaitName, LockSpec, StyleSpec
 from planners import PLANNERS
 
 __all__ = [
@@ -58,7 +69,8 @@ NonNeg = Annotated[float, Field(ge=0)]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True,
+                              allow_inf_nan=False)
 
 
 def _resolve(value: str | None, info: ValidationInfo) -> str | None:
@@ -234,9 +246,12 @@ class TerrainSpec(_Model):
 
     def build(self):
         """The :class:`crowdwalk.terrain.Terrain` this section describes."""
+        from crowdwalk.checks import at
         from crowdwalk.terrain import Terrain
 
-        return Terrain(self.extent, self.base, tuple(f.build() for f in self.features))
+        features = tuple(at(("terrain", "features", i), f.build)
+                         for i, f in enumerate(self.features))
+        return at(("terrain",), Terrain, self.extent, self.base, features)
 
 
 # --- routes -------------------------------------------------------------------------
@@ -264,8 +279,8 @@ class RoutesSpec(_Model):
     """The route graph: inline ``nodes`` and ``edges``, or a ``graphml`` file."""
 
     graphml: str | None = None
-    nodes: list[NodeSpec] = []
-    edges: list[EdgeSpec] = []
+    nodes: list[NodeSpec] = Field([], max_length=MAX_ROUTE_NODES)
+    edges: list[EdgeSpec] = Field([], max_length=MAX_ROUTE_NODES)
 
     _resolve_graphml = field_validator("graphml")(_resolve)
 
@@ -285,16 +300,17 @@ class RoutesSpec(_Model):
 
         return [str(n) for n in nx.read_graphml(existing_file(self.graphml)).nodes]
 
-    def build(self, terrain=None):
-        """The :class:`crowdwalk.routes.RouteGraph` this section describes."""
+    def build(self, terrain=None, obstacles=()):
+        """The :class:`crowdwalk.routes.RouteGraph` this section describes (``obstacles``:
+        shapely polygons cut out of the walkable area)."""
         from crowdwalk.routes import Corridor, Place, RouteGraph
 
         if self.graphml is not None:
-            return RouteGraph.from_graphml(self.graphml, terrain)
+            return RouteGraph.from_graphml(self.graphml, terrain, obstacles=obstacles)
         places = [Place(n.name, n.xy[0], n.xy[1], n.area) for n in self.nodes]
         corridors = [Corridor(e.from_, e.to, e.width, tuple(e.via), e.oneway)
                      for e in self.edges]
-        return RouteGraph(places, corridors, terrain)
+        return RouteGraph(places, corridors, terrain, obstacles=obstacles)
 
 
 # --- groups -------------------------------------------------------------------------
@@ -337,6 +353,7 @@ class Normal(_Model):
 # distribution of European adult men (≈1.78 m) and women (≈1.65 m), NCD Risk Factor
 # Collaboration, "A century of trends in adult human height", eLife 5:e13410 (2016).
 DEFAULT_BODY_HEIGHT = Normal(mean=1.71, sd=0.09, min=1.45, max=2.05)
+MIN_FREE_SPEED = 0.1  # [m/s]; slower is standing still (planned as speed class 0)
 # Free walking speed: Weidmann (1993), Transporttechnik der Fussgänger, ETH Zürich,
 # mean 1.34 m/s, sd 0.26 m/s.
 DEFAULT_FREE_SPEED = Normal(mean=1.34, sd=0.26, min=0.6, max=2.1)
@@ -344,21 +361,30 @@ DEFAULT_FREE_SPEED = Normal(mean=1.34, sd=0.26, min=0.6, max=2.1)
 
 class SpawnTimes(_Model):
     """When a group's agents enter: from ``start`` [s], one every ``interval`` [s] or at
-    ``rate`` [1/s] (exactly one of the two; all at once if neither)."""
+    ``rate`` [1/s] (exactly one of the two; all at once if neither); ``process: poisson``
+    draws exponential gaps of mean ``interval`` (a Poisson arrival process)."""
 
     start: NonNeg = 0.0
     interval: NonNeg | None = None
     rate: Positive | None = None
+    process: Literal["regular", "poisson"] = "regular"
 
     @model_validator(mode="after")
     def _one(self):
         if self.interval is not None and self.rate is not None:
             raise ValueError("give interval or rate, not both")
+        if self.process == "poisson" and not (self.rate or self.interval):
+            raise ValueError("poisson arrivals need a rate or an interval > 0")
         return self
 
-    def times(self, n: int) -> np.ndarray:
-        """Spawn times (n,) [s]."""
+    def times(self, n: int, rng: np.random.Generator | None = None) -> np.ndarray:
+        """Spawn times (n,) [s] (``rng`` draws the gaps of Poisson arrivals)."""
         step = 1.0 / self.rate if self.rate is not None else (self.interval or 0.0)
+        if self.process == "poisson":
+            if rng is None:
+                raise ValueError("poisson arrivals need a random generator")
+            gaps = rng.exponential(step, max(n - 1, 0))
+            return self.start + np.concatenate([[0.0], np.cumsum(gaps)])[:n]
         return self.start + step * np.arange(n)
 
 
@@ -369,21 +395,21 @@ class Group(_Model):
     count: int = Field(ge=1)
     spawn: str | Polygon2 = Field(description="route node name, or a polygon [m]")
     spawn_times: SpawnTimes = SpawnTimes()
-    destinations: list[str] = Field(min_length=1, description="route nodes, visited in order")
+    destinations: list[str] = Field([], description="route nodes, visited in order")
+    exit_choice: ExitChoice | None = Field(None, description="then one exit among several")
+    density: Positive | None = Field(None, le=6.0, description="start density [1/m²]")
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
     planner: PlannerName = "best_first"
-    gait: str = Field("elevation_angles",
-                      description="gait engine (crowdwalk.gait.engine.GAIT_ENGINES)")
+    gait: GaitName = Field("elevation_angles", description="gait engine of the group")
+    style: StyleSpec | None = Field(None, description="KLAW style (crowdwalk.style)")
+    lock: LockSpec | None = Field(None, description="locked locomotion parameter(s)")
 
-    @field_validator("gait")
-    @classmethod
-    def _gait_engine(cls, v: str) -> str:
-        from crowdwalk.gait.engine import GAIT_ENGINES
-
-        if v not in GAIT_ENGINES:
-            raise ValueError(f"gait must be one of {sorted(GAIT_ENGINES)}; got {v!r}")
-        return v
+    @model_validator(mode="after")
+    def _somewhere(self):
+        if not self.destinations and self.exit_choice is None:
+            raise ValueError("give destinations or exit_choice")
+        return self
 
     @field_validator("body_height")
     @classmethod
@@ -397,8 +423,9 @@ class Group(_Model):
     @classmethod
     def _speed_range(cls, v: Normal) -> Normal:
         lo, hi = v.bounds
-        if lo <= 0 or hi > 3.0:
-            raise ValueError(f"free speeds must lie in (0, 3] m/s; got [{lo}, {hi}]")
+        if lo < MIN_FREE_SPEED or hi > 3.0:  # the planner's speed classes are 5 cm/s wide
+            raise ValueError(f"free speeds must lie in [{MIN_FREE_SPEED}, 3] m/s; "
+                             f"got [{lo:g}, {hi:g}]")
         return v
 
 
@@ -427,6 +454,17 @@ class Scenario(_Model):
     groups: list[Group] = Field(min_length=1)
     simulation: Simulation
     outputs: Outputs = Outputs()
+    obstacles: list[ObstacleSpec] = []
+    events: list[EventSpec] = []
+    waiting_areas: list[WaitingAreaSpec] = []
+    measurement: MeasurementSpec = MeasurementSpec()
+    _source: str = PrivateAttr("<scenario>")
+    _root: object = PrivateAttr(None)  # the YAML node graph it was read from
+
+    def where(self, loc: tuple) -> str:
+        """``"file:line"`` of a field path such as ``("groups", 0, "spawn")``."""
+        line = _line(self._root, loc)
+        return f"{self._source}:{line}" if line else self._source
 
     def cross_errors(self) -> list[tuple[tuple, str]]:
         """Problems between sections as (field path, message); empty when consistent."""
@@ -452,7 +490,7 @@ class Scenario(_Model):
                 if d not in known:
                     errs.append((("groups", i, "destinations", j),
                                  f"must be one of the route nodes {sorted(known)}; got {d!r}"))
-        return errs
+        return errs + behaviours.cross_errors(self, known)
 
 
 # --- loading ------------------------------------------------------------------------
@@ -550,6 +588,7 @@ _CONSTRAINTS = {
     "int_from_float": "an integer",
     "int_type": "an integer",
     "float_parsing": "a number",
+    "finite_number": "a finite number",
     "float_type": "a number",
     "bool_parsing": "true or false",
     "bool_type": "true or false",
@@ -573,6 +612,7 @@ _UNITS = {
     "z0": "m", "z_start": "m", "z_end": "m", "cell": "m", "amplitude": "m",
     "correlation": "m", "taper": "m", "size": "m", "heading": "deg", "incline": "deg",
     "rotate": "deg", "body_height": "m", "free_speed": "m/s",
+    "density": "1/m²", "release_time": "s", "release_rate": "1/s", "thickness": "m",
 }
 
 
@@ -607,14 +647,17 @@ def _short(value) -> str:
 
 def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scenario:
     """Validate scenario YAML ``text``; ``base_dir`` resolves relative file paths."""
+    from crowdwalk.safe_yaml import compose_bounded, construct
+
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.load(text, Loader=yaml.SafeLoader)
+        root = compose_bounded(text, source)
+        data = construct(root)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise _fail(source, mark.line + 1 if mark else None, f"not valid YAML: {problem}.") \
-            from None
+        line = mark.line + 1 if mark else text.count("\n", 0, getattr(exc, "position", 0)) + 1
+        problem = getattr(exc, "problem", None) or getattr(exc, "reason", None) or \
+            str(exc).splitlines()[0]
+        raise _fail(source, line, f"not valid YAML: {problem}.") from None
     if not isinstance(data, dict):
         raise _fail(source, 1, f"scenario must be a mapping of sections; got "
                     f"{type(data).__name__}.")
@@ -648,13 +691,21 @@ def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scen
     if errs:
         loc, msg = errs[0]
         raise _fail(source, _line(root, loc), f"{_loc_text(loc)} {msg}.")
+    sc._source, sc._root = source, root
     return sc
 
 
 def load_scenario(path) -> Scenario:
     """Read and validate a scenario YAML file (paths inside are relative to it)."""
     path = existing_file(path)
-    return parse_scenario(path.read_text(encoding="utf-8"), str(path), path.parent)
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _fail(str(path), data.count(b"\n", 0, exc.start) + 1,
+                    f"a scenario file must be UTF-8 text; got byte {data[exc.start]:#04x}.") \
+            from None
+    return parse_scenario(text, str(path), path.parent)
 
 
 def scenario_json_schema() -> dict:

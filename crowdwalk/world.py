@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from shapely.geometry import Polygon
 
-from crowdwalk.errors import invalid
+from crowdwalk.errors import InputError, invalid
 from crowdwalk.routes import RouteGraph
 from crowdwalk.scenario import Scenario
 from crowdwalk.terrain import Terrain
@@ -29,10 +29,21 @@ def build_world(scenario: Scenario) -> World:
     """Build the terrain and the route graph of a validated ``scenario``.
 
     Raises :class:`~crowdwalk.errors.InputError` for geometry that does not fit together
-    (a corridor leaving the terrain or climbing a wall, a spawn polygon off the ground).
+    (a corridor leaving the terrain or climbing a wall, a spawn polygon off the walkable
+    area, more agents or grid nodes than memory holds), located as ``file:line: ...``.
     """
+    from crowdwalk.checks import check_resources, located
+
+    try:
+        check_resources(scenario)
+        return _build_world(scenario)
+    except InputError as exc:
+        raise located(scenario, exc) from None
+
+
+def _build_world(scenario: Scenario) -> World:
     terrain = scenario.terrain.build()
-    routes = scenario.routes.build(terrain)
+    routes = scenario.routes.build(terrain, [o.geometry() for o in scenario.obstacles])
     for i, g in enumerate(scenario.groups):
         if not isinstance(g.spawn, str):
             poly = Polygon(g.spawn)
@@ -42,7 +53,12 @@ def build_world(scenario: Scenario) -> World:
             if not terrain.area.covers(poly):
                 raise invalid(f"Scenario.groups[{i}]", "spawn",
                               f"inside the terrain extent {terrain.bounds} [m]", g.spawn)
+            if not routes._walkable_tolerant.covers(poly):
+                raise invalid(f"Scenario.groups[{i}]", "spawn",
+                              "inside the walkable area (a node's area or a corridor) [m]",
+                              g.spawn)
     _check_reachable(scenario, routes)
+    _check_behaviours(scenario, routes)
     return World(scenario, terrain, routes)
 
 
@@ -62,3 +78,16 @@ def _check_reachable(scenario: Scenario, routes: RouteGraph) -> None:
                               f"reachable from {here!r} (check one-way corridors and "
                               "disconnected parts)", dest)
             here = dest
+
+
+def _check_behaviours(scenario: Scenario, routes: RouteGraph) -> None:
+    """Events name existing corridors."""
+    for key in ("events", "waiting_areas"):
+        if getattr(scenario, key):
+            raise invalid("Scenario", key, "empty in this version (the schema is in place; "
+                          "the simulation does not carry them out yet)", key)
+    for i, e in enumerate(scenario.events):
+        if e.corridor is not None and not routes.graph.has_edge(*e.corridor) \
+                and not routes.graph.has_edge(*e.corridor[::-1]):
+            raise invalid(f"Scenario.events[{i}]", "corridor", "two nodes joined by a corridor",
+                          list(e.corridor))
