@@ -37,7 +37,7 @@ def swing_bezier(swing: np.ndarray, *, stance: np.ndarray, stance_z: np.ndarray,
     return bez
 
 
-def take_steps(state, queue, agents: np.ndarray, *, start_time: np.ndarray,
+def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
                direction: np.ndarray, plan, duration: np.ndarray, terrain, legs, population,
                foot_half_width: float) -> StepBatch:
     """Start the steps ``plan`` (a :class:`~crowdwalk.crowd.stepping.StepPlan` of k rows)

@@ -23,7 +23,6 @@ pure functions over arrays, one module each:
    take their steps (:mod:`~crowdwalk.crowd.commit`), which leave as one
    :class:`~crowdwalk.steps.StepBatch` for the gait engine (batched per output frame) and
    for the run's sinks (:meth:`CrowdSimulation.take_steps`).
-
 Ticks are aligned with output frames so frames are exact interpolations.
 """
 
@@ -40,10 +39,10 @@ from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import STAIR_DOWN_FACTOR, STAIR_UP_FACTOR, step_durations
+from crowdwalk.crowd.speed import step_durations
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
-from crowdwalk.crowd.stepping import PlanQueue, StepPlan, even_steps, plan_or_reuse
+from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
 from crowdwalk.population import Population, cadence_at, step_length_at
@@ -51,7 +50,7 @@ from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
-           "ACTIVE", "ARRIVED", "STAIR_UP_FACTOR", "STAIR_DOWN_FACTOR"]
+           "ACTIVE", "ARRIVED"]
 
 
 class CrowdSimulation:
@@ -95,7 +94,6 @@ class CrowdSimulation:
         self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
-        self.planner_of = population.planner
         self.state = AgentState(n)
         self.queue = PlanQueue(n, self.footsteps.horizon)
         table = self.routes.table
@@ -222,16 +220,22 @@ class CrowdSimulation:
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, radius=self.radius,
                                 count=prm.neighbours, reach=prm.neighbour_range)
-        choice = choose_steps(pos, st.stance[idx], st.heading[idx], self.radius[idx], route_dir,
-                              target, self.nominal_step[idx], nbs, self.clearance,
-                              prm.steering, speed=self.pop.free_speed[idx],
-                              stuck=st.stuck[idx], step_time=self.min_step_time[idx],
-                              lag=t - te)
+        choice = choose_steps(
+            pos, st.stance[idx], heading=st.heading[idx], radius=self.radius[idx],
+            route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
+            neighbours=nbs, clearance=self.clearance, params=prm.steering,
+            speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
+            step_time=self.min_step_time[idx], lag=t - te)
         self.wall_steering += _time.perf_counter() - w0
         plan = StepPlan.standing(idx.size)
         mv = np.flatnonzero(choice.move)
         if mv.size:
-            plan = self._footsteps(idx, mv, choice, plan)
+            w0 = _time.perf_counter()
+            plan = plan.put(mv, next_steps(
+                st, self.queue, agents=idx[mv], choice=choice.take(mv),
+                footsteps=self.footsteps, legs=self.legs, population=self.pop,
+                terrain=self.terrain, params=prm))
+            self.wall_planning += _time.perf_counter() - w0
             # the exact step taken, in time, against each neighbour's committed step
             go = np.flatnonzero(plan.move)
             if go.size and nbs.valid.shape[1]:
@@ -245,49 +249,6 @@ class CrowdSimulation:
                 plan = plan.with_move(move)
                 self.queue.clear(idx[go[clash]])
         self._commit(idx, te, t, choice.direction, plan)
-
-    def _footsteps(self, idx, mv, choice, plan: StepPlan) -> StepPlan:
-        """The steps of the movers ``mv`` (rows of ``idx``): plan or reuse, then shortened
-        where a neighbour or wall is closer than the planned step, and a short positioning
-        step where no legal plan exists (e.g. the stance foot just short of a riser)."""
-        st, pop = self.state, self.pop
-        a = idx[mv]
-        w0 = _time.perf_counter()
-        mine, planned = plan_or_reuse(
-            self.queue, self.footsteps, agents=a, direction=choice.direction[mv],
-            stance=st.stance[a], stance_z=st.stance_z[a], trail=st.trail[a],
-            leg=self.legs.index[a], speed=pop.free_speed[a], planner=self.planner_of[a],
-            replan_turn_deg=self.params.replan_turn_deg)
-        if planned.any():
-            self.wall_planning += _time.perf_counter() - w0
-        st.plans[a[planned]] += 1
-        st.plan_failures[a[planned & ~mine.move]] += 1
-        ok = mine.move
-        plan = plan.put(mv, mine)
-        free = choice.free_length
-        short = mv[ok & (plan.length[mv] > free[mv] + 1e-9)]
-        if short.size:
-            plan = plan.put(short, self._even(idx[short], choice.direction[short], free[short]))
-            self.queue.clear(idx[short])
-        failed = mv[~ok]
-        for length in (0.3, 0.2):
-            if failed.size == 0:
-                break
-            sub = self._even(idx[failed], choice.direction[failed],
-                             np.minimum(free[failed], length))
-            plan = plan.put(failed, sub)
-            failed = failed[~sub.move]
-        return plan
-
-    def _even(self, a: np.ndarray, direction: np.ndarray, length: np.ndarray) -> StepPlan:
-        """Fallback steps of ``length`` where the whole foot lands on even ground."""
-        st = self.state
-        sub = even_steps(self.terrain, stance=st.stance[a], stance_z=st.stance_z[a],
-                         direction=direction, length=length, legs=self.legs.of(a),
-                         speed=self.pop.free_speed[a], config=self.footsteps.config,
-                         min_step=self.params.steering.min_step)
-        st.shortened[a[sub.move]] += 1
-        return sub
 
     def _commit(self, idx, te, t, direction, plan: StepPlan) -> None:
         st, prm = self.state, self.params
@@ -305,7 +266,8 @@ class CrowdSimulation:
                 plan = plan.with_move(move)
         wait = idx[~plan.move]
         if wait.size:
-            stand(st, self.queue, wait, t=t, terrain=self.terrain, legs=self.legs, params=prm)
+            stand(st, self.queue, agents=wait, t=t, terrain=self.terrain, legs=self.legs,
+                  params=prm)
         # blocked: no progress along the route for ``reroute_after`` seconds (side steps
         # and steps back in a jam do not count)
         blocked = idx[t - st.progress_time[idx] >= prm.reroute_after]
@@ -316,7 +278,7 @@ class CrowdSimulation:
         if go.size == 0:
             return
         a, steps = idx[go], plan.take(go)
-        batch = take_steps(st, self.queue, a, start_time=te[go], direction=direction[go],
+        batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
                            plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
                            foot_half_width=prm.foot_half_width)

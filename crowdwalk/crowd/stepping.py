@@ -14,7 +14,8 @@ import numpy as np
 
 from crowdwalk.crowd.legs import LegColumns
 
-__all__ = ["StepPlan", "PlanQueue", "plan_or_reuse", "even_steps", "fallback_energy"]
+__all__ = ["StepPlan", "PlanQueue", "next_steps", "plan_or_reuse", "even_steps",
+           "fallback_energy"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,8 +121,8 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
         ap = a[p]
         d = direction[p]
         trailing = -np.einsum("ij,ij->i", stance[p] - trail[p], d)
-        planned = footsteps.plan(stance[p], stance_z[p], d, leg[p], speed[p], planner[p],
-                                 trailing)
+        planned = footsteps.plan(stance[p], stance_z[p], direction=d, leg=leg[p],
+                                 speed=speed[p], planner=planner[p], trailing=trailing)
         plan.move[p] = planned.ok
         plan.length[p], plan.rise[p] = planned.step_length[:, 0], planned.step_height[:, 0]
         plan.energy[p], plan.swing[p] = planned.energy[:, 0], planned.swing[:, 0]
@@ -163,3 +164,47 @@ def even_steps(terrain, *, stance: np.ndarray, stance_z: np.ndarray, direction: 
                                             config=config), 0.0)
     return StepPlan(even, np.where(even, length, 0.0), rise, energy,
                     np.full((length.size, 4, 2), np.nan))
+
+
+def next_steps(state, queue: PlanQueue, *, agents: np.ndarray, choice, footsteps, legs,
+               population, terrain, params) -> StepPlan:
+    """The steps of k moving ``agents`` along their steering ``choice`` (a
+    :class:`~crowdwalk.crowd.steering.StepChoice` of k rows): planned or reused
+    (:func:`plan_or_reuse`); shortened to the free length where a neighbour or wall is
+    closer than the planned step, if the foot lands on even ground (else the agent
+    waits); where no legal plan exists (e.g. the stance foot just short of a riser, where
+    no step of the planner's range lands fully on the tread) a short positioning step on
+    even ground (0.3 m, else 0.2 m) changes the approach, as people do. Counts plans,
+    failures and shortened steps in ``state``."""
+    st, a = state, agents
+    d, free = choice.direction, choice.free_length
+    plan, planned = plan_or_reuse(
+        queue, footsteps, agents=a, direction=d, stance=st.stance[a],
+        stance_z=st.stance_z[a], trail=st.trail[a], leg=legs.index[a],
+        speed=population.free_speed[a], planner=population.planner[a],
+        replan_turn_deg=params.replan_turn_deg)
+    ok = plan.move
+    st.plans[a[planned]] += 1
+    st.plan_failures[a[planned & ~ok]] += 1
+
+    def even(rows: np.ndarray, length: np.ndarray) -> StepPlan:
+        r = a[rows]
+        sub = even_steps(terrain, stance=st.stance[r], stance_z=st.stance_z[r],
+                         direction=d[rows], length=length, legs=legs.of(r),
+                         speed=population.free_speed[r], config=footsteps.config,
+                         min_step=params.steering.min_step)
+        st.shortened[r[sub.move]] += 1
+        return sub
+
+    short = np.flatnonzero(ok & (plan.length > free + 1e-9))
+    if short.size:
+        plan = plan.put(short, even(short, free[short]))
+        queue.clear(a[short])
+    failed = np.flatnonzero(~ok)
+    for length in (0.3, 0.2):
+        if failed.size == 0:
+            break
+        sub = even(failed, np.minimum(free[failed], length))
+        plan = plan.put(failed, sub)
+        failed = failed[~sub.move]
+    return plan

@@ -13,7 +13,7 @@ import numpy as np
 __all__ = ["stand"]
 
 
-def stand(state, queue, agents: np.ndarray, *, t: float, terrain, legs, params) -> None:
+def stand(state, queue, *, agents: np.ndarray, t: float, terrain, legs, params) -> None:
     """Let ``agents`` (k,) stand from their heel strike until ``t + wait_time`` [s]
     (``state`` updated in place; their queued plans are dropped). ``legs`` is the crowd's
     :class:`~crowdwalk.crowd.legs.LegTable`, ``params`` its ``CrowdParams``."""
