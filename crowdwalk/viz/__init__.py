@@ -15,8 +15,8 @@ CLI (``crowdwalk view``, ``crowdwalk render``) and notebooks::
 Without a display, rendering goes through EGL (see :mod:`crowdwalk.viz.headless`).
 """
 
-from crowdwalk.viz.camera import follow, oblique_view, project_to_pixels
 from crowdwalk.viz.bodies import SolidBodies
+from crowdwalk.viz.camera import follow, oblique_view, project_to_pixels
 from crowdwalk.viz.footprints import COLOR_FIELDS, FootprintMesh, Footsteps
 from crowdwalk.viz.headless import (
     configure_offscreen,

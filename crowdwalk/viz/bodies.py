@@ -166,7 +166,8 @@ class SolidBodies:
         self._cos, self._sin = np.cos(angles), np.sin(angles)
         k = np.arange(s)
         kn = (k + 1) % s
-        band = np.concatenate([np.column_stack([k, kn, s + k]), np.column_stack([kn, s + kn, s + k])])
+        band = np.concatenate([np.column_stack([k, kn, s + k]),
+                               np.column_stack([kn, s + kn, s + k])])
         rings = len(self._ring_axial)
         self._capsule_tris = np.concatenate([band + s * r for r in range(rings - 1)])
 

@@ -73,7 +73,7 @@ def follow(renderer, target: np.ndarray) -> None:
 
 
 def frame(renderer, bounds, elevation: float = 0.6, azimuth: float = -2.2,
-          zoom: float = 1.25) -> None:
+          zoom: float = 1.5) -> None:
     """Look at the box ``bounds`` (6,) [m] obliquely (see :func:`oblique_view`) from as
     close as its bounding sphere fits the renderer's viewport, then ``zoom`` in (the
     sphere is a loose fit for a flat scene)."""

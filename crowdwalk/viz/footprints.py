@@ -18,7 +18,8 @@ import pyvista as pv
 
 from crowdwalk.errors import invalid
 
-__all__ = ["COARSE_ABOVE", "COLOR_FIELDS", "FADED", "Footsteps", "FootprintMesh", "foot_outline", "walking_headings"]
+__all__ = ["COARSE_ABOVE", "COLOR_FIELDS", "FADED", "Footsteps", "FootprintMesh", "foot_outline",
+           "walking_headings"]
 
 COLOR_FIELDS = ("energy", "group", "planner", "style", "agent")
 

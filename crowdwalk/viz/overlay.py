@@ -13,8 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from vtkmodules import vtkRenderingAnnotation as _annotation  # noqa: F401 (scalar bars)
-import vtk
+from vtkmodules.vtkRenderingAnnotation import vtkScalarBarActor
+from vtkmodules.vtkRenderingCore import vtkProp, vtkRenderer, vtkTextActor
 
 __all__ = ["Layout", "Overlay"]
 
@@ -62,7 +62,7 @@ class Overlay:
     def __init__(self, plotter, layout: Layout, scene_renderer) -> None:
         self.layout = layout
         self.plotter = plotter
-        self.renderer = vtk.vtkRenderer()
+        self.renderer = vtkRenderer()
         self.renderer.SetViewport(*layout.region)
         self.renderer.SetBackground(1.0, 1.0, 1.0)
         self.renderer.SetLayer(0)
@@ -73,7 +73,7 @@ class Overlay:
         scene_renderer.SetViewport(*layout.scene)
         scene_renderer.SetLayer(1)
         scene_renderer.SetPreserveColorBuffer(0)  # it clears (and paints) its own viewport
-        self._actors: dict[str, vtk.vtkProp] = {}
+        self._actors: dict[str, vtkProp] = {}
 
     @property
     def pixels(self) -> tuple[int, int]:
@@ -91,11 +91,11 @@ class Overlay:
 
     def text(self, name: str, text: str, position: tuple[float, float], *, size: int,
              color=(0.1, 0.1, 0.1), bold: bool = False, right: bool = False,
-             top: bool = True, mono: bool = False) -> vtk.vtkTextActor:
+             top: bool = True, mono: bool = False) -> vtkTextActor:
         """Place or update the text ``name`` at ``position`` (region fractions, y up)."""
         actor = self._actors.get(name)
         if actor is None:
-            actor = vtk.vtkTextActor()
+            actor = vtkTextActor()
             actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
             self.renderer.AddActor(actor)
             self._actors[name] = actor
@@ -120,7 +120,7 @@ class Overlay:
         _, height_px = self.pixels
         title_h = 1.5 * size / height_px
         self.text(f"{name} title", title, (x0 if title_x is None else title_x, y1), size=size)
-        bar = vtk.vtkScalarBarActor()
+        bar = vtkScalarBarActor()
         bar.SetLookupTable(lookup_table)
         bar.SetOrientationToHorizontal()
         bar.SetTextPositionToSucceedScalarBar()
@@ -163,10 +163,11 @@ class Overlay:
         render), for checking that none overlaps the scene or another."""
         out = {}
         for name, actor in self._actors.items():
-            if isinstance(actor, vtk.vtkTextActor):
-                bbox = [0.0] * 4
+            if isinstance(actor, vtkTextActor):
+                bbox = [0.0] * 4  # relative to the anchor: xmin, xmax, ymin, ymax
                 actor.GetBoundingBox(self.renderer, bbox)
-                out[name] = np.array([bbox[0], bbox[2], bbox[1], bbox[3]])
+                x, y = actor.GetPositionCoordinate().GetComputedDisplayValue(self.renderer)
+                out[name] = np.array([x + bbox[0], y + bbox[2], x + bbox[1], y + bbox[3]])
             else:
                 p1 = actor.GetPositionCoordinate().GetComputedDisplayValue(self.renderer)
                 p2 = actor.GetPosition2Coordinate().GetComputedDisplayValue(self.renderer)

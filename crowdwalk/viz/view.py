@@ -112,8 +112,9 @@ class SceneView:
         Current time, play/pause and speed (the lead view's drives linked views).
     """
 
-    def __init__(self, scene, plotter: pv.Plotter, layout: Layout = Layout(),
+    def __init__(self, scene, plotter: pv.Plotter, layout: Layout | None = None,
                  subplot: int = 0) -> None:
+        layout = Layout() if layout is None else layout
         self.scene = scene
         self.plotter = plotter
         self._subplot = subplot
@@ -131,6 +132,7 @@ class SceneView:
         self.walkers: Walkers = scene.walkers if scene.walkers is not None else Walkers.empty()
         self.frame: int | None = None
         self._shown_time: float | None = None
+        self._time: float | None = None  # the time this view shows [s]
         self.agent_ids = np.zeros(0, dtype=int)
         self.agent_roots = np.zeros((0, 3))
         self.agent_positions = np.zeros((0, 0, 3))
@@ -140,10 +142,10 @@ class SceneView:
         self.bounds = self._add_world()
         self._add_bodies()
         self._add_footprints()
-        self._font = self.overlay.font()
-        self.overlay.text("title", scene.title, (0.015, 0.985), size=round(1.25 * self._font),
-                          bold=True)
+        self._lay_out()
         self._set_colors()
+        # a resized window (by the user, or by a web page) gets fonts of its new size
+        self.overlay.renderer.AddObserver("StartEvent", lambda *_: self._lay_out(redraw=True))
         cam.frame(self.renderer, self.bounds)
         self.renderer.reset_camera_clipping_range()
 
@@ -162,7 +164,7 @@ class SceneView:
             lo, hi = float(heights.min()), float(heights.max())
             self._height_range = (lo, hi) if hi - lo > 1e-6 else None
             self._add("terrain", ground, scalars="height", cmap=_ground_colormap(),
-                      smooth_shading=False, show_scalar_bar=False, ambient=0.3,
+                      smooth_shading=False, show_scalar_bar=False, ambient=0.15,
                       clim=[lo, hi if hi - lo > 1e-6 else lo + 1.0])
             edges = terrain_edges(ground)
             if edges.n_cells:
@@ -173,7 +175,7 @@ class SceneView:
             if scene.walkable_area is not None and not scene.walkable_area.is_empty:
                 ground = flat_ground(scene.walkable_area)
                 if ground.n_points:
-                    self._add("terrain", ground, color="#eeede9", ambient=0.3)
+                    self._add("terrain", ground, color="#d9d6cc", ambient=0.15)
         if scene.walkable_area is not None and not scene.walkable_area.is_empty:
             outline = outline_lines(scene.walkable_area, scene.terrain)
             if outline.n_points:
@@ -228,6 +230,20 @@ class SceneView:
                   show_scalar_bar=False, ambient=0.35)
 
     # --- colours and overlays -------------------------------------------------------
+
+    def _lay_out(self, redraw: bool = False) -> None:
+        """Fonts for the current window size; the header and panel redrawn when it changed."""
+        pixels = self.overlay.pixels
+        if getattr(self, "_laid_out_for", None) == pixels:
+            return
+        self._laid_out_for = pixels
+        self._font = self.overlay.font()
+        self.overlay.text("title", self.scene.title, (0.015, 0.985),
+                          size=round(1.25 * self._font), bold=True)
+        if redraw:
+            self._draw_panel()
+            if self._time is not None:
+                self._update(self._time)
 
     def _codes(self, category: str, ids: np.ndarray) -> np.ndarray:
         if category == "agent":
@@ -327,7 +343,8 @@ class SceneView:
         for view in (self, *self.linked):
             view.color = color
             view._set_colors()
-            view._draw_info(view.playback.time)
+            if view._time is not None:
+                view._draw_info(view._time)
 
     # --- animation ------------------------------------------------------------------
 
@@ -361,6 +378,7 @@ class SceneView:
 
     def _update(self, t: float) -> None:
         """Move this view's walkers, footprints, highlight and texts to time ``t``."""
+        self._time = t
         if self.bodies is not None and t != self._shown_time:
             self._show_time(t)
         if self.footprints is not None:
@@ -452,9 +470,13 @@ class SceneView:
             y = y1 - 0.55 * self.layout.header * (y1 - self.layout.region[1])
             self._slider = self.plotter.add_slider_widget(
                 self.set_time, rng=[t0, t1], value=self.playback.time, title="",
-                pointa=(x0 + 0.5 * (x1 - x0), y), pointb=(x1 - 0.02 * (x1 - x0), y),
                 style="modern", interaction_event="always", fmt="%.1f",
             )
+            rep = self._slider.GetRepresentation()  # in window coordinates: the header
+            for point, x in ((rep.GetPoint1Coordinate(), x0 + 0.5 * (x1 - x0)),
+                             (rep.GetPoint2Coordinate(), x1 - 0.03 * (x1 - x0))):
+                point.SetCoordinateSystemToNormalizedDisplay()
+                point.SetValue(x, y)
         for key, action in self.key_bindings().items():
             self.plotter.add_key_event(key, action)
         if t1 > t0:

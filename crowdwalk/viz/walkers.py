@@ -16,13 +16,13 @@ from crowdwalk.viz.footprints import Footsteps
 __all__ = ["CATEGORIES", "Walkers", "WalkerStatus", "walker_status"]
 
 CATEGORIES = ("group", "planner", "style")
-UNKNOWN = "—"
+UNKNOWN = "unknown"
 
 
 @dataclass(frozen=True)
 class Walkers:
     """Per-walker labels, struct of arrays sorted by id: ``id`` (m,) int; ``group``,
-    ``planner``, ``style`` (m,) str (``"—"`` when the run does not say)."""
+    ``planner``, ``style`` (m,) str (``"unknown"`` when the run does not say)."""
 
     id: np.ndarray
     group: np.ndarray
@@ -109,7 +109,8 @@ def walker_status(steps: Footsteps, agent: int, t: float) -> WalkerStatus:
     """Status of walker ``agent`` at time ``t`` [s] from its placements up to ``t``.
 
     Speed is the distance between the last two placements of the same foot over their time
-    apart (one stride), zero when the last placement is more than a stride ago.
+    apart (one stride; one step after the first two placements), zero when the last
+    placement is longer ago than that.
     """
     mine = np.flatnonzero((steps.agent == agent) & (steps.time <= t + 1e-9))
     if not mine.size:
@@ -118,8 +119,8 @@ def walker_status(steps: Footsteps, agent: int, t: float) -> WalkerStatus:
     energy = float(np.nansum(steps.energy[mine]))
     length = float(steps.step_length[mine[-1]]) if steps.step_length is not None else np.nan
     speed = 0.0
-    if mine.size >= 3:
-        a, b = mine[-3], mine[-1]
+    if mine.size >= 2:
+        a, b = mine[-min(3, mine.size)], mine[-1]
         stride = steps.time[b] - steps.time[a]
         if stride > 0 and t - steps.time[b] <= stride:
             speed = float(np.hypot(*(steps.position[b, :2] - steps.position[a, :2])) / stride)
