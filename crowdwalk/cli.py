@@ -217,6 +217,37 @@ def compare(
         typer.echo(f"Report: {report}")
 
 
+# --- measurement and verification (issue 14): analyse, verify ---------------------
+
+
+@app.command()
+@friendly_errors
+def analyse(run_dir: Path = typer.Argument(..., help="Run folder.")) -> None:
+    """Analyse the scenario's measurement lines and areas with PedPy into RUN/analysis/."""
+    from crowdwalk.analysis import analyse_run
+
+    result = analyse_run(run_dir)
+    for kind in ("lines", "areas"):
+        for row in result[kind]:
+            typer.echo(f"{kind[:-1]} {row['name']}: " + ", ".join(
+                f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                for k, v in row.items() if k != "name"))
+
+
+@app.command()
+@friendly_errors
+def verify(
+    full: bool = typer.Option(False, "--full", help="Every case at full size (minutes)."),
+    out: Path = typer.Option(Path("docs/verification.md"), "--out", help="Markdown table."),
+    only: str = typer.Option("", "--only", help="Comma-separated case names."),
+) -> None:
+    """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
+    from crowdwalk.verify import run_verification
+
+    run_verification(full=full, out=out, only=[s for s in only.split(",") if s],
+                     echo=typer.echo)
+
+
 # --- gait export (issue 4): export-bvh ----------------------------------------------
 
 
@@ -233,6 +264,21 @@ def export_bvh_command(
 
     path = export_bvh(run_dir, agent, out, scale=scale)
     typer.echo(f"wrote {path}")
+
+
+@app.command("gait-report")
+@friendly_errors
+def gait_report_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    plot: Path = typer.Option(None, "--plot", help="PNG of the joint curves to write."),
+) -> None:
+    """Gait of a run's walkers against Winter, WBDS and Bovi (measured from the run)."""
+    from crowdwalk.gait_report import plot_curves, report_table, run_figures
+
+    figures = run_figures(run_dir)
+    typer.echo(report_table(figures))
+    if plot is not None:
+        typer.echo(f"wrote {plot_curves(figures, plot)}")
 
 
 # --- viewer (issue 6): view, render -------------------------------------------------

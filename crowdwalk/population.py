@@ -23,6 +23,7 @@ from importlib import resources
 import numpy as np
 
 from crowdwalk.errors import invalid
+from crowdwalk.style import Style, sample_styles
 
 __all__ = ["Population", "normative", "cadence_at", "step_length_at"]
 
@@ -77,6 +78,10 @@ class Population:
         Tuples of route node names, visited in order.
     route_start : (n, 2) float
         Where the agent's route polyline begins [m] (NaN: at the origin node).
+    style : crowdwalk.style.Style or None
+        Each agent's KLAW style (None: the default style at ``free_speed``).
+    gait_names : tuple of str
+        Gait engine per group (empty: ``elevation_angles`` for all).
     """
 
     group: np.ndarray
@@ -89,9 +94,15 @@ class Population:
     origin: np.ndarray
     destinations: np.ndarray
     route_start: np.ndarray
+    style: Style | None = None
+    gait_names: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n = self.group.size
+        if self.style is None:
+            object.__setattr__(self, "style", Style.default(self.body_height, self.free_speed))
+        if len(self.style) != n:
+            raise invalid("Population", "style", f"of {n} walkers", len(self.style))
         for name in ("body_height", "free_speed", "spawn_time", "origin", "destinations"):
             if getattr(self, name).shape != (n,):
                 raise invalid("Population", name, f"of shape ({n},)", getattr(self, name).shape)
@@ -118,7 +129,14 @@ class Population:
             free_speed=self.free_speed[index], spawn_time=self.spawn_time[index],
             spawn_xy=self.spawn_xy[index], origin=self.origin[index],
             destinations=self.destinations[index], route_start=self.route_start[index],
+            style=self.style.take(index),
         )
+
+    @property
+    def gait(self) -> np.ndarray:
+        """Gait engine name per agent (n,)."""
+        names = self.gait_names or ("elevation_angles",) * len(self.group_names)
+        return np.asarray(names, dtype=object)[self.group]
 
     def with_planner(self, planner: str) -> Population:
         """The same agents, every group using ``planner`` (the planned-vs-unplanned
@@ -131,7 +149,9 @@ class Population:
 
         Per group, in file order: body heights, free speeds (the group's ``Normal``
         distributions), then spawn positions inside the spawn node's area (or polygon),
-        all from ``rng``. Spawn times come from the group's ``spawn_times``.
+        all from ``rng``; then the styles (:func:`crowdwalk.style.sample_styles`; a
+        preset or locked velocity replaces the free speed). Spawn times come from the
+        group's ``spawn_times``.
 
         Parameters
         ----------
@@ -141,7 +161,8 @@ class Population:
         """
         from shapely.geometry import Polygon
 
-        from crowdwalk.routes import spawn_points
+        from crowdwalk.exits import choose_exits
+        from crowdwalk.routes import lattice_points, spawn_points
 
         parts: dict[str, list] = {k: [] for k in (
             "group", "height", "speed", "time", "xy", "origin", "dest", "start")}
@@ -163,29 +184,44 @@ class Population:
             inner = area.buffer(-0.25)  # keep bodies off the walls
             if inner.area > 0.05 * area.area:
                 area = inner
-            try:
-                xy = spawn_points(area, n, rng, min_spacing=0.5)
-            except ValueError:  # more agents than fit at once: they enter one by one
-                xy = spawn_points(area, n, rng, min_spacing=0.0)
+            if g.density is not None:
+                front = routes.node_xy((g.destinations or g.exit_choice.among)[0])
+                xy = lattice_points(area, n, g.density, rng, front=front)
+            else:
+                try:
+                    xy = spawn_points(area, n, rng, min_spacing=0.5)
+                except ValueError:  # more agents than fit at once: they enter one by one
+                    xy = spawn_points(area, n, rng, min_spacing=0.0)
             parts["group"].append(np.full(n, gi))
             parts["height"].append(heights)
             parts["speed"].append(speeds)
-            parts["time"].append(g.spawn_times.times(n))
+            times = g.spawn_times.times(n, rng)
+            parts["time"].append(times)
             parts["xy"].append(xy)
             parts["origin"].append(np.full(n, origin, dtype=object))
             dest = np.empty(n, dtype=object)
             dest[:] = [tuple(g.destinations)] * n
+            if g.exit_choice is not None:
+                here = g.destinations[-1] if g.destinations else origin
+                exits = choose_exits(g.exit_choice, routes, here, xy, speeds, times, rng)
+                dest[:] = [(*g.destinations, e) for e in exits]
             parts["dest"].append(dest)
             parts["start"].append(np.tile(start, (n, 1)))
+        group = np.concatenate(parts["group"]).astype(np.int64)
+        height = np.concatenate(parts["height"])
+        style = sample_styles(scenario.groups, group, height, np.concatenate(parts["speed"]), rng)
+        style = style.with_values(velocity=np.round(style.velocity, 2))
         return cls(
-            group=np.concatenate(parts["group"]).astype(np.int64),
+            group=group,
             group_names=tuple(g.name for g in scenario.groups),
             planner_names=tuple(g.planner for g in scenario.groups),
-            body_height=np.concatenate(parts["height"]),
-            free_speed=np.concatenate(parts["speed"]),
+            body_height=height,
+            free_speed=style.velocity,
             spawn_time=np.concatenate(parts["time"]).astype(float),
             spawn_xy=np.concatenate(parts["xy"]),
             origin=np.concatenate(parts["origin"]),
             destinations=np.concatenate(parts["dest"]),
             route_start=np.concatenate(parts["start"]),
+            style=style,
+            gait_names=tuple(g.gait for g in scenario.groups),
         )

@@ -36,7 +36,8 @@ from shapely.geometry import LineString, Point, Polygon
 
 from crowdwalk.errors import InfeasibleError, existing_file, invalid
 
-__all__ = ["Place", "Corridor", "RouteCosts", "RouteGraph", "spawn_points"]
+__all__ = ["Place", "Corridor", "RouteCosts", "RouteGraph", "spawn_points",
+           "lattice_points"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,6 +160,45 @@ def spawn_points(area, n: int, rng: np.random.Generator, min_spacing: float = 0.
                   f"at min_spacing {min_spacing} m", n)
 
 
+def lattice_points(area, n: int, density: float, rng: np.random.Generator, *,
+                   front=None) -> np.ndarray:
+    """``n`` points of a hexagonal lattice at ``density`` [1/m²] inside ``area``.
+
+    The lattice (spacing ``sqrt(2 / (sqrt(3) density))`` [m]) gets a random phase and
+    orientation from ``rng`` (up to 8 draws until ``n`` points fit); of the points inside ``area`` the ``n`` nearest to ``front``
+    (2,) [m] (default: the area's centroid) are kept, so a crowd starts as one block at the
+    given density next to where it goes.
+
+    Returns
+    -------
+    (n, 2) points [m]. Raises :class:`~crowdwalk.errors.InputError` if fewer fit.
+    """
+    if not (np.isfinite(density) and density > 0):
+        raise invalid("lattice_points", "density", "> 0 [1/m²]", density)
+    a = float(np.sqrt(2.0 / (np.sqrt(3.0) * density)))
+    x0, y0, x1, y1 = area.bounds
+    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+    reach = 0.5 * np.hypot(x1 - x0, y1 - y0) + a
+    k = int(np.ceil(reach / a)) + 1
+    i, j = np.meshgrid(np.arange(-k, k + 1), np.arange(-k, k + 1))
+    uv = np.column_stack([(i + 0.5 * (j % 2)).ravel() * a, j.ravel() * a * np.sqrt(3) / 2])
+    shapely.prepare(area)
+    for _ in range(8):  # a few phases: in a small area the lattice's fit depends on them
+        turn = rng.uniform(0, 2 * np.pi)
+        rot = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+        pts = centre + (uv + rng.uniform(0, a, 2)) @ rot.T
+        pts = pts[shapely.contains_xy(area, pts[:, 0], pts[:, 1])]
+        if len(pts) >= n:
+            break
+    if len(pts) < n:
+        raise invalid("Group", "density", f"at least {n / max(area.area, 1e-9):.2f} /m² for "
+                      f"{n} agents in {area.area:.1f} m² (the lattice holds {len(pts)})",
+                      density)
+    ref = np.asarray(area.centroid.coords[0]) if front is None else np.asarray(front, float)
+    order = np.argsort(np.linalg.norm(pts - ref, axis=1), kind="stable")
+    return pts[np.sort(order[:n])]
+
+
 _WALL_HALF_THICKNESS = 5e-4  # [m] walls cut the walkable area as 1 mm wide strips
 
 
@@ -171,11 +211,15 @@ class RouteGraph:
     corridors : iterable of :class:`Corridor`
     terrain : :class:`crowdwalk.terrain.Terrain` or None (level ground everywhere)
     costs : :class:`RouteCosts`
+    obstacles : shapely polygons [m] cut out of the walkable area (walls, obstacles);
+        paths go around them
     """
 
-    def __init__(self, places, corridors, terrain=None, costs: RouteCosts = RouteCosts()):
+    def __init__(self, places, corridors, terrain=None, costs: RouteCosts = RouteCosts(),
+                 obstacles=()):
         self.terrain = terrain
         self.costs = costs
+        self.obstacles = shapely.union_all(list(obstacles)) if len(obstacles) else None
         self.places = {}
         for p in places:
             if p.name in self.places:
@@ -263,7 +307,8 @@ class RouteGraph:
         return float(max(cost, length) + self.costs.climb * up + self.costs.descent * down)
 
     @classmethod
-    def from_graphml(cls, path, terrain=None, costs: RouteCosts = RouteCosts()) -> RouteGraph:
+    def from_graphml(cls, path, terrain=None, costs: RouteCosts = RouteCosts(),
+                     obstacles=()) -> RouteGraph:
         """Read places and corridors from GraphML written by :meth:`to_graphml` (or any
         GraphML with node attributes ``x``, ``y`` [m] and edge attribute ``width`` [m];
         optional ``area`` and ``geometry`` as WKT, ``oneway`` bool)."""
@@ -287,7 +332,7 @@ class RouteGraph:
                                 [1:-1]))
             corridors.append(Corridor(str(a), str(b), float(d["width"]), via,
                                       bool(d.get("oneway", False))))
-        return cls(places, corridors, terrain, costs)
+        return cls(places, corridors, terrain, costs, obstacles)
 
     def to_graphml(self, path) -> None:
         """Write places and corridors (one edge per corridor) as GraphML."""
@@ -338,6 +383,8 @@ class RouteGraph:
                     [d["geometry"] for *_, d in self.graph.edges(data=True)]
                     + [Point(p.x, p.y) for p in self.places.values()])
                 geom = shapely.union_all(pieces[shapely.intersects(pieces, carriers)])
+        if self.obstacles is not None:
+            geom = geom.difference(self.obstacles)
         shapely.prepare(geom)
         return geom
 
@@ -404,10 +451,47 @@ class RouteGraph:
             if start is not None:
                 raw = np.vstack([np.asarray(start, float)[None, :], raw[1:] if len(raw) > 1
                                  else raw])
+            raw = self._around_obstacles(raw)
             widths = [self.graph.edges[u, v]["width"] for u, v in
                       zip(nodes[:-1], nodes[1:], strict=True)]
             self._paths[key] = self._round_corners(raw, radius, min(widths, default=1.0))
         return self._paths[key].copy()
+
+    def _around_obstacles(self, raw: np.ndarray, clear: float = 0.35) -> np.ndarray:
+        """``raw`` (k, 2) [m] with every leg that passes within ``clear`` [m] of an obstacle
+        replaced by the shortest path around it: Dijkstra on the visibility graph of the
+        leg's ends and the corners of the obstacles grown by ``clear`` (Lozano-Pérez &
+        Wesley 1979), legs kept inside the walkable area."""
+        if self.obstacles is None:
+            return raw
+        blocked = self.obstacles.buffer(clear - 1e-3)
+        shapely.prepare(blocked)
+        legs = shapely.linestrings(np.stack([raw[:-1], raw[1:]], axis=1))
+        hit = shapely.intersects(blocked, legs)
+        if not hit.any():
+            return raw
+        corners = shapely.get_coordinates(shapely.get_exterior_ring(shapely.get_parts(
+            self.obstacles.buffer(clear, quad_segs=2, join_style="mitre"))))
+        area = self._walkable_tolerant
+        out = [raw[0]]
+        for k in range(len(raw) - 1):
+            if not hit[k]:
+                out.append(raw[k + 1])
+                continue
+            pts = np.vstack([raw[k], raw[k + 1], corners])
+            pts = pts[np.r_[True, True, shapely.covers(area, shapely.points(pts[2:]))]]
+            i, j = np.triu_indices(len(pts), 1)
+            seg = shapely.linestrings(np.stack([pts[i], pts[j]], axis=1))
+            ok = ~shapely.intersects(blocked, seg) & shapely.covers(area, seg)
+            g = nx.Graph()
+            length = np.linalg.norm(pts[i] - pts[j], axis=1)
+            g.add_weighted_edges_from(zip(i[ok], j[ok], length[ok], strict=True))
+            try:
+                via = nx.shortest_path(g, 0, 1, weight="weight")
+            except (nx.NetworkXNoPath, nx.NodeNotFound):
+                via = [0, 1]  # no way round inside the walkable area: keep the leg
+            out.extend(pts[via[1:]])
+        return np.asarray(out)
 
     def _round_corners(self, raw: np.ndarray, radius, width: float) -> np.ndarray:
         keep = np.concatenate([[True], np.linalg.norm(np.diff(raw, axis=0), axis=1) > 1e-9])

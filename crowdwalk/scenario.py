@@ -29,7 +29,16 @@ from pydantic import (
     model_validator,
 )
 
+from crowdwalk import behaviours
+from crowdwalk.behaviours import (
+    EventSpec,
+    ExitChoice,
+    MeasurementSpec,
+    ObstacleSpec,
+    WaitingAreaSpec,
+)
 from crowdwalk.errors import InputError, existing_file
+from crowdwalk.style import GaitName, LockSpec, StyleSpec
 
 __all__ = [
     "Scenario",
@@ -284,16 +293,17 @@ class RoutesSpec(_Model):
 
         return [str(n) for n in nx.read_graphml(existing_file(self.graphml)).nodes]
 
-    def build(self, terrain=None):
-        """The :class:`crowdwalk.routes.RouteGraph` this section describes."""
+    def build(self, terrain=None, obstacles=()):
+        """The :class:`crowdwalk.routes.RouteGraph` this section describes (``obstacles``:
+        shapely polygons cut out of the walkable area)."""
         from crowdwalk.routes import Corridor, Place, RouteGraph
 
         if self.graphml is not None:
-            return RouteGraph.from_graphml(self.graphml, terrain)
+            return RouteGraph.from_graphml(self.graphml, terrain, obstacles=obstacles)
         places = [Place(n.name, n.xy[0], n.xy[1], n.area) for n in self.nodes]
         corridors = [Corridor(e.from_, e.to, e.width, tuple(e.via), e.oneway)
                      for e in self.edges]
-        return RouteGraph(places, corridors, terrain)
+        return RouteGraph(places, corridors, terrain, obstacles=obstacles)
 
 
 # --- groups -------------------------------------------------------------------------
@@ -343,21 +353,30 @@ DEFAULT_FREE_SPEED = Normal(mean=1.34, sd=0.26, min=0.6, max=2.1)
 
 class SpawnTimes(_Model):
     """When a group's agents enter: from ``start`` [s], one every ``interval`` [s] or at
-    ``rate`` [1/s] (exactly one of the two; all at once if neither)."""
+    ``rate`` [1/s] (exactly one of the two; all at once if neither); ``process: poisson``
+    draws exponential gaps of mean ``interval`` (a Poisson arrival process)."""
 
     start: NonNeg = 0.0
     interval: NonNeg | None = None
     rate: Positive | None = None
+    process: Literal["regular", "poisson"] = "regular"
 
     @model_validator(mode="after")
     def _one(self):
         if self.interval is not None and self.rate is not None:
             raise ValueError("give interval or rate, not both")
+        if self.process == "poisson" and not (self.rate or self.interval):
+            raise ValueError("poisson arrivals need a rate or an interval > 0")
         return self
 
-    def times(self, n: int) -> np.ndarray:
-        """Spawn times (n,) [s]."""
+    def times(self, n: int, rng: np.random.Generator | None = None) -> np.ndarray:
+        """Spawn times (n,) [s] (``rng`` draws the gaps of Poisson arrivals)."""
         step = 1.0 / self.rate if self.rate is not None else (self.interval or 0.0)
+        if self.process == "poisson":
+            if rng is None:
+                raise ValueError("poisson arrivals need a random generator")
+            gaps = rng.exponential(step, max(n - 1, 0))
+            return self.start + np.concatenate([[0.0], np.cumsum(gaps)])[:n]
         return self.start + step * np.arange(n)
 
 
@@ -368,10 +387,21 @@ class Group(_Model):
     count: int = Field(ge=1)
     spawn: str | Polygon2 = Field(description="route node name, or a polygon [m]")
     spawn_times: SpawnTimes = SpawnTimes()
-    destinations: list[str] = Field(min_length=1, description="route nodes, visited in order")
+    destinations: list[str] = Field([], description="route nodes, visited in order")
+    exit_choice: ExitChoice | None = Field(None, description="then one exit among several")
+    density: Positive | None = Field(None, le=6.0, description="start density [1/m²]")
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
     planner: PlannerName = "best_first"
+    gait: GaitName = Field("elevation_angles", description="gait engine of the group")
+    style: StyleSpec | None = Field(None, description="KLAW style (crowdwalk.style)")
+    lock: LockSpec | None = Field(None, description="locked locomotion parameter(s)")
+
+    @model_validator(mode="after")
+    def _somewhere(self):
+        if not self.destinations and self.exit_choice is None:
+            raise ValueError("give destinations or exit_choice")
+        return self
 
     @field_validator("body_height")
     @classmethod
@@ -415,6 +445,10 @@ class Scenario(_Model):
     groups: list[Group] = Field(min_length=1)
     simulation: Simulation
     outputs: Outputs = Outputs()
+    obstacles: list[ObstacleSpec] = []
+    events: list[EventSpec] = []
+    waiting_areas: list[WaitingAreaSpec] = []
+    measurement: MeasurementSpec = MeasurementSpec()
 
     def cross_errors(self) -> list[tuple[tuple, str]]:
         """Problems between sections as (field path, message); empty when consistent."""
@@ -440,7 +474,7 @@ class Scenario(_Model):
                 if d not in known:
                     errs.append((("groups", i, "destinations", j),
                                  f"must be one of the route nodes {sorted(known)}; got {d!r}"))
-        return errs
+        return errs + behaviours.cross_errors(self, known)
 
 
 # --- loading ------------------------------------------------------------------------
@@ -561,6 +595,7 @@ _UNITS = {
     "z0": "m", "z_start": "m", "z_end": "m", "cell": "m", "amplitude": "m",
     "correlation": "m", "taper": "m", "size": "m", "heading": "deg", "incline": "deg",
     "rotate": "deg", "body_height": "m", "free_speed": "m/s",
+    "density": "1/m²", "release_time": "s", "release_rate": "1/s", "thickness": "m",
 }
 
 

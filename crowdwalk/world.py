@@ -32,7 +32,7 @@ def build_world(scenario: Scenario) -> World:
     (a corridor leaving the terrain or climbing a wall, a spawn polygon off the ground).
     """
     terrain = scenario.terrain.build()
-    routes = scenario.routes.build(terrain)
+    routes = scenario.routes.build(terrain, [o.geometry() for o in scenario.obstacles])
     for i, g in enumerate(scenario.groups):
         if not isinstance(g.spawn, str):
             poly = Polygon(g.spawn)
@@ -43,6 +43,7 @@ def build_world(scenario: Scenario) -> World:
                 raise invalid(f"Scenario.groups[{i}]", "spawn",
                               f"inside the terrain extent {terrain.bounds} [m]", g.spawn)
     _check_reachable(scenario, routes)
+    _check_behaviours(scenario, routes)
     return World(scenario, terrain, routes)
 
 
@@ -62,3 +63,16 @@ def _check_reachable(scenario: Scenario, routes: RouteGraph) -> None:
                               f"reachable from {here!r} (check one-way corridors and "
                               "disconnected parts)", dest)
             here = dest
+
+
+def _check_behaviours(scenario: Scenario, routes: RouteGraph) -> None:
+    """Events name existing corridors."""
+    for key in ("events", "waiting_areas"):
+        if getattr(scenario, key):
+            raise invalid("Scenario", key, "empty in this version (the schema is in place; "
+                          "the simulation does not carry them out yet)", key)
+    for i, e in enumerate(scenario.events):
+        if e.corridor is not None and not routes.graph.has_edge(*e.corridor) \
+                and not routes.graph.has_edge(*e.corridor[::-1]):
+            raise invalid(f"Scenario.events[{i}]", "corridor", "two nodes joined by a corridor",
+                          list(e.corridor))
