@@ -63,11 +63,16 @@ class Walkers:
 
     @classmethod
     def from_run(cls, run, steps: Footsteps) -> Walkers:
-        """From a :class:`crowdwalk.record.Run`: its summary's agent rows when present."""
+        """From a :class:`crowdwalk.record.Run`: its summary's agent rows when present (a
+        walker without a recorded style gets its group's style preset from the scenario as
+        run)."""
         rows = run.summary.get("agents") if run.summary_path.exists() else None
-        if rows:
-            return cls.from_rows(rows)
-        return cls.from_footsteps(steps)
+        if not rows:
+            return cls.from_footsteps(steps)
+        styles = _group_styles(run.scenario_path)
+        rows = [r if r.get("style") else {**r, "style": styles.get(r.get("group"))}
+                for r in rows]
+        return cls.from_rows(rows)
 
     def __len__(self) -> int:
         return len(self.id)
@@ -92,6 +97,22 @@ class Walkers:
         codes = np.array([lookup[v] for v in getattr(self, field)], dtype=int)
         row = self.index(ids)
         return np.where(row >= 0, codes[np.maximum(row, 0)] if len(codes) else -1, -1)
+
+
+def _group_styles(scenario_path) -> dict[str, str]:
+    """Group name -> its KLAW style preset in a scenario file ("normal" without a style,
+    "custom" for attributes without a preset); empty when the file cannot be read."""
+    from crowdwalk.scenario import load_scenario
+
+    try:
+        groups = load_scenario(scenario_path).groups
+    except (OSError, ValueError):
+        return {}
+    out = {}
+    for g in groups:
+        spec = getattr(g, "style", None)
+        out[g.name] = "normal" if spec is None else (spec.preset or "custom")
+    return out
 
 
 @dataclass(frozen=True)

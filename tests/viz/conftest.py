@@ -90,7 +90,7 @@ _VIEW_RECT = """JSON.stringify([...document.querySelectorAll('img')].map(e => {
 def chromium():
     """``look(url, size, ready, timeout) -> (image (h, w, 3) uint8, view box (x, y, w, h)
     [px])``: opens ``url`` in headless Chromium and screenshots it until ``ready(image,
-    box)``; skips where no Chromium is installed."""
+    box)`` and the page stopped changing; skips where no Chromium is installed."""
     import shutil
 
     exe = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -115,11 +115,12 @@ async def _look(exe, url, size=(1280, 800), ready=lambda image, box: True, timeo
 
     import aiohttp
     import imageio.v3 as iio
+    import numpy as np
 
     from crowdwalk.viz.web import free_port
 
     port = free_port()
-    with tempfile.TemporaryDirectory() as profile:
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as profile:
         proc = subprocess.Popen(
             [exe, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", f"--remote-debugging-port={port}",
              f"--window-size={size[0]},{size[1]}", "about:blank"],
@@ -146,7 +147,7 @@ async def _look(exe, url, size=(1280, 800), ready=lambda image, box: True, timeo
                                 return message.get("result", {})
 
                     await call("Page.navigate", url=url)
-                    image, box = None, None
+                    image, box, last = None, None, None
                     while time.monotonic() < deadline:
                         await asyncio.sleep(1.0)
                         found = await call("Runtime.evaluate", expression=_VIEW_RECT,
@@ -155,8 +156,11 @@ async def _look(exe, url, size=(1280, 800), ready=lambda image, box: True, timeo
                         box = max(rects, key=lambda r: r[2] * r[3]) if rects else None
                         shot = await call("Page.captureScreenshot", format="png")
                         image = iio.imread(base64.b64decode(shot["data"]))[..., :3]
-                        if box is not None and ready(image, box):
+                        steady = last is not None and last.shape == image.shape and np.abs(
+                            last.astype(int) - image).mean() < 0.2
+                        if box is not None and steady and ready(image, box):
                             break
+                        last = image
                     return image, box
         finally:
             proc.kill()
