@@ -462,6 +462,12 @@ class Run:
         self.summary_path = path / "summary.json"
 
     @property
+    def complete(self) -> bool:
+        """Whether the run wrote ``summary.json`` (finished, or interrupted cleanly); a run
+        killed outright (SIGKILL, power loss) has only what its last flush wrote."""
+        return self.summary_path.exists()
+
+    @property
     def summary(self) -> dict:
         """``summary.json`` as a dict (``{}`` when the run never wrote one)."""
         if not self.summary_path.exists():

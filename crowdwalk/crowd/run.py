@@ -79,9 +79,8 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
     overrides = overrides or RunOverrides()
     check_overrides(overrides)
     params = params or CrowdParams()
-    from crowdwalk.population import Population
+    from crowdwalk.checks import world_and_population
     from crowdwalk.scenario import Scenario, load_scenario
-    from crowdwalk.world import build_world
 
     if isinstance(scenario, Scenario):
         sc = scenario
@@ -90,9 +89,7 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
         path = Path(scenario)
         sc = load_scenario(path)
         text = path.read_text()
-    world = build_world(sc)
-    rng = np.random.default_rng(sc.simulation.seed)
-    pop = Population.from_scenario(sc, world.routes, rng)
+    world, pop = world_and_population(sc)
     if overrides.planner is not None:
         pop = pop.with_planner(overrides.planner)
     if overrides.max_agents is not None:
