@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal, get_args
+from typing import Annotated, Literal
 
 import numpy as np
 import yaml
@@ -41,6 +41,7 @@ from crowdwalk.behaviours import (
 from crowdwalk.checks import MAX_ROUTE_NODES
 from crowdwalk.errors import InputError, existing_file
 from crowdwalk.style import GaitName, LockSpec, StyleSpec
+from planners import PLANNERS
 
 __all__ = [
     "Scenario",
@@ -57,8 +58,8 @@ __all__ = [
     "PLANNER_NAMES",
 ]
 
-PlannerName = Literal["best_first", "fixed", "optimal"]
-PLANNER_NAMES: tuple[str, ...] = get_args(PlannerName)
+PLANNER_NAMES: tuple[str, ...] = tuple(sorted(PLANNERS))
+PlannerName = Literal[PLANNER_NAMES]  # the planners' names (planners.PLANNERS)
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
