@@ -269,10 +269,21 @@ def compare(
 @app.command()
 @friendly_errors
 def analyse(run_dir: Path = typer.Argument(..., help="Run folder.")) -> None:
-    """Analyse the scenario's measurement lines and areas with PedPy into RUN/analysis/."""
+    """PedPy analysis into RUN/analysis/: speeds along the 3-D path (speeds_3d.csv) and the
+    scenario's measurement lines and areas."""
     from crowdwalk.analysis import analyse_run
+    from crowdwalk.record import open_run
+    from crowdwalk.scenario import parse_scenario
+    from crowdwalk.speeds3d import write_walking_speeds
 
-    result = analyse_run(run_dir)
+    _warn_incomplete(run_dir)
+    typer.echo(write_walking_speeds(run_dir))
+    scenario = open_run(run_dir).scenario_path
+    measurement = parse_scenario(scenario.read_text(encoding="utf-8"), str(scenario)).measurement
+    if not (measurement.lines or measurement.areas):
+        typer.echo("no measurement lines or areas in the scenario: nothing more to analyse.")
+        return
+    result = analyse_run(run_dir, measurement)
     for kind in ("lines", "areas"):
         for row in result[kind]:
             typer.echo(f"{kind[:-1]} {row['name']}: " + ", ".join(
