@@ -431,6 +431,28 @@ def render(
                + (f", or `crowdwalk view {target}` to explore" if target.is_dir() else ""))
 
 
+# --- gait engines against people (issue 13): gait-compare ---------------------------
+
+
+@app.command("gait-compare")
+@friendly_errors
+def gait_compare_command(
+    out: Path = typer.Option(Path("gait_compare"), "--out", help="Folder for the runs."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write the curves figure (PNG)."),
+) -> None:
+    """Run the same lone walker at 1.0, 1.33 and 1.7 m/s with every gait engine and print
+    joint-angle RMS / r against Winter and step length / cadence against WBDS."""
+    from crowdwalk.gait.engine import GAIT_ENGINES
+    from crowdwalk.gait_compare import comparison_table, plot_comparison, run_comparison
+
+    engines = tuple(GAIT_ENGINES)
+    rows = run_comparison(out, engines=engines,
+                          progress=lambda e, v: typer.echo(f"ran {e} at {v:g} m/s", err=True))
+    typer.echo(comparison_table(rows))
+    if plot is not None:
+        typer.echo(f"wrote {plot_comparison(rows, plot)}")
+
+
 def main() -> None:
     """Entry point of the ``crowdwalk`` script."""
     app()
