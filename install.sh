@@ -13,6 +13,7 @@ LOG="$VENV/install.log"
 # administrator). Add a feature's packages here with a comment saying what needs them.
 APT_PACKAGES=(
   libegl1 libegl-mesa0 libgl1-mesa-dri  # off-screen rendering (pyvista/VTK over EGL + Mesa)
+  chromium  # headless browser of the `crowdwalk view --web` test (tests/viz/test_web.py)
 )
 
 say() { echo "install.sh: $*"; }
