@@ -125,6 +125,8 @@ class StepCommand:
         Toe-out of the swing foot [rad] (MetaGait §6.1); default the style's.
     spin : (m,), optional
         Spin turn on the stance foot [rad], positive counter-clockwise (§6.1).
+    speed : (m,), optional
+        Walking speed of the step [m/s] (length / duration), for ElevInterp's speed blend.
     """
 
     agent: np.ndarray
@@ -139,6 +141,7 @@ class StepCommand:
     swing_bezier: np.ndarray | None = None
     toe_out: np.ndarray | None = None
     spin: np.ndarray | None = None
+    speed: np.ndarray | None = None
 
     @classmethod
     def from_batch(cls, steps: StepBatch) -> StepCommand:
@@ -146,7 +149,8 @@ class StepCommand:
         return cls(agent=steps.agent, time=steps.start_time, duration=steps.duration,
                    swing_foot=steps.foot.astype(int), start=steps.start, target=steps.target,
                    heading=steps.heading, step_length=np.maximum(steps.length, _MIN_STEP),
-                   step_height=steps.rise, swing_bezier=steps.swing_bezier)
+                   step_height=steps.rise, swing_bezier=steps.swing_bezier,
+                   speed=np.maximum(steps.length, _MIN_STEP) / steps.duration)
 
     def __post_init__(self) -> None:
         owner = "StepCommand"
@@ -185,6 +189,11 @@ class StepCommand:
                 if not np.all(np.isfinite(arr) & (np.abs(arr) < np.pi)):
                     raise invalid(owner, name, "finite and in (-π, π) [rad]", arr)
                 object.__setattr__(self, name, arr)
+        if self.speed is not None:
+            arr = _column(np.atleast_1d(self.speed), m, owner, "speed", "[m/s]")
+            if not np.all(np.isfinite(arr) & (arr > 0)):
+                raise invalid(owner, "speed", "finite and > 0 [m/s]", arr.min())
+            object.__setattr__(self, "speed", arr)
 
 
 @dataclass(eq=False)
@@ -431,7 +440,7 @@ class Animator:
         length = rel[:, 0] * np.cos(cmd.heading) + rel[:, 1] * np.sin(cmd.heading)
         length = np.maximum(length, _MIN_STEP)
         height = rel[:, 2]
-        data = self.interp.request(body, length, height)
+        data = self.interp.request(body, length, height, speed=cmd.speed)
         step, st, sw = self._step, self._stance, self._swing
         step.angles[a] = data.angles
         step.stance_fraction[a] = data.stance_fraction

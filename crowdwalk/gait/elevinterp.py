@@ -33,6 +33,12 @@ Implementation notes (deviations and choices, each measured in the tests/benchma
   reach is retried in the neighbouring triangles, then with weights ≥ −1. What still
   misses (a few % of the hull area, errors ≤ 1.5 cm) keeps its best blend and is
   flagged (``clamped``, ``converged`` False).
+- Speed blend (extension, switch ``ElevInterpConfig.speed_blend``; the paper blends by
+  step length and height only). Given each step's walking speed, the level datasets
+  (Bovi's xs … l) blended by *speed* replace, in mid-stance and mid-swing, the level
+  datasets blended by the step's *length*: the curves gain the residual
+  ``(L(speed) − L(length)) · sin²(2πt)``, faded out with step height. The window is zero
+  at t = 0 and t = 0.5, the rows Eq. 10 reads, so the produced step is unchanged.
 """
 
 from __future__ import annotations
@@ -228,6 +234,11 @@ class ElevInterpConfig:
     last_resort_extrapolation : float
         ... and ≥ −last_resort_extrapolation [1] in a final pass for requests those miss
         (where Eq. 10 folds between toe-first and heel-first landings).
+    speed_blend : bool
+        Requests with a ``speed`` also blend the level datasets by walking speed (an
+        extension of §5, see the module notes); False is the paper's ElevInterp.
+    speed_fade : float
+        The speed residual fades linearly to zero at this |step height| [leg lengths].
     """
 
     tolerance: float = 0.002
@@ -237,10 +248,13 @@ class ElevInterpConfig:
     shape_resolution: float = 0.005
     extrapolation: float = 0.2
     last_resort_extrapolation: float = 1.0
+    speed_blend: bool = True
+    speed_fade: float = 0.04
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
-        units = {"tolerance": "m", "insert_spacing": "1", "shape_resolution": "1"}
+        units = {"tolerance": "m", "insert_spacing": "1", "shape_resolution": "1",
+                 "speed_fade": "1"}
         for name, unit in units.items():
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
@@ -460,7 +474,8 @@ class ElevInterp:
 
     # -- public -----------------------------------------------------------------------
     def request(
-        self, leg: LegLike, step_length: np.ndarray | float, step_height: np.ndarray | float
+        self, leg: LegLike, step_length: np.ndarray | float, step_height: np.ndarray | float,
+        *, speed: np.ndarray | float | None = None,
     ) -> StepDatasets:
         """Datasets that produce the requested steps for the given bodies (batched).
 
@@ -474,6 +489,9 @@ class ElevInterp:
             (n,) requested step lengths [m], > 0, foothold to foothold.
         step_height : float or numpy.ndarray
             (n,) requested rise of the new foothold over the stance foothold [m].
+        speed : float or numpy.ndarray, optional
+            (n,) walking speed of each step [m/s] (step length / duration); with
+            ``config.speed_blend`` the level datasets are also blended by it.
 
         Returns
         -------
@@ -508,6 +526,11 @@ class ElevInterp:
             space = self._space(key, props[idx[0]])
             out = self._solve(space, target[idx], props[idx], length[idx])
             angles[idx], phases[idx], achieved[idx], served[idx], flags[idx] = out
+        if speed is not None and self.config.speed_blend:
+            v = np.broadcast_to(np.asarray(speed, dtype=float), sl.shape)
+            if not np.all(np.isfinite(v) & (v > 0)):
+                raise invalid("ElevInterp", "speed", "finite and > 0 [m/s]", v.min())
+            angles += self._speed_residual(v, served, props)
         achieved *= length[:, None]
         served *= length[:, None]
         self.stats["requests"] += n
@@ -543,6 +566,47 @@ class ElevInterp:
         return dataset_step(self._curves, leg)
 
     # -- internals --------------------------------------------------------------------
+    def _speed_residual(self, speed: np.ndarray, served: np.ndarray,
+                        props: np.ndarray) -> np.ndarray:
+        """(n, N, 4) [rad]: level datasets blended by speed minus blended by step length.
+
+        Both blends are piecewise linear over the level datasets (clamped to their
+        range); the length of a level dataset is its Eq. 10 step for the request's body
+        shape [leg lengths]. Windowed by sin²(2πt) (zero at the Eq. 10 rows) and faded
+        with |step height| over ``config.speed_fade``.
+        """
+        level = [i for i, d in enumerate(self.datasets) if d.name.startswith("level")]
+        if len(level) < 2:
+            return np.zeros((len(speed), *self._curves.shape[1:]))
+        curves = self._curves[level]
+        by_speed = np.argsort([self.datasets[i].speed for i in level])
+        speeds = np.array([self.datasets[i].speed for i in level])[by_speed]
+        lengths = dataset_step(curves[None].repeat(len(speed), 0).reshape(-1, *curves.shape[1:]),
+                               _leg_of(np.repeat(props, len(level), axis=0)))
+        lengths = lengths[:, 0].reshape(len(speed), len(level))  # (n, k) [leg lengths]
+
+        def weights(x, xs):  # (n, k) hat-function weights of x in the sorted knots xs
+            x = np.clip(x, xs[..., :1], xs[..., -1:])
+            j = np.clip((xs <= x).sum(axis=-1, keepdims=True) - 1, 0, xs.shape[-1] - 2)
+            lo, hi = np.take_along_axis(xs, j, -1), np.take_along_axis(xs, j + 1, -1)
+            f = (x - lo) / np.where(hi > lo, hi - lo, 1.0)
+            w = np.zeros(xs.shape if xs.ndim == 2 else (len(x), xs.shape[-1]))
+            np.put_along_axis(w, j, 1.0 - f, -1)
+            np.put_along_axis(w, j + 1, f, -1)
+            return w
+
+        w_speed = np.zeros((len(speed), len(level)))
+        w_speed[:, by_speed] = weights(speed[:, None], np.broadcast_to(speeds, w_speed.shape))
+        by_len = np.argsort(lengths, axis=1)
+        w_len = np.zeros_like(w_speed)
+        np.put_along_axis(w_len, by_len, weights(served[:, :1],
+                          np.take_along_axis(lengths, by_len, 1)), 1)
+        t = np.arange(curves.shape[1]) / curves.shape[1]
+        window = np.sin(2.0 * np.pi * t) ** 2
+        fade = np.clip(1.0 - np.abs(served[:, 1]) / self.config.speed_fade, 0.0, 1.0)
+        residual = np.einsum("nk,kmj->nmj", w_speed - w_len, curves)
+        return residual * (window[None, :, None] * fade[:, None, None])
+
     def _space(self, key: np.ndarray, shape: np.ndarray) -> _ShapeSpace:
         """The triangulated space of a body shape; created with the first exact shape."""
         k = tuple(int(v) for v in key)

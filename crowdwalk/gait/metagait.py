@@ -311,6 +311,7 @@ class MetaGait:
             swing_bezier=swing_bezier,
             toe_out=np.clip(toe_out, -1.0, 1.0),
             spin=spin_now,
+            speed=np.broadcast_to(np.asarray(speed, dtype=float), sl.shape).copy(),
         )
 
 

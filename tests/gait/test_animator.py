@@ -280,3 +280,43 @@ def test_unplanned_swing_sole_never_enters_a_curb_or_a_threshold(case):
         t += 0.6
         z0 = z1
     assert worst <= 5e-3
+
+
+def _swing_knee_peak(speed_blend):
+    """Peak swing knee flexion [deg] of two identical 0.65 m steps of a 1.75 m body,
+    commanded at Bovi's slowest (0.85 m/s) and fastest (1.96 m/s) level speeds."""
+    from crowdwalk.gait.elevinterp import ElevInterp, ElevInterpConfig
+
+    body = Body.from_heights([1.75, 1.75])
+    interp = ElevInterp(config=ElevInterpConfig(speed_blend=speed_blend))
+    animator = Animator(body, ground=_flat, interp=interp)
+    hip, knee, ankle = (JOINT_NAMES.index(n) for n in ("r_hip", "r_knee", "r_talocrural"))
+    peak = np.zeros(2)
+    for s in range(3):
+        y = 0.045 if s % 2 == 0 else -0.045
+        start = np.array([[s * 0.65, y, 0.0]] * 2)
+        target = np.array([[(s + 1) * 0.65, -y, 0.0]] * 2)
+        cmd = _command([0, 1], s * 0.6, 1 if s % 2 == 0 else 0, start, target)
+        animator.command(StepCommand(**{**cmd.__dict__, "speed": np.array([0.85, 1.96])}))
+        for f in range(30):
+            p = animator.pose(s * 0.6 + f / 50.0).positions
+            thigh, shank = p[:, knee] - p[:, hip], p[:, ankle] - p[:, knee]
+            cos = np.sum(thigh * shank, 1) / np.linalg.norm(thigh, axis=1) / np.linalg.norm(
+                shank, axis=1)
+            peak = np.maximum(peak, np.degrees(np.arccos(np.clip(cos, -1, 1))))
+    return peak
+
+
+def test_speed_blend_changes_swing_knee_with_speed():
+    """ElevInterp's speed blend (extension of §5): the same step walked faster takes the
+    fast dataset's larger swing knee flexion (Bovi 2011 level_l − level_xs ≈ 3.8°); the
+    paper's ElevInterp (blend off) animates both alike."""
+    from crowdwalk.gait.datasets import load_datasets
+
+    sets = {d.name: d.angles for d in load_datasets()}
+    knee = {k: np.degrees(sets[k][:, 2] - sets[k][:, 1]).max() for k in ("level_xs", "level_l")}
+    gap = knee["level_l"] - knee["level_xs"]
+    slow, fast = _swing_knee_peak(True)
+    assert fast - slow > 0.5 * gap
+    slow0, fast0 = _swing_knee_peak(False)
+    assert abs(fast0 - slow0) < 0.1
