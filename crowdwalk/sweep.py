@@ -30,7 +30,6 @@ import json
 import math
 import os
 import shutil
-import time
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -230,17 +229,11 @@ def manifest_row(trial: Trial, summary: dict) -> dict:
     return row
 
 
-def _warm(scenario: str) -> float:
-    """Compile (or load) the numba kernels in a worker: one agent, one simulated second."""
-    import tempfile
+def _warm() -> float:
+    """Compile (or load) the numba kernels in a worker (:mod:`crowdwalk.warm`)."""
+    from crowdwalk.warm import warm_kernels
 
-    from crowdwalk.crowd.run import RunOverrides, run_scenario
-
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        run_scenario(scenario, tmp, overrides=RunOverrides(max_agents=1, duration=1.0,
-                                                             poses=True))
-    return time.perf_counter() - t0
+    return warm_kernels()
 
 
 def run_sweep(spec: SweepSpec, out: str | Path, *, scheduler: str | None = None,
@@ -266,7 +259,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, *, scheduler: str | None = None,
         else:
             client = Client(scheduler)
         try:
-            client.run(_warm, str(spec.scenario))  # kernels compiled before work starts
+            client.run(_warm)  # every worker's kernels compiled before work starts
             futures = [client.submit(run_trial, spec, t, str(out), key=f"trial-{t.name}",
                                      pure=False, retries=2) for t in todo]
             for done, fut in enumerate(as_completed(futures), 1):
