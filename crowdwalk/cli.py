@@ -123,17 +123,20 @@ def schema() -> None:
 def plan_command(
     profile: Path = typer.Option(..., "--profile", help="CSV with columns s,z [m]; a vertical "
                                  "height change is two rows with the same s."),
-    planner: str = typer.Option("best_first", "--planner",
-                                help="best_first (Chen & Li), fixed (unplanned) or optimal."),
+    planner: str = typer.Option("best_first_multistart", "--planner",
+                                help="best_first (Chen & Li as written), "
+                                "best_first_multistart, fixed (unplanned) or optimal."),
     body_height: float = typer.Option(1.75, "--body-height", help="Body height [m]."),
     speed: float = typer.Option(1.34, "--speed", help="Walking speed [m/s]."),
+    horizon: bool = typer.Option(False, "--horizon", help="Plan one horizon from s = 0 "
+                                 "instead of walking the whole profile."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     plot: Path | None = typer.Option(None, "--plot", help="Write a plot of the plan (PNG)."),
 ) -> None:
-    """Plan the next footsteps on a ground profile (exit 1 when no legal foothold)."""
+    """Walk a ground profile by receding horizon (exit 1 where no legal foothold)."""
     from crowdwalk.planning import format_plan, plan_profile
 
-    result = plan_profile(profile, planner, body_height, speed, plot)
+    result = plan_profile(profile, planner, body_height, speed, plot, horizon=horizon)
     typer.echo(format_plan(result, as_json))
     if plot is not None and not as_json:
         typer.echo(f"wrote the plan plot {plot}")
@@ -229,8 +232,9 @@ def run(
 @friendly_errors
 def compare(
     scenario: Path = typer.Argument(..., help="Scenario YAML file."),
-    planners: str = typer.Option("best_first,fixed", "--planners",
-                                 help="Comma-separated planners to compare."),
+    planners: str = typer.Option("best_first,best_first_multistart,optimal,fixed",
+                                 "--planners", help="Comma-separated planners to compare "
+                                 "(each against fixed, the unplanned walker)."),
     out: Path = typer.Option(..., "--out", help="Folder for the runs and report.md."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
@@ -305,10 +309,21 @@ def sweep(
 @app.command()
 @friendly_errors
 def analyse(run_dir: Path = typer.Argument(..., help="Run folder.")) -> None:
-    """Analyse the scenario's measurement lines and areas with PedPy into RUN/analysis/."""
+    """PedPy analysis into RUN/analysis/: speeds along the 3-D path (speeds_3d.csv) and the
+    scenario's measurement lines and areas."""
     from crowdwalk.analysis import analyse_run
+    from crowdwalk.record import open_run
+    from crowdwalk.scenario import parse_scenario
+    from crowdwalk.speeds3d import write_walking_speeds
 
-    result = analyse_run(run_dir)
+    _warn_incomplete(run_dir)
+    typer.echo(write_walking_speeds(run_dir))
+    scenario = open_run(run_dir).scenario_path
+    measurement = parse_scenario(scenario.read_text(encoding="utf-8"), str(scenario)).measurement
+    if not (measurement.lines or measurement.areas):
+        typer.echo("no measurement lines or areas in the scenario: nothing more to analyse.")
+        return
+    result = analyse_run(run_dir, measurement)
     for kind in ("lines", "areas"):
         for row in result[kind]:
             typer.echo(f"{kind[:-1]} {row['name']}: " + ", ".join(
@@ -454,6 +469,28 @@ def render(
     what = "the picture" if suffix == ".png" else "the movie"
     typer.echo(f"wrote {what} {out}; next: open it in an image viewer"
                + (f", or `crowdwalk view {target}` to explore" if target.is_dir() else ""))
+
+
+# --- gait engines against people (issue 13): gait-compare ---------------------------
+
+
+@app.command("gait-compare")
+@friendly_errors
+def gait_compare_command(
+    out: Path = typer.Option(Path("gait_compare"), "--out", help="Folder for the runs."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write the curves figure (PNG)."),
+) -> None:
+    """Run the same lone walker at 1.0, 1.33 and 1.7 m/s with every gait engine and print
+    joint-angle RMS / r against Winter and step length / cadence against WBDS."""
+    from crowdwalk.gait.engine import GAIT_ENGINES
+    from crowdwalk.gait_compare import comparison_table, plot_comparison, run_comparison
+
+    engines = tuple(GAIT_ENGINES)
+    rows = run_comparison(out, engines=engines,
+                          progress=lambda e, v: typer.echo(f"ran {e} at {v:g} m/s", err=True))
+    typer.echo(comparison_table(rows))
+    if plot is not None:
+        typer.echo(f"wrote {plot_comparison(rows, plot)}")
 
 
 def main() -> None:

@@ -10,29 +10,30 @@ agents together; the searches then only look tables up.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
 
 from planners.config import PlannerConfig
 from planners.energy import (
+    frequency_energy,
+    normal_step,
     step_energy,
     terminal_energy,
     total_energy,
     vertical_energy,
     walking_energy,
 )
+from planners.leg import Leg
 from planners.legality import Reason, foot_support, snap_to_support
-from planners.profile import _VERTICAL, GroundProfile
+from planners.profile import _VERTICAL, RASTER_CELL, GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
 
-__all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_profiles",
-           "grid", "neutral_index"]
+__all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables",
+           "combine_profiles", "grid", "neutral_index"]
 
 
-#: Cell of the conservative height raster used for swing collision checks [m].
-RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 #: Extra clearance of the reusable curves for straight sloped spans [m].
 SLOPE_EXTRA = 0.03
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
@@ -262,6 +263,33 @@ class _LegArrays:
 
 
 @dataclass(frozen=True, eq=False)
+class TableWork:
+    """What building the tables did, per agent (A,) each, counted where it was done.
+
+    Attributes
+    ----------
+    steps : ndarray of int
+        Lattice steps whose legality and energy were evaluated.
+    key_frames : ndarray of int
+        Steps whose key frames were solved by inverse kinematics (the others are level
+        steps on level ground, looked up in the per-leg cache).
+    swing_curves : ndarray of int
+        Swing curves built and checked by the §5.2 adjustment.
+    swing_curves_reused : ndarray of int
+        Swing curves taken from the per-leg flat-ground cache (sheared to a slope) and
+        checked against the slack the cache recorded.
+    swing_adjustments : ndarray of int
+        §5.2 adjustment rounds of the curves built.
+    """
+
+    steps: np.ndarray
+    key_frames: np.ndarray
+    swing_curves: np.ndarray
+    swing_curves_reused: np.ndarray
+    swing_adjustments: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class StepTables:
     """Per-agent tables (A agents, Nn nodes, Ns steps, Np swings).
 
@@ -297,6 +325,8 @@ class StepTables:
         0 where unused) [J/kg].
     reach : ndarray, shape (A,)
         Farthest last foothold of the lattice, relative to the stance foot [m].
+    work : TableWork
+        What building the tables did, per agent.
     """
 
     struct: Structure
@@ -321,6 +351,7 @@ class StepTables:
     progress: np.ndarray
     terminal: np.ndarray
     reach: np.ndarray
+    work: TableWork
 
     @cached_property
     def step_legal(self) -> np.ndarray:
@@ -398,10 +429,38 @@ def flat_swings(legs, config: PlannerConfig, extra: float = 0.0):
 
 
 def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Shortest step and increment (A,) [m] of each leg's step-length grid."""
+    """Shortest step and increment (A,) [m] of each leg's step-length grid (shifted by
+    ``grid_shift`` increments for an :class:`AnchoredLeg`)."""
     length = np.array([leg.length for leg in legs])
     lo = config.min_step_ratio * length
-    return lo, (config.max_step_ratio * length - lo) / config.intervals
+    delta = (config.max_step_ratio * length - lo) / config.intervals
+    shift = np.array([getattr(leg, "grid_shift", 0.0) for leg in legs])
+    return lo + shift * delta, delta
+
+
+#: Grid shifts are multiples of 1/GRID_SHIFTS increment (so the per-leg caches stay small).
+GRID_SHIFTS = 16
+
+
+@dataclass(frozen=True)
+class AnchoredLeg(Leg):
+    """A leg whose step-length grid is anchored on its normal-mode step for one speed
+    (``PlannerConfig.step_model = "normal_mode"``): the grid is shifted by ``grid_shift``
+    increments (|shift| <= 1/2) so that grid node ``neutral`` is that step."""
+
+    grid_shift: float = 0.0
+    neutral: int = 0
+
+
+def anchored_legs(legs, speeds: np.ndarray, config: PlannerConfig) -> list[AnchoredLeg]:
+    """Each leg anchored on its normal-mode step at its speed [m/s] (to 1/32 increment)."""
+    lo, delta = grid(legs, config)
+    u = (normal_step(_LegArrays(legs), np.asarray(speeds, float)[:, None])[:, 0] - lo) / delta
+    k = np.clip(np.floor(u + 0.5), 0, config.intervals).astype(int)
+    shift = np.round(np.clip(u - k, -0.5, 0.5) * GRID_SHIFTS) / GRID_SHIFTS
+    names = [f.name for f in fields(Leg)]
+    return [AnchoredLeg(**{n: getattr(leg, n) for n in names}, grid_shift=float(q),
+                        neutral=int(j)) for leg, q, j in zip(legs, shift, k, strict=True)]
 
 
 _NEUTRAL_CACHE: dict = {}
@@ -424,8 +483,14 @@ def neutral_energy_per_metre(legs, speeds: np.ndarray, config: PlannerConfig) ->
     entries = [_NEUTRAL_CACHE[(leg, config)] for leg in legs]
     v = 60.0 * np.asarray(speeds, dtype=float)
     # En per metre is (32 + 0.005 v^2) / v [cal/(kg m)]; the rest does not depend on v.
-    alpha = config.weights.alpha
-    return alpha * (32.0 + 0.005 * v**2) / v + np.array([e[1] for e in entries])
+    w = config.weights
+    walking = w.alpha * (32.0 + 0.005 * v**2) / v
+    if config.step_model == "normal_mode":
+        lo, delta = grid(legs, config)
+        L = lo + delta * np.array([e[0] for e in entries])
+        normal = normal_step(_LegArrays(legs), np.asarray(speeds, float)[:, None])[:, 0]
+        walking = walking * (1.0 + w.frequency * (normal / L - 1.0) ** 2)
+    return walking + np.array([e[1] for e in entries])
 
 
 def _neutral(legs, config: PlannerConfig) -> None:
@@ -437,10 +502,15 @@ def _neutral(legs, config: PlannerConfig) -> None:
     leg = _LegArrays(missing)
     zero = np.zeros_like(L)
     summit = leg.ankle_height + 0.75 * config.swing_lift + zero
-    En, _, Ej, E, reachable = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
+    # Eqs. 1-4 alone: the speed-dependent frequency term is added per speed by the callers
+    paper = replace(config, step_model="paper")
+    En, _, Ej, E, reachable = step_energy(zero, zero, L, zero, summit, leg, 1.0, paper)
     if len(_NEUTRAL_CACHE) > 4096:
         _NEUTRAL_CACHE.clear()
     best = np.argmax(L / E, axis=1)
+    anchored = np.array([isinstance(m, AnchoredLeg) for m in missing])
+    if anchored.any():
+        best = np.where(anchored, [getattr(m, "neutral", 0) for m in missing], best)
     rows = np.arange(len(missing))
     rest = (E - config.weights.alpha * En)[rows, best] / L[rows, best]  # [J/(kg m)]
     for i, leg_i in enumerate(missing):
@@ -479,6 +549,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     """
     A = len(profiles)
     st = structure(config.n_steps, config.intervals + 1)
+    if config.step_model == "normal_mode":
+        legs = anchored_legs(legs, speeds, config)
     lo, delta = grid(legs, config)
     neutral = neutral_index(legs, config)
     if trailing is None:
@@ -515,6 +587,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     Ej = np.take_along_axis(flat_Ej, np.broadcast_to(st.step_j, rise.shape), axis=1)
     reachable = np.take_along_axis(flat_reach, np.broadcast_to(st.step_j, rise.shape), axis=1)
     other = np.nonzero(~level)
+    key_frames = np.bincount(other[0], minlength=A)
     if other[0].size:
         sub = legs_col.take(other[0])
         summit_z = highest[other] + sub.ankle_height + 0.75 * config.swing_lift
@@ -525,6 +598,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     En = walking_energy(length, speeds[:, None])
     Ev = vertical_energy(rise, w.down_ratio, w.vertical)
     E = total_energy(En, Ev, Ej, w)
+    if config.step_model == "normal_mode":
+        E = E + frequency_energy(En, length, normal_step(legs_col, speeds[:, None]), w)
     per_metre = neutral_energy_per_metre(legs, speeds, config)
     last = slice(st.node_offset[st.n], None)  # the nodes of depth n
     far = node_s[:, last].max(axis=1)  # (A,) every plan's common end
@@ -559,6 +634,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     controls = np.zeros((A, P, 4, 2))
     rounds = np.full((A, P), -1)
     swing_ok = np.zeros((A, P), dtype=bool)
+    built, reused, adjustments = (np.zeros(A, dtype=np.int64) for _ in range(3))
     agent_of, which = np.nonzero(needed)
     if agent_of.size:
         b_node, f_node = back[which], front[which]
@@ -602,6 +678,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             controls[ag, which[rows]] = ctrl
             rounds[ag, which[rows]] = 0
             swing_ok[ag, which[rows]] = True
+            reused += np.bincount(ag, minlength=A)
         rest = ~flat
         if rest.any():
             margin = 2 * float(legs_col.foot_length.max())
@@ -615,6 +692,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             controls[ag, which[rest]] = ctrl
             rounds[ag, which[rest]] = swing.rounds
             swing_ok[ag, which[rest]] = swing.ok
+            built += np.bincount(ag, minlength=A)
+            adjustments += np.bincount(ag, weights=swing.rounds, minlength=A).astype(np.int64)
     return StepTables(st, lo, delta, neutral, per_metre,
                       node_s, node_z, length, rise, En, Ev, Ej, E, reason,
-                      swing_ok, controls, rounds, config, cost, progress, terminal, far)
+                      swing_ok, controls, rounds, config, cost, progress, terminal, far,
+                      TableWork(np.full(A, rise.shape[1]), key_frames, built, reused,
+                                adjustments))

@@ -76,10 +76,12 @@ def test_uphill_steps_shorten_with_the_linear_form_and_jump_with_the_printed_one
 
     leg = Leg.from_body_height(1.75)
     ramp = GroundProfile(np.array([-2.0, -1.0, 8.0]), np.array([0.0, 0.0, 0.9]))  # 10 %
-    level = plan(GroundProfile.flat(), leg, 1.34, "optimal").step_lengths.mean()
-    linear = plan(ramp, leg, 1.34, "optimal").step_lengths.mean()
+    eqs = PlannerConfig(step_model="paper")  # Eqs. 1-4 alone (no step-frequency term)
+    level = plan(GroundProfile.flat(), leg, 1.34, "optimal", eqs).step_lengths.mean()
+    linear = plan(ramp, leg, 1.34, "optimal", eqs).step_lengths.mean()
     printed = plan(ramp, leg, 1.34, "optimal",
-                   PlannerConfig(weights=EnergyWeights(vertical="paper"))).step_lengths.mean()
+                   PlannerConfig(step_model="paper",
+                                 weights=EnergyWeights(vertical="paper"))).step_lengths.mean()
     assert linear < level < printed
     assert printed == pytest.approx(1.05 * leg.length, rel=1e-6)  # the longest grid step
 
@@ -128,3 +130,19 @@ def test_terminal_energy_lets_a_low_obstacle_be_stridden_over(leg):
                - 2 * 6.3 * 3.0)
     over = terminal_energy(low, *args) - 6.3 * 3.0
     assert 0 < over < step_on
+
+
+def test_fitted_constants_are_selectable_and_price_descent_below_ascent(leg):
+    """The measured constants (scripts/fit_energy_constants.py) plan like any others; a
+    stair step down costs less than the step up, by more than with the hand-set ones."""
+    from planners import EnergyWeights, GroundProfile, PlannerConfig, plan
+
+    fitted = PlannerConfig(weights=EnergyWeights.fitted())
+    ratios = []
+    for config in (PlannerConfig(), fitted):
+        up = plan(GroundProfile.stairs(0.17, 0.30, 6, first_edge=0.4), leg, 0.6, config=config)
+        down = plan(GroundProfile.stairs(-0.17, 0.30, 6, first_edge=0.4), leg, 0.6,
+                    config=config)
+        assert up.ok and down.ok
+        ratios.append(down.energy_per_metre / up.energy_per_metre)
+    assert ratios[1] < ratios[0] < 1
