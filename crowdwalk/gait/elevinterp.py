@@ -236,7 +236,9 @@ class ElevInterpConfig:
         (where Eq. 10 folds between toe-first and heel-first landings).
     speed_blend : bool
         Requests with a ``speed`` also blend the level datasets by walking speed (an
-        extension of §5, see the module notes); False is the paper's ElevInterp.
+        extension of §5, see the module notes); False (default) is the paper's
+        ElevInterp. Off by default: measured on lone walkers it raises the hip and knee
+        RMS against Winter (docs/architecture.md, "Speed blend").
     speed_fade : float
         The speed residual fades linearly to zero at this |step height| [leg lengths].
     """
@@ -248,7 +250,7 @@ class ElevInterpConfig:
     shape_resolution: float = 0.005
     extrapolation: float = 0.2
     last_resort_extrapolation: float = 1.0
-    speed_blend: bool = True
+    speed_blend: bool = False
     speed_fade: float = 0.04
 
     def __post_init__(self) -> None:
