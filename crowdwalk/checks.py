@@ -70,12 +70,13 @@ def located(scenario, exc: InputError, default: tuple = ()) -> InputError:
 
 # --- memory ---------------------------------------------------------------------------
 
-# Bytes a run holds per agent (struct-of-arrays state, planner cache, steering index and the
-# pose batch; measured as peak RSS growth / agents on stadium_egress, 1,000 vs 5,000 agents,
-# rounded up) and per terrain grid node (heights, noise field and filter work arrays).
-BYTES_PER_AGENT = 200_000
+# Bytes a run holds per agent: `python benchmarks/bench_memory.py` measures ~3 kB of peak-RSS
+# growth per agent (stadium_egress, 100 -> 1,000 agents, poses on, 4 s); budgeted at 20 kB for
+# the planner cache and buffers a long run accumulates. Per terrain grid node: heights, the
+# noise field and the filter's work arrays (8 float64 arrays).
+BYTES_PER_AGENT = 20_000
 BYTES_PER_GRID_NODE = 64
-MAX_AGENTS = 1_000_000  # beyond any machine's memory for a run, whatever it reports
+MAX_AGENTS = 20_000  # 4x the largest crowd benchmarked (bench_crowd.py); setup grows beyond
 MAX_ROUTE_NODES = 10_000  # route nodes (and edges) per scenario: validation within seconds
 
 
@@ -127,10 +128,11 @@ def check_resources(scenario, memory: int | None = None) -> None:
     fit = min(MAX_AGENTS, budget // BYTES_PER_AGENT)
     if total > fit:
         i = max(range(len(scenario.groups)), key=lambda k: scenario.groups[k].count)
+        why = ("the largest crowd crowdwalk sets up in bounded time" if fit == MAX_AGENTS else
+               f"~{BYTES_PER_AGENT // 1000} kB each, {_gib(memory)} available")
         raise InputError(
             f"{scenario.where(('groups', i, 'count'))}: groups[{i}].count: the scenario's "
-            f"agents must number at most {fit:,} on this machine (~{BYTES_PER_AGENT // 1000} kB "
-            f"each, {_gib(memory)} available); got {total:,} in all.")
+            f"agents must number at most {fit:,} ({why}); got {total:,} in all.")
 
 
 def world_and_population(scenario):
