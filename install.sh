@@ -68,9 +68,10 @@ pip_install() {  # one line per package pip fetches; the whole pip output goes t
   say "installing crowdwalk and its dependencies into $VENV (a few minutes; log: $LOG)"
   "$VENV/bin/python" -m pip install --quiet --upgrade pip >"$LOG" 2>&1 ||
     { tail -n 20 "$LOG" >&2; exit 1; }
-  if ! "$VENV/bin/python" -m pip install --progress-bar off -e ".[dev]" 2>&1 | tee -a "$LOG" |
-       { grep -E --line-buffered '^(Collecting|Successfully installed)' | cut -c1-100 |
-         sed -u 's/^/  /' || true; }; then
+  if ! PYTHONUNBUFFERED=1 "$VENV/bin/python" -m pip install --progress-bar off -e ".[dev]" 2>&1 |
+       tee -a "$LOG" |
+       { grep -E --line-buffered '^(Collecting|Successfully installed)' |
+         sed -u 's/^\(.\{1,98\}\).*$/  \1/' || true; }; then
     say "pip failed; the end of $LOG:" >&2; tail -n 20 "$LOG" >&2; exit 1
   fi
   # embreex: faster mesh ray queries where a wheel exists; rtree (a base dependency) otherwise.
@@ -79,9 +80,16 @@ pip_install() {  # one line per package pip fetches; the whole pip output goes t
     say "optional embreex unavailable here; mesh terrain uses rtree"
 }
 
+warm_kernels() {  # compile the numba kernels now: the first run loads them (crowdwalk.warm)
+  say "compiling the numba kernels once (about a minute)"
+  if "$VENV/bin/python" -m crowdwalk.warm >>"$LOG" 2>&1; then say "kernels compiled"
+  else say "kernel warm-up failed (log: $LOG); the first run compiles them instead" >&2; fi
+}
+
 find_python
 need_venv_module
 apt_packages
 make_venv
 pip_install
+warm_kernels
 say "done: $("$VENV/bin/crowdwalk" --version). Activate the environment with: . .venv/bin/activate"

@@ -99,31 +99,37 @@ def _gib(n: float) -> str:
     return f"{n / 2**30:.1f} GiB"
 
 
+def _grid_nodes(f) -> float:
+    """Nodes of a rough-terrain grid, from its spec (a .npy file: from its header only)."""
+    if f.amplitude is not None:
+        return (f.size[0] / f.cell + 1) * (f.size[1] / f.cell + 1)
+    if f.heights is not None:
+        return len(f.heights) * max((len(r) for r in f.heights), default=0)
+    if f.heights_file.endswith(".npy") and os.path.exists(f.heights_file):
+        import numpy as np
+
+        return math.prod(np.load(f.heights_file, mmap_mode="r").shape)
+    return 0  # a CSV file: its size bounds its array
+
+
 def check_resources(scenario, memory: int | None = None) -> None:
     """Refuse agent counts and terrain grids that would not fit in ``memory`` [bytes]
     (default: what is available now), before any of them is allocated."""
     memory = available_memory() if memory is None else memory
     budget = memory // 2
     for i, f in enumerate(scenario.terrain.features):
-        if f.type != "rough":
+        nodes = _grid_nodes(f) if f.type == "rough" else 0
+        if nodes * BYTES_PER_GRID_NODE <= budget:
             continue
-        if f.amplitude is not None:
-            nodes = (f.size[0] / f.cell + 1) * (f.size[1] / f.cell + 1)
-        elif f.heights is not None:
-            nodes = len(f.heights) * max((len(r) for r in f.heights), default=0)
-        else:
-            continue  # a heights file: its array is checked when it is read
-        need = nodes * BYTES_PER_GRID_NODE
-        if need > budget:
-            min_cell = f.cell * math.sqrt(need / budget)
-            raise InputError(
-                f"{scenario.where(('terrain', 'features', i, 'cell'))}: terrain.features[{i}]."
-                f"cell must be ≥ {min_cell:.3g} m for this {f.size[0]:g} × {f.size[1]:g} m grid "
-                f"({nodes:.3g} nodes need ~{_gib(need)}; {_gib(memory)} available); "
-                f"got {f.cell:g}." if f.amplitude is not None else
-                f"{scenario.where(('terrain', 'features', i, 'heights'))}: terrain.features[{i}]."
-                f"heights must have at most {budget // BYTES_PER_GRID_NODE:,} values here; "
-                f"got {nodes:,}.")
+        fit = f"at most {budget // BYTES_PER_GRID_NODE:,} grid nodes ({_gib(memory)} available)"
+        if f.amplitude is None:
+            key = "heights" if f.heights is not None else "heights_file"
+            raise InputError(f"{scenario.where(('terrain', 'features', i, key))}: "
+                             f"terrain.features[{i}].{key} must have {fit}; got {nodes:,.0f}.")
+        min_cell = f.cell * math.sqrt(nodes * BYTES_PER_GRID_NODE / budget)
+        raise InputError(f"{scenario.where(('terrain', 'features', i, 'cell'))}: "
+                         f"terrain.features[{i}].cell must be ≥ {min_cell:.3g} m for a "
+                         f"{f.size[0]:g} × {f.size[1]:g} m grid of {fit} [m]; got {f.cell:g}.")
     total = sum(g.count for g in scenario.groups)
     fit = min(MAX_AGENTS, budget // BYTES_PER_AGENT)
     if total > fit:

@@ -45,9 +45,10 @@ from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
-from crowdwalk.population import Population, cadence_at, step_length_at
+from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
+from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
            "ACTIVE", "ARRIVED"]
@@ -90,8 +91,10 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
-        self.min_step_time = 1.0 / cadence_at(population.free_speed)
-        self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
+        # the normal-mode step and cadence of each body at its free speed (WBDS relation)
+        leg = normal_mode.leg_length_from_height(population.body_height)
+        self.min_step_time = 1.0 / normal_mode.step_frequency(population.free_speed, leg)
+        self.nominal_step = normal_mode.step_length(population.free_speed, leg)
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
         self.state = AgentState(n)

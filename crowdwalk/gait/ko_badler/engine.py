@@ -68,6 +68,7 @@ _PATH = np.linspace(0.0, 1.0, 17)  # ground samples along the swing path
 # Phys Ther 72:45-53 (1.29 ± 0.45 cm). The prototype's rigid marker foot with straight toes
 # would pass 1.2-1.5 cm below the floor in mid swing (its toe marker is 1.1 cm above the sole line).
 _TOE_CLEARANCE = 0.0129
+_BEZIER_RAMP = 0.25  # fraction of the swing over which the Bezier lift is eased in
 _UNEVEN = 0.01  # ground this far above the foothold line: the step is over uneven ground [m]
 
 
@@ -333,9 +334,10 @@ class KoBadlerEngine:
         if has_bez.any():
             w = np.stack([(1 - u) ** 3, 3 * (1 - u) ** 2 * u, 3 * (1 - u) * u**2, u**3], 1)
             z_bez = np.einsum("kc,kc->k", w[has_bez], bez[has_bez, :, 2])
-            lift = z_bez > fly[has_bez, 2]
-            fly[np.flatnonzero(has_bez)[lift], 2] = z_bez[lift]
-            self.stats["bezier_lifted"] += int(lift.sum())
+            up = np.maximum(z_bez - fly[has_bez, 2], 0.0)
+            ramp = np.clip((s[has_bez] - tom) / (_BEZIER_RAMP * (1 - tom)), 0.0, 1.0)
+            fly[has_bez, 2] += ramp * ramp * (3 - 2 * ramp) * up  # eased in after TOM
+            self.stats["bezier_lifted"] += int(np.count_nonzero(up > 0))
         p_ankle_sw = np.where(push[:, None], on_print(trail, self._yaw_trail[a], ankle_push), fly)
         yaw_fly = self._yaw_trail[a] + _wrap(self._psi1[a] - self._yaw_trail[a]) * np.clip(
             (s - tom) / (1 - tom), 0.0, 1.0)  # fmt: skip
