@@ -192,7 +192,7 @@ class StepCommand:
         if self.speed is not None:
             arr = _column(np.atleast_1d(self.speed), m, owner, "speed", "[m/s]")
             if not np.all(np.isfinite(arr) & (arr > 0)):
-                raise invalid(owner, "speed", "finite and > 0 [m/s]", arr.min())
+                raise invalid(owner, "speed", "finite and > 0 [m/s]", float(arr.min()))
             object.__setattr__(self, "speed", arr)
 
 

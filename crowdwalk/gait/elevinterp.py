@@ -531,7 +531,7 @@ class ElevInterp:
         if speed is not None and self.config.speed_blend:
             v = np.broadcast_to(np.asarray(speed, dtype=float), sl.shape)
             if not np.all(np.isfinite(v) & (v > 0)):
-                raise invalid("ElevInterp", "speed", "finite and > 0 [m/s]", v.min())
+                raise invalid("ElevInterp", "speed", "finite and > 0 [m/s]", float(v.min()))
             angles += self._speed_residual(v, served, props)
         achieved *= length[:, None]
         served *= length[:, None]
@@ -587,14 +587,14 @@ class ElevInterp:
                                _leg_of(np.repeat(props, len(level), axis=0)))
         lengths = lengths[:, 0].reshape(len(speed), len(level))  # (n, k) [leg lengths]
 
-        def weights(x, xs):  # (n, k) hat-function weights of x in the sorted knots xs
-            x = np.clip(x, xs[..., :1], xs[..., -1:])
-            j = np.clip((xs <= x).sum(axis=-1, keepdims=True) - 1, 0, xs.shape[-1] - 2)
-            lo, hi = np.take_along_axis(xs, j, -1), np.take_along_axis(xs, j + 1, -1)
+        def weights(x, xs):  # (n, k) hat-function weights of x (n, 1) in sorted knots xs
+            x = np.clip(x, xs[:, :1], xs[:, -1:])
+            j = np.clip((xs <= x).sum(axis=1, keepdims=True) - 1, 0, xs.shape[1] - 2)
+            lo, hi = np.take_along_axis(xs, j, 1), np.take_along_axis(xs, j + 1, 1)
             f = (x - lo) / np.where(hi > lo, hi - lo, 1.0)
-            w = np.zeros(xs.shape if xs.ndim == 2 else (len(x), xs.shape[-1]))
-            np.put_along_axis(w, j, 1.0 - f, -1)
-            np.put_along_axis(w, j + 1, f, -1)
+            w = np.zeros(xs.shape)
+            np.put_along_axis(w, j, 1.0 - f, 1)
+            np.put_along_axis(w, j + 1, f, 1)
             return w
 
         w_speed = np.zeros((len(speed), len(level)))
