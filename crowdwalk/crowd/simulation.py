@@ -45,9 +45,11 @@ from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
-from crowdwalk.population import Population, cadence_at, step_length_at
+from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
+from crowdwalk.style import LOCKS, normal_step_length
+from planners.normal_mode import leg_length_from_height, speed_from_step_length
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
            "ACTIVE", "ARRIVED"]
@@ -90,10 +92,27 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
-        self.min_step_time = 1.0 / cadence_at(population.free_speed)
-        self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
+        # KLAW locomotion parameters at the free speed (crowdwalk.style: normal mode = the
+        # measured step length(speed, leg length); locked mode holds length or frequency):
+        # the step length steering aims at and the shortest step time
+        style = population.style
+        self.nominal_step, frequency = style.locomotion(population.free_speed,
+                                                        population.body_height)
+        # a locked frequency is the step time; otherwise steps are no quicker than the
+        # normal mode's (a planned step shorter than a locked length keeps the speed)
+        normal = population.free_speed / normal_step_length(population.free_speed,
+                                                            population.body_height)
+        self.min_step_time = 1.0 / np.where(style.lock == LOCKS.index("step_frequency"),
+                                            frequency, np.maximum(frequency, normal))
+        # a held step length is planned as the normal-mode step of the speed it is normal
+        # at (the planners' neutral step and step-frequency term then centre on it)
+        leg = leg_length_from_height(population.body_height)
+        self.plan_speed = np.where(style.lock > 0, speed_from_step_length(
+            self.nominal_step, leg), population.free_speed)
+        self.half_width = 0.5 * population.style.stride_width  # ankle line from centre [m]
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
+        self.setting = self._style_settings()
         self.state = AgentState(n)
         self.queue = PlanQueue(n, self.footsteps.horizon)
         table = self.routes.table
@@ -184,7 +203,18 @@ class CrowdSimulation:
         if idx.size:
             p = self.pop.spawn_xy[idx]
             place(st, idx, t=t, xy=p, z=self.terrain.height(p), table=self.routes.table,
-                  foot_half_width=self.params.foot_half_width)
+                  foot_half_width=self.half_width[idx])
+
+    def _style_settings(self) -> np.ndarray:
+        """Planner configuration per walker (n,) (index into ``footsteps.configs``): the
+        crowd's, with the style's toe clearance as swing clearance [m] (to 5 mm)."""
+        from dataclasses import replace
+
+        clearance = np.round(self.pop.style.toe_clearance / 0.005) * 0.005
+        values, index = np.unique(clearance, return_inverse=True)
+        base = self.footsteps.config
+        return np.array([self.footsteps.add_config(replace(base, clearance=float(c)))
+                         for c in values], dtype=np.int64)[index]
 
     def _durations(self, a: np.ndarray, plan: StepPlan) -> np.ndarray:
         return step_durations(plan.length, plan.rise, free_speed=self.pop.free_speed[a],
@@ -234,7 +264,8 @@ class CrowdSimulation:
             plan = plan.put(mv, next_steps(
                 st, self.queue, agents=idx[mv], choice=choice.take(mv),
                 footsteps=self.footsteps, legs=self.legs, population=self.pop,
-                terrain=self.terrain, params=prm))
+                terrain=self.terrain, params=prm, plan_speed=self.plan_speed,
+                setting=self.setting))
             self.wall_planning += _time.perf_counter() - w0
             # the exact step taken, in time, against each neighbour's committed step
             go = np.flatnonzero(plan.move)
@@ -281,7 +312,7 @@ class CrowdSimulation:
         batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
                            plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
-                           foot_half_width=prm.foot_half_width)
+                           foot_half_width=self.half_width[a])
         self._decided.append(batch)
         if self.gait is not None:
             if self._pending and np.isin(a, np.concatenate([b.agent for b in self._pending])).any():
