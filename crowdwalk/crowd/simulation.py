@@ -45,10 +45,10 @@ from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
-from crowdwalk.population import Population
+from crowdwalk.population import Population, cadence_at, step_length_at
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
-from crowdwalk.style import LOCKS, normal_step_length
+from crowdwalk.style import LOCKS
 from planners.normal_mode import leg_length_from_height, speed_from_step_length
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -92,23 +92,21 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
-        # KLAW locomotion parameters at the free speed (crowdwalk.style: normal mode = the
-        # measured step length(speed, leg length); locked mode holds length or frequency):
-        # the step length steering aims at and the shortest step time
-        style = population.style
-        self.nominal_step, frequency = style.locomotion(population.free_speed,
-                                                        population.body_height)
-        # a locked frequency is the step time; otherwise steps are no quicker than the
-        # normal mode's (a planned step shorter than a locked length keeps the speed)
-        normal = population.free_speed / normal_step_length(population.free_speed,
-                                                            population.body_height)
-        self.min_step_time = 1.0 / np.where(style.lock == LOCKS.index("step_frequency"),
-                                            frequency, np.maximum(frequency, normal))
-        # a held step length is planned as the normal-mode step of the speed it is normal
-        # at (the planners' neutral step and step-frequency term then centre on it)
-        leg = leg_length_from_height(population.body_height)
-        self.plan_speed = np.where(style.lock > 0, speed_from_step_length(
-            self.nominal_step, leg), population.free_speed)
+        # KLAW locomotion parameters (crowdwalk.style): normal mode keeps the crowd's
+        # measured fits (Fukuchi et al. 2018, WBDS) for the step steering aims at and the
+        # shortest step time; a lock holds its step length or step frequency, and a held
+        # step length is planned at the speed it is the normal-mode step of (the
+        # planners' neutral step and step-frequency term then centre on it)
+        style, v, h = population.style, population.free_speed, population.body_height
+        held, frequency = style.locomotion(v, h)
+        locked = style.lock > 0
+        self.nominal_step = np.where(locked, held, step_length_at(v) * h / 1.71)
+        floor = cadence_at(v)
+        self.min_step_time = 1.0 / np.where(
+            style.lock == LOCKS.index("step_frequency"), frequency,
+            np.where(locked, np.maximum(frequency, floor), floor))
+        self.plan_speed = np.where(locked, speed_from_step_length(
+            self.nominal_step, leg_length_from_height(h)), v)
         self.half_width = 0.5 * population.style.stride_width  # ankle line from centre [m]
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
