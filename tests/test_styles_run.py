@@ -243,7 +243,8 @@ def test_marching_and_tired_are_told_apart_in_the_bvh(lanes):
     for label in ("klaw-marching", "elevation_angles-tired"):
         out = root / f"{label}.bvh"
         result = CliRunner().invoke(app, ["export-bvh", str(root / "run"), "--agent",
-                                          str(names[label]), "--out", str(out)])
+                                          str(names[label]), "--out", str(out),
+                                          "--names", "hanim"])
         assert result.exit_code == 0, result.output
         p = _bvh_positions(out)  # BVH: X forward here (heading +x), Y up, cm
         moving = np.flatnonzero(np.gradient(p["HumanoidRoot"][:, 0]) > 0.6)[40:]
