@@ -261,7 +261,7 @@ def summarise(sim: CrowdSimulation, scenario, *, timing: dict, max_overlap: floa
             "mean_step_length_m": opt(mean_sl[i]), "cadence_steps_per_s": opt(cadence[i]),
             "plans": int(st.plans[i]), "plan_failures": int(st.plan_failures[i]),
             "shortened_steps": int(st.shortened[i]), "reroutes": int(st.reroutes[i]),
-            "gait": str(gaits[i]), "style": str(styles[i]) or "custom",
+            "gait": str(gaits[i]), "style": str(styles[i]),  # "" without a preset
         }
         for i in range(sim.n)
     ]
