@@ -45,11 +45,11 @@ from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
-from crowdwalk.population import Population, cadence_at, step_length_at
+from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
-from planners.normal_mode import leg_length_from_height, speed_from_step_length
+from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
            "ACTIVE", "ARRIVED"]
@@ -92,22 +92,20 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
-        # KLAW locomotion parameters (crowdwalk.style): normal mode keeps the crowd's
-        # measured fits (Fukuchi et al. 2018, WBDS) for the step steering aims at and the
-        # shortest step time; a lock holds its step length or step frequency, and a held
-        # step length is planned at the speed it is the normal-mode step of (the
+        # KLAW locomotion parameters (crowdwalk.style) at the free speed: normal mode is
+        # the body's normal-mode step and cadence (planners.normal_mode, WBDS relation); a
+        # lock holds its step length (the step aimed at) or frequency (the step time), and
+        # a held step length is planned at the speed it is the normal-mode step of (the
         # planners' neutral step and step-frequency term then centre on it)
-        style, v, h = population.style, population.free_speed, population.body_height
-        held, frequency = style.locomotion(v, h)
-        locked = style.lock > 0
-        self.nominal_step = np.where(locked, held, step_length_at(v) * h / 1.71)
-        floor = cadence_at(v)
-        self.min_step_time = 1.0 / np.where(
-            style.lock == LOCKS.index("step_frequency"), frequency,
-            np.where(locked, np.maximum(frequency, floor), floor))
-        self.plan_speed = np.where(locked, speed_from_step_length(
-            self.nominal_step, leg_length_from_height(h)), v)
-        self.half_width = 0.5 * population.style.stride_width  # ankle line from centre [m]
+        style, v = population.style, population.free_speed
+        leg = normal_mode.leg_length_from_height(population.body_height)
+        self.nominal_step, frequency = style.locomotion(v, population.body_height)
+        normal = normal_mode.step_frequency(v, leg)
+        self.min_step_time = 1.0 / np.where(style.lock == LOCKS.index("step_frequency"),
+                                            frequency, np.maximum(frequency, normal))
+        self.plan_speed = np.where(style.lock > 0, normal_mode.speed_from_step_length(
+            self.nominal_step, leg), v)
+        self.half_width = 0.5 * style.stride_width  # ankle line from the centre [m]
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
         self.setting = self._style_settings()
