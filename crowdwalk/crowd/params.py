@@ -24,9 +24,6 @@ class CrowdParams:
         bottleneck passed 1.43 /s instead of Seyfried et al.'s (2009) 1.9 /s: two such
         discs abreast plus their wall clearance barely fit, so the two lanes of the
         "zipper" (Hoogendoorn & Daamen 2005) rarely formed).
-    foot_half_width : float
-        Lateral distance of each foot's centre from the walking line [m] (stride width
-        about 0.1 m, normative.json).
     wait_time : float
         How long an agent stands before deciding again when it cannot step [s].
     target_distance : float
@@ -58,7 +55,6 @@ class CrowdParams:
     """
 
     radius_ratio: float = 0.105
-    foot_half_width: float = 0.05
     wait_time: float = 0.25
     target_distance: float = 2.0
     centre_pull: float = 0.25
