@@ -50,8 +50,8 @@ def test_shortest_walk_inside_the_walkable_area():
     assert straight.shape == (2, 2)  # in sight: one straight leg
     walk = shapely.LineString(routes.shortest_walk((7.0, 4.0), (13.0, 4.0)))
     assert routes.walkable_area.buffer(1e-6).covers(walk)
-    assert walk.distance(shapely.box(9, 3, 11, 5)) >= 0.2  # legs from the ends may cut
-    # a corner of the 0.25 m offset a little
+    # legs from the two ends may cut a corner of the 0.25 m offset a little
+    assert walk.distance(shapely.box(9, 3, 11, 5)) >= 0.2
     # round the 2 m pillar's corners, 0.25 m off: 2 (sqrt(2^2 + 1.25^2)) = 4.72 m + 2 m
     assert 6.0 < walk.length < 7.0
 
