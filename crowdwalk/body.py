@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+import planners.leg as _leg
 from crowdwalk.errors import invalid
 
 __all__ = [
@@ -75,12 +76,14 @@ END_SITES: dict[str, str] = {
 
 PROPORTIONS: dict[str, float] = {
     # Winter (2009), Biomechanics and Motor Control of Human Movement, 4th ed., Fig. 4.1,
-    # after Drillis & Contini (1966): segment lengths as fractions of body height H.
+    # after Drillis & Contini (1966): segment lengths as fractions of body height H. The
+    # leg's (thigh, shank, ankle height, foot and the ankle's place on it) are the
+    # planners' (planners.leg), so that planned and animated legs are one leg.
     "hip_height": 0.530,  # greater trochanter ≈ hip joint centre
-    "thigh": 0.245,  # 0.530 - 0.285 (knee)
-    "shank": 0.246,  # 0.285 - 0.039 (ankle)
-    "ankle_height": 0.039,
-    "foot_length": 0.152,
+    "thigh": _leg.THIGH_RATIO,  # 0.245 = 0.530 - 0.285 (knee)
+    "shank": _leg.SHANK_RATIO,  # 0.246 = 0.285 - 0.039 (ankle)
+    "ankle_height": _leg.ANKLE_HEIGHT_RATIO,  # 0.039
+    "foot_length": _leg.FOOT_LENGTH_RATIO,  # 0.152
     "upper_arm": 0.186,
     "forearm": 0.146,
     "hand": 0.108,
@@ -89,16 +92,17 @@ PROPORTIONS: dict[str, float] = {
     "shoulder_width": 0.259,
     "hip_width": 0.191,
     # Estimates (not in Winter's figure), documented:
-    # - the ankle lies a quarter foot length ahead of the heel (heel 0.038 H, toe 0.114 H),
-    #   the convention shared with crowdwalk.gait.elevinterp.SagittalLeg;
+    # - the ankle lies a quarter foot length ahead of the heel (heel 0.038 H, toe 0.114 H;
+    #   planners.leg.HEEL_FRACTION), the convention shared with
+    #   crowdwalk.gait.elevinterp.SagittalLeg;
     # - the first metatarsal head (ball) 0.073 H ahead of the ankle (72 % of foot length
     #   from the heel);
     # - hip joint centres 0.52 x Winter's hip width apart (Bell et al. 1990: each HJC lies
     #   14 % of the inter-ASIS width medial to the ASIS);
     # - shoulder joint centres 0.8 x Winter's shoulder width apart;
     # - the L5 joint 0.05 H above the hip joint centres.
-    "heel_offset": 0.038,
-    "toe_offset": 0.114,
+    "heel_offset": _leg.HEEL_FRACTION * _leg.FOOT_LENGTH_RATIO,
+    "toe_offset": (1 - _leg.HEEL_FRACTION) * _leg.FOOT_LENGTH_RATIO,
     "ball_offset": 0.073,
     "hip_separation": 0.52 * 0.191,
     "shoulder_separation": 0.8 * 0.259,
@@ -186,9 +190,9 @@ class Body:
             thigh=p["thigh"] * h,
             shank=p["shank"] * h,
             ankle_height=p["ankle_height"] * h,
-            heel_offset=p["heel_offset"] * h,
+            heel_offset=_leg.HEEL_FRACTION * (p["foot_length"] * h),
             ball_offset=p["ball_offset"] * h,
-            toe_offset=p["toe_offset"] * h,
+            toe_offset=(1 - _leg.HEEL_FRACTION) * (p["foot_length"] * h),
             foot_length=p["foot_length"] * h,
             hip_separation=p["hip_separation"] * h,
             hip_height=p["hip_height"] * h,
@@ -208,6 +212,17 @@ class Body:
     def take(self, index: np.ndarray) -> Body:
         """The bodies at ``index`` (integer or boolean array)."""
         return Body(**{k: getattr(self, k)[index] for k in self.__dataclass_fields__})
+
+    def planning_legs(self) -> list:
+        """The ``planners.Leg`` of each body (n,): the same thigh, shank, ankle height and
+        foot the body is animated with [m]."""
+        from planners import Leg
+
+        return [Leg(thigh=float(self.thigh[i]), shank=float(self.shank[i]),
+                    foot_length=float(self.foot_length[i]),
+                    heel_offset=float(self.heel_offset[i]),
+                    toe_offset=float(self.toe_offset[i]),
+                    ankle_height=float(self.ankle_height[i])) for i in range(len(self))]
 
     @property
     def leg_length(self) -> np.ndarray:

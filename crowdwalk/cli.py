@@ -22,9 +22,37 @@ app = typer.Typer(
 )
 
 
+def _version(value: bool) -> None:
+    if value:
+        from crowdwalk import __version__
+
+        typer.echo(f"crowdwalk {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                 help="Print the version and exit."),
+) -> None:
+    """Crowds of walking people that plan their footsteps."""
+
+
 def _fail(message: str, code: int) -> None:
     typer.echo(f"crowdwalk: {message}", err=True)
     raise typer.Exit(code)
+
+
+def _warn_incomplete(target: Path) -> None:
+    """Say on stderr when ``target`` is a run folder a killed run left (no summary.json)."""
+    from crowdwalk.cli_conventions import incomplete_note
+
+    note = incomplete_note(target)
+    if note:
+        typer.echo(f"crowdwalk: warning: {note}", err=True)
+
+
+_OVERWRITE = typer.Option(False, "--overwrite", help="Replace the run files in a non-empty --out.")
 
 
 def friendly_errors(func):
@@ -41,7 +69,9 @@ def friendly_errors(func):
         except FileNotFoundError as exc:
             _fail(f"file not found: {exc.filename or exc}", 2)
         except (ValueError, OSError) as exc:
-            _fail(str(exc), 2)
+            from crowdwalk.checks import plain
+
+            _fail(plain(str(exc)).splitlines()[0] if str(exc) else type(exc).__name__, 2)
 
     return wrapper
 
@@ -55,11 +85,11 @@ def validate(scenario: Path = typer.Argument(..., help="Scenario YAML file.")) -
     """Check a scenario file against the schema and build its world."""
     from collections import Counter
 
+    from crowdwalk.checks import world_and_population
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     sc = load_scenario(scenario)
-    world = build_world(sc)
+    world, _ = world_and_population(sc)
     n = sum(g.count for g in sc.groups)
     x0, y0, x1, y1 = world.terrain.bounds
     kinds = Counter(f.type for f in sc.terrain.features)
@@ -105,6 +135,8 @@ def plan_command(
 
     result = plan_profile(profile, planner, body_height, speed, plot)
     typer.echo(format_plan(result, as_json))
+    if plot is not None and not as_json:
+        typer.echo(f"wrote the plan plot {plot}")
     if not result.ok:
         raise typer.Exit(1)
 
@@ -131,12 +163,12 @@ def _sim_progress(quiet: bool, label: str):
 def _check_before_running(scenario: Path, overrides) -> None:
     """Check the overrides, load the scenario and build its world (milliseconds), so that
     bad input ends with its one-line message before a progress bar is drawn."""
+    from crowdwalk.checks import world_and_population
     from crowdwalk.crowd.run import check_overrides
     from crowdwalk.scenario import load_scenario
-    from crowdwalk.world import build_world
 
     check_overrides(overrides)
-    build_world(load_scenario(scenario))
+    world_and_population(load_scenario(scenario))
 
 
 def _term_as_interrupt() -> None:
@@ -159,11 +191,14 @@ def run(
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     planner: str = typer.Option(None, "--planner", help="Override every group's planner."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
+    overwrite: bool = _OVERWRITE,
 ) -> None:
     """Simulate a scenario and write trajectories, footsteps, poses and a summary."""
+    from crowdwalk.cli_conventions import check_out_folder, next_hint
     from crowdwalk.crowd.run import RunOverrides, run_scenario
 
     _term_as_interrupt()
+    check_out_folder(out, overwrite, "run")
     overrides = RunOverrides(planner=planner, duration=duration)
     _check_before_running(scenario, overrides)
     with _sim_progress(quiet, scenario.stem) as bar:
@@ -175,14 +210,18 @@ def run(
                 bar.update(task, completed=t, total=total, remaining=remaining)
 
         summary = run_scenario(scenario, out, overrides=overrides, progress=update)
-    if not quiet:
-        tm = summary["timing"]
-        typer.echo(
-            f"{summary['agents_arrived']}/{summary['agents_total']} agents arrived in "
-            f"{summary['simulated_time_s']:.1f} s simulated, {tm['wall_s']:.1f} s wall "
-            f"({tm['simulated_s_per_wall_s']:.2f}× real time); poses {summary['poses']}. "
-            f"Run folder: {out}"
-        )
+    arrived = f"{summary['agents_arrived']}/{summary['agents_total']} agents arrived"
+    if quiet:
+        typer.echo(f"wrote the run folder {out} ({arrived}); {next_hint(f'crowdwalk view {out}')}")
+        return
+    tm = summary["timing"]
+    typer.echo(
+        f"{arrived} in {summary['simulated_time_s']:.1f} s simulated, {tm['wall_s']:.1f} s wall "
+        f"({tm['simulated_s_per_wall_s']:.2f}× real time); poses {summary['poses']}.\n"
+        f"wrote the run folder {out}: trajectories.sqlite (PedPy), footsteps.csv, "
+        f"{'poses.sqlite, ' if (out / 'poses.sqlite').exists() else ''}summary.json.\n"
+        + next_hint(f"crowdwalk view {out}", f"crowdwalk render {out} --out {out}/frame.png",
+                    f"crowdwalk analyse {out}"))
 
 
 @app.command()
@@ -194,12 +233,15 @@ def compare(
     out: Path = typer.Option(..., "--out", help="Folder for the runs and report.md."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
+    overwrite: bool = _OVERWRITE,
 ) -> None:
     """Run the same scenario, seed and agents with each planner; write report.md."""
+    from crowdwalk.cli_conventions import check_out_folder, next_hint
     from crowdwalk.compare import check_planners, compare_planners
     from crowdwalk.crowd.run import RunOverrides
 
     _term_as_interrupt()
+    check_out_folder(out, overwrite, "compare")
     names = [p.strip() for p in planners.split(",") if p.strip()]
     check_planners(names)
     _check_before_running(scenario, RunOverrides(duration=duration))
@@ -213,8 +255,8 @@ def compare(
                            remaining=remaining)
 
         report = compare_planners(scenario, names, out, duration=duration, progress=update)
-    if not quiet:
-        typer.echo(f"Report: {report}")
+    typer.echo(f"wrote the report {report} and one run folder per planner in {out}; "
+               + next_hint(f"crowdwalk view {out}/{names[0]}"))
 
 
 # --- measurement and verification (issue 14): analyse, verify ---------------------
@@ -262,8 +304,25 @@ def export_bvh_command(
     """Write one agent's full-body motion as a BVH file."""
     from crowdwalk.export_bvh import export_bvh
 
+    _warn_incomplete(run_dir)
     path = export_bvh(run_dir, agent, out, scale=scale)
-    typer.echo(f"wrote {path}")
+    typer.echo(f"wrote agent {agent}'s motion to {path}; next: import it in Blender "
+               "(File > Import > Motion Capture) or any BVH reader")
+
+
+@app.command("gait-report")
+@friendly_errors
+def gait_report_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    plot: Path = typer.Option(None, "--plot", help="PNG of the joint curves to write."),
+) -> None:
+    """Gait of a run's walkers against Winter, WBDS and Bovi (measured from the run)."""
+    from crowdwalk.gait_report import plot_curves, report_table, run_figures
+
+    figures = run_figures(run_dir)
+    typer.echo(report_table(figures))
+    if plot is not None:
+        typer.echo(f"wrote {plot_curves(figures, plot)}")
 
 
 # --- viewer (issue 6): view, render -------------------------------------------------
@@ -288,11 +347,13 @@ def view(
 ) -> None:
     """Open the interactive viewer (keys: space play/pause, ←/→ one frame, ↑/↓ speed,
     c colour, f follow)."""
-    from crowdwalk.viz.headless import has_display
+    from crowdwalk.viz.headless import display_problem
 
-    if not has_display():
-        _fail("view needs a display (DISPLAY or WAYLAND_DISPLAY is unset); "
+    problem = display_problem()
+    if problem:
+        _fail(f"view needs a window, but {problem}; "
               "use `crowdwalk render` for pictures and movies off-screen.", 2)
+    _warn_incomplete(target)
     from crowdwalk.viz import Scene
 
     Scene.load(target, color=color, follow=follow, footprint_trail=trail).show(time=time)
@@ -327,10 +388,16 @@ def render(
         raise invalid("render", "start", "unset for a .png (use --time) [s]", (start, end))
     if suffix != ".png" and time is not None:
         raise invalid("render", "time", "unset for a movie (use --start/--end) [s]", time)
+    from crowdwalk.cli_conventions import check_time
     from crowdwalk.viz import Scene
     from crowdwalk.viz.headless import gl_available
 
+    _warn_incomplete(target)
     scene = Scene.load(target, color=color, follow=follow, footprint_trail=trail)
+    if scene.poses is not None:  # a run: from its start (t = 0) to its last frame
+        t_range = (min(scene.time_range[0], 0.0), scene.time_range[1])
+        for name, value in (("time", time), ("start", start), ("end", end)):
+            check_time(value, t_range, name)
     if not gl_available():
         _fail(_GL_MISSING, 2)
     if suffix == ".png":
@@ -344,7 +411,9 @@ def render(
                 out, start=start, end=end, fps=fps, size=width_height, speed=speed,
                 progress=lambda done, total: bar.update(task, completed=done, total=total),
             )
-    typer.echo(f"wrote {out}")
+    what = "the picture" if suffix == ".png" else "the movie"
+    typer.echo(f"wrote {what} {out}; next: open it in an image viewer"
+               + (f", or `crowdwalk view {target}` to explore" if target.is_dir() else ""))
 
 
 def main() -> None:

@@ -353,6 +353,26 @@ def _direction_lines(planners, directions: dict, baseline: str) -> list[str]:
     return lines + ["", "\\* the interval excludes 0.", ""]
 
 
+def _style_lines(planners, summaries) -> list[str]:
+    """The "By style" table (KLAW styles, :func:`crowdwalk.style.summary_by_style`)."""
+    from crowdwalk.style import summary_by_style
+
+    rows = [(name, style, v) for name in planners
+            for style, v in summary_by_style(summaries[name]["agents"]).items()]
+    if len({style for _, style, _ in rows}) < 2:
+        return []
+    lines = ["## By style", "",
+             "| planner | style | gait | agents | arrived | travel time [s] | energy per "
+             "metre [J/(kg m)] | step length [m] | cadence [steps/s] |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, style, v in rows:
+        lines.append(f"| {name} | {style} | {', '.join(v['gait'])} | {v['agents']} | "
+                     f"{v['arrived']} | {_fmt(v['travel_time_s'])} | "
+                     f"{_fmt(v['energy_per_metre_J_per_kg_m'])} | "
+                     f"{_fmt(v['mean_step_length_m'])} | {_fmt(v['cadence_steps_per_s'])} |")
+    return lines + [""]
+
+
 def _report_text(scenario, planners, summaries, tables, pngs, out: Path, *,
                  directions=None, trips=None, baseline=None) -> str:
     first = summaries[planners[0]]
@@ -396,6 +416,7 @@ def _report_text(scenario, planners, summaries, tables, pngs, out: Path, *,
     ]
     if trips:
         lines += _trip_lines(trips, baseline)
+    lines += _style_lines(planners, summaries)
     lines += [
         "## By terrain type",
         "",

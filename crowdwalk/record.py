@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from crowdwalk.errors import invalid
+from crowdwalk.steps import FOOTSTEP_COLUMNS, StepBatch
 
 __all__ = [
     "FOOTSTEP_COLUMNS",
@@ -41,28 +42,6 @@ __all__ = [
     "PoseRecord",
     "open_run",
 ]
-
-#: Columns of ``footsteps.csv`` in order. Units: time [s]; x, y, z [m] (ankle foothold,
-#: world frame); step_length, step_height [m]; energy [planner energy unit, per step];
-#: heading [rad]; kind is the :class:`~crowdwalk.terrain.TerrainKind` value under the
-#: foothold; on_obstacle is 1 when the foothold is on an obstacle (BLOCK) cell.
-FOOTSTEP_COLUMNS = (
-    "agent",
-    "step",
-    "time",
-    "foot",
-    "x",
-    "y",
-    "z",
-    "step_length",
-    "step_height",
-    "energy",
-    "planner",
-    "group",
-    "heading",
-    "kind",
-    "on_obstacle",
-)
 
 _TRAJECTORY_SCHEMA = """
 CREATE TABLE IF NOT EXISTS metadata(key TEXT NOT NULL UNIQUE PRIMARY KEY, value TEXT NOT NULL);
@@ -93,7 +72,7 @@ def _blob(array: np.ndarray, dtype: str) -> bytes:
 
 
 class RunWriter:
-    """Write a run folder incrementally.
+    """Write a run folder incrementally; a :class:`crowdwalk.sinks.RunSink`.
 
     Parameters
     ----------
@@ -153,6 +132,34 @@ class RunWriter:
             )
             self._poses.execute("INSERT INTO pose_meta VALUES ('fps', ?)", (repr(self.fps),))
         self.flush()
+
+    # --- the RunSink protocol ---------------------------------------------------------
+
+    def begin(self, info) -> None:
+        """Describe the run's agents (``crowdwalk.sinks.RunInfo``) in ``poses.sqlite``."""
+        self.write_agents(np.arange(len(info)), info.body_height, list(info.group),
+                          list(info.planner))
+
+    def steps(self, batch: StepBatch) -> None:
+        """Append the footsteps of a :class:`~crowdwalk.steps.StepBatch`."""
+        self.write_footsteps(batch.footstep_columns())
+
+    def frame(self, time: float, snapshot, poses) -> None:
+        """Append one output frame (a ``crowdwalk.sinks.Snapshot``) and its poses (a
+        ``crowdwalk.gait.engine.PoseFrame`` or None); commit once per simulated second."""
+        s = snapshot
+        self.write_frame(s.frame, s.agents, s.xy, s.z, s.orientation)
+        if poses is not None:
+            self.write_pose(s.frame, time, poses.agents, poses.root_position,
+                            poses.root_quaternion, poses.joints, poses.positions,
+                            poses.contact, poses.fallback)
+        if s.frame > 0 and s.frame % max(1, int(round(self.fps))) == 0:
+            self.flush()
+
+    def end(self, summary: dict) -> None:
+        """Write ``summary.json`` and close the files."""
+        self.write_summary(summary)
+        self.close()
 
     # --- trajectories ---------------------------------------------------------------
 
@@ -460,6 +467,12 @@ class Run:
         self.footsteps_path = path / "footsteps.csv"
         self.poses_path = path / "poses.sqlite"
         self.summary_path = path / "summary.json"
+
+    @property
+    def complete(self) -> bool:
+        """Whether the run wrote ``summary.json`` (finished, or interrupted cleanly); a run
+        killed outright (SIGKILL, power loss) has only what its last flush wrote."""
+        return self.summary_path.exists()
 
     @property
     def summary(self) -> dict:

@@ -27,6 +27,8 @@ serves every agent going there.
 from __future__ import annotations
 
 import functools
+import math
+import re
 from dataclasses import dataclass
 
 import networkx as nx
@@ -34,6 +36,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point, Polygon
 
+from crowdwalk.checks import MAX_ROUTE_NODES
 from crowdwalk.errors import InfeasibleError, existing_file, invalid
 
 __all__ = ["Place", "Corridor", "RouteCosts", "RouteGraph", "spawn_points",
@@ -146,18 +149,75 @@ def spawn_points(area, n: int, rng: np.random.Generator, min_spacing: float = 0.
     cand = rng.uniform((x0, y0), (x1, y1), size=(int(m / max(area.area / ((x1 - x0) * (y1 - y0)),
                                                              1e-3)) + 1, 2))
     cand = cand[shapely.contains_xy(area, cand[:, 0], cand[:, 1])][:m]
-    chosen = np.empty((n, 2))
-    k = 0
     d2 = min_spacing**2
-    for c in cand:
-        if k == 0 or np.min(np.sum((chosen[:k] - c) ** 2, axis=1)) >= d2:
-            chosen[k] = c
-            k += 1
-            if k == n:
-                return chosen
+    densest = int(0.9069 * area.area / (math.pi * d2 / 4)) if d2 else n  # hexagonal packing
+    if d2 == 0 or n > densest:  # no spacing to keep, or more discs than can ever fit
+        k = len(cand) if d2 == 0 else densest
+        if k >= n:
+            return cand[:n].copy()
+    else:
+        chosen = _dart_throw(cand, n, min_spacing)
+        if len(chosen) == n:
+            return chosen
+        k = len(chosen)
     fit = max(k, 1)
     raise invalid("spawn_points", "n", f"at most about {fit} for an area of {area.area:.1f} m² "
                   f"at min_spacing {min_spacing} m", n)
+
+
+def _dart_throw(cand: np.ndarray, n: int, spacing: float) -> np.ndarray:
+    """The first ``n`` candidates (m, 2) [m], in order, each at least ``spacing`` [m] from
+    the ones taken before it (a grid of spacing/√2 cells holds at most one point each, so
+    a candidate is compared with the points of the 5 × 5 cells around it only)."""
+    h = spacing / math.sqrt(2)
+    d2 = spacing**2
+    cells = np.floor((cand - cand.min(axis=0, initial=0.0)) / h).astype(np.int64)
+    taken: dict[tuple[int, int], tuple[float, float]] = {}
+    out: list[tuple[float, float]] = []
+    for first in range(0, len(cand), 4096):  # in chunks: the first n usually suffice
+        chunk = zip(cand[first:first + 4096].tolist(), cells[first:first + 4096].tolist(),
+                    strict=True)
+        for (x, y), (i, j) in chunk:
+            if all((p := taken.get((i + di, j + dj))) is None
+                   or (p[0] - x) ** 2 + (p[1] - y) ** 2 >= d2
+                   for di in (-2, -1, 0, 1, 2) for dj in (-2, -1, 0, 1, 2)):
+                taken[(i, j)] = (x, y)
+                out.append((x, y))
+                if len(out) == n:
+                    return np.array(out, dtype=float)
+    return np.array(out, dtype=float).reshape(-1, 2)
+
+
+GRAPHML_WIDTH = 2.0  # [m] corridor width of a GraphML edge without ``width`` (a footway)
+
+
+def _graphml_float(value, owner: str, name: str) -> float:
+    """A GraphML number; OSMnx writes several values of a merged way as "['3', '4']"
+    (the smallest is taken)."""
+    if isinstance(value, str):
+        numbers = re.findall(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|nan|inf", value)
+        if len(numbers) != 1 and not value.strip().startswith("["):
+            raise invalid(owner, name, "a number [m]", value)
+        value = min(map(float, numbers), default=math.nan)
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise invalid(owner, name, "a number [m]", value) from None
+    if not math.isfinite(value):
+        raise invalid(owner, name, "a finite number [m]", value)
+    return value
+
+
+def _graphml_bool(value, owner: str, name: str) -> bool:
+    """A GraphML boolean, also the strings "True"/"false"/"yes"/"0" OSMnx and others write."""
+    if isinstance(value, bool | int | float):
+        return bool(value)
+    text = str(value).strip().lower()
+    if text in ("true", "yes", "1"):
+        return True
+    if text in ("false", "no", "0", ""):
+        return False
+    raise invalid(owner, name, "true or false", value)
 
 
 def lattice_points(area, n: int, density: float, rng: np.random.Generator, *,
@@ -309,29 +369,39 @@ class RouteGraph:
     @classmethod
     def from_graphml(cls, path, terrain=None, costs: RouteCosts = RouteCosts(),
                      obstacles=()) -> RouteGraph:
-        """Read places and corridors from GraphML written by :meth:`to_graphml` (or any
-        GraphML with node attributes ``x``, ``y`` [m] and edge attribute ``width`` [m];
-        optional ``area`` and ``geometry`` as WKT, ``oneway`` bool)."""
+        """Read places and corridors from GraphML written by :meth:`to_graphml`, OSMnx
+        (``ox.save_graphml`` of a projected graph) or any tool: node attributes ``x``, ``y``
+        [m]; optional edge attributes ``width`` [m] (default :data:`GRAPHML_WIDTH`),
+        ``geometry`` and node ``area`` as WKT, ``oneway`` (true/false, also as the strings
+        OSMnx writes). A pair of opposite edges (a two-way street) is one corridor; of
+        parallel edges the first is kept."""
         path = existing_file(path)
         try:
             g = nx.read_graphml(path)
         except Exception as exc:  # noqa: BLE001 - parser errors of several kinds
             raise invalid("GraphML", "file", "valid GraphML", f"{path}: {exc}") from exc
-        places, corridors = [], []
+        if g.number_of_nodes() > MAX_ROUTE_NODES:
+            raise invalid("GraphML", "nodes", f"at most {MAX_ROUTE_NODES:,}", g.number_of_nodes())
+        places, corridors, seen = [], [], set()
         for n, d in g.nodes(data=True):
             if "x" not in d or "y" not in d:
                 raise invalid(f"GraphML.nodes[{n!r}]", "x/y", "present [m]", sorted(d))
             area = shapely.from_wkt(d["area"]) if d.get("area") else None
-            places.append(Place(str(n), float(d["x"]), float(d["y"]), area))
+            places.append(Place(str(n), _graphml_float(d["x"], f"GraphML.nodes[{n!r}]", "x"),
+                                _graphml_float(d["y"], f"GraphML.nodes[{n!r}]", "y"), area))
         for a, b, d in g.edges(data=True):
-            if "width" not in d:
-                raise invalid(f"GraphML.edges[{a!r}->{b!r}]", "width", "present [m]", sorted(d))
+            owner = f"GraphML.edges[{a!r}->{b!r}]"
+            if frozenset((a, b)) in seen:
+                continue
+            seen.add(frozenset((a, b)))
             via = ()
             if d.get("geometry"):
                 via = tuple(map(tuple, shapely.get_coordinates(shapely.from_wkt(d["geometry"]))
                                 [1:-1]))
-            corridors.append(Corridor(str(a), str(b), float(d["width"]), via,
-                                      bool(d.get("oneway", False))))
+            width = _graphml_float(d.get("width", GRAPHML_WIDTH), owner, "width")
+            oneway = _graphml_bool(d.get("oneway", False), owner, "oneway") and \
+                not g.has_edge(b, a)
+            corridors.append(Corridor(str(a), str(b), width, via, oneway))
         return cls(places, corridors, terrain, costs, obstacles)
 
     def to_graphml(self, path) -> None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal, get_args
+from typing import Annotated, Literal
 
 import numpy as np
 import yaml
@@ -23,6 +23,7 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    PrivateAttr,
     ValidationError,
     ValidationInfo,
     field_validator,
@@ -37,8 +38,10 @@ from crowdwalk.behaviours import (
     ObstacleSpec,
     WaitingAreaSpec,
 )
+from crowdwalk.checks import MAX_ROUTE_NODES
 from crowdwalk.errors import InputError, existing_file
 from crowdwalk.style import GaitName, LockSpec, StyleSpec
+from planners import PLANNERS
 
 __all__ = [
     "Scenario",
@@ -55,8 +58,8 @@ __all__ = [
     "PLANNER_NAMES",
 ]
 
-PlannerName = Literal["best_first", "fixed", "optimal"]
-PLANNER_NAMES: tuple[str, ...] = get_args(PlannerName)
+PLANNER_NAMES: tuple[str, ...] = tuple(sorted(PLANNERS))
+PlannerName = Literal[PLANNER_NAMES]  # the planners' names (planners.PLANNERS)
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
@@ -66,7 +69,8 @@ NonNeg = Annotated[float, Field(ge=0)]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True,
+                              allow_inf_nan=False)
 
 
 def _resolve(value: str | None, info: ValidationInfo) -> str | None:
@@ -242,9 +246,12 @@ class TerrainSpec(_Model):
 
     def build(self):
         """The :class:`crowdwalk.terrain.Terrain` this section describes."""
+        from crowdwalk.checks import at
         from crowdwalk.terrain import Terrain
 
-        return Terrain(self.extent, self.base, tuple(f.build() for f in self.features))
+        features = tuple(at(("terrain", "features", i), f.build)
+                         for i, f in enumerate(self.features))
+        return at(("terrain",), Terrain, self.extent, self.base, features)
 
 
 # --- routes -------------------------------------------------------------------------
@@ -272,8 +279,8 @@ class RoutesSpec(_Model):
     """The route graph: inline ``nodes`` and ``edges``, or a ``graphml`` file."""
 
     graphml: str | None = None
-    nodes: list[NodeSpec] = []
-    edges: list[EdgeSpec] = []
+    nodes: list[NodeSpec] = Field([], max_length=MAX_ROUTE_NODES)
+    edges: list[EdgeSpec] = Field([], max_length=MAX_ROUTE_NODES)
 
     _resolve_graphml = field_validator("graphml")(_resolve)
 
@@ -346,6 +353,7 @@ class Normal(_Model):
 # distribution of European adult men (≈1.78 m) and women (≈1.65 m), NCD Risk Factor
 # Collaboration, "A century of trends in adult human height", eLife 5:e13410 (2016).
 DEFAULT_BODY_HEIGHT = Normal(mean=1.71, sd=0.09, min=1.45, max=2.05)
+MIN_FREE_SPEED = 0.1  # [m/s]; slower is standing still (planned as speed class 0)
 # Free walking speed: Weidmann (1993), Transporttechnik der Fussgänger, ETH Zürich,
 # mean 1.34 m/s, sd 0.26 m/s.
 DEFAULT_FREE_SPEED = Normal(mean=1.34, sd=0.26, min=0.6, max=2.1)
@@ -415,8 +423,9 @@ class Group(_Model):
     @classmethod
     def _speed_range(cls, v: Normal) -> Normal:
         lo, hi = v.bounds
-        if lo <= 0 or hi > 3.0:
-            raise ValueError(f"free speeds must lie in (0, 3] m/s; got [{lo}, {hi}]")
+        if lo < MIN_FREE_SPEED or hi > 3.0:  # the planner's speed classes are 5 cm/s wide
+            raise ValueError(f"free speeds must lie in [{MIN_FREE_SPEED}, 3] m/s; "
+                             f"got [{lo:g}, {hi:g}]")
         return v
 
 
@@ -449,6 +458,13 @@ class Scenario(_Model):
     events: list[EventSpec] = []
     waiting_areas: list[WaitingAreaSpec] = []
     measurement: MeasurementSpec = MeasurementSpec()
+    _source: str = PrivateAttr("<scenario>")
+    _root: object = PrivateAttr(None)  # the YAML node graph it was read from
+
+    def where(self, loc: tuple) -> str:
+        """``"file:line"`` of a field path such as ``("groups", 0, "spawn")``."""
+        line = _line(self._root, loc)
+        return f"{self._source}:{line}" if line else self._source
 
     def cross_errors(self) -> list[tuple[tuple, str]]:
         """Problems between sections as (field path, message); empty when consistent."""
@@ -572,6 +588,7 @@ _CONSTRAINTS = {
     "int_from_float": "an integer",
     "int_type": "an integer",
     "float_parsing": "a number",
+    "finite_number": "a finite number",
     "float_type": "a number",
     "bool_parsing": "true or false",
     "bool_type": "true or false",
@@ -630,14 +647,17 @@ def _short(value) -> str:
 
 def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scenario:
     """Validate scenario YAML ``text``; ``base_dir`` resolves relative file paths."""
+    from crowdwalk.safe_yaml import compose_bounded, construct
+
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.load(text, Loader=yaml.SafeLoader)
+        root = compose_bounded(text, source)
+        data = construct(root)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise _fail(source, mark.line + 1 if mark else None, f"not valid YAML: {problem}.") \
-            from None
+        line = mark.line + 1 if mark else text.count("\n", 0, getattr(exc, "position", 0)) + 1
+        problem = getattr(exc, "problem", None) or getattr(exc, "reason", None) or \
+            str(exc).splitlines()[0]
+        raise _fail(source, line, f"not valid YAML: {problem}.") from None
     if not isinstance(data, dict):
         raise _fail(source, 1, f"scenario must be a mapping of sections; got "
                     f"{type(data).__name__}.")
@@ -671,13 +691,21 @@ def parse_scenario(text: str, source: str = "<scenario>", base_dir=None) -> Scen
     if errs:
         loc, msg = errs[0]
         raise _fail(source, _line(root, loc), f"{_loc_text(loc)} {msg}.")
+    sc._source, sc._root = source, root
     return sc
 
 
 def load_scenario(path) -> Scenario:
     """Read and validate a scenario YAML file (paths inside are relative to it)."""
     path = existing_file(path)
-    return parse_scenario(path.read_text(encoding="utf-8"), str(path), path.parent)
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _fail(str(path), data.count(b"\n", 0, exc.start) + 1,
+                    f"a scenario file must be UTF-8 text; got byte {data[exc.start]:#04x}.") \
+            from None
+    return parse_scenario(text, str(path), path.parent)
 
 
 def scenario_json_schema() -> dict:

@@ -47,6 +47,7 @@ __all__ = [
     "Spread",
     "normal_step_length",
     "sample_styles",
+    "summary_by_style",
 ]
 
 GaitName = Literal["elevation_angles", "klaw", "ko_badler"]
@@ -104,7 +105,7 @@ ATTRIBUTES: tuple[Attribute, ...] = (
               "KLAW's knee_bend (§2.2): least knee flexion in single stance"),
     Attribute("knee_impact", "deg", 3.0, 0.0, 30.0,
               "knee flexion at heel strike"),
-    Attribute("toe_clearance", "m", 0.02, 0.005, 0.25,
+    Attribute("toe_clearance", "m", 0.02, 0.005, 0.08,
               "least height of the swing foot above the ground (planner and gait engine)"),
     Attribute("foot_angle", "deg", 7.0, -15.0, 30.0,
               "toe-out of the feet from the walking direction"),
@@ -196,7 +197,8 @@ class Style:
                 bad = x[~((x >= a.lo - 1e-9) & (x <= a.hi + 1e-9))][0]
                 raise invalid("Style", a.name, f"in [{a.lo:g}, {a.hi:g}] [{a.unit}]", float(bad))
         if np.any(self.elbow_max < self.elbow_min - 1e-12):
-            raise invalid("Style", "elbow_max", ">= elbow_min", np.rad2deg(self.elbow_max).min())
+            raise invalid("Style", "elbow_max", ">= elbow_min [deg]",
+                          float(np.rad2deg(self.elbow_max).min()))
         if not np.all(self.velocity > 0):
             raise invalid("Style", "velocity", "> 0 [m/s]", float(self.velocity.min()))
 
@@ -396,3 +398,32 @@ def sample_styles(groups, group: np.ndarray, body_height: np.ndarray, free_speed
                 cols["velocity"][rows] = v
     return Style(**cols)
 
+
+
+def summary_by_style(agents: list[dict]) -> dict[str, dict]:
+    """Per style (the agents' ``style`` key, a preset name or ``"custom"``): agents,
+    arrived, mean travel time [s], energy per metre [J/(kg m)] (steps' energy over the
+    distance walked), mean step length [m] and cadence [steps/s] of the agents in a
+    run summary's ``agents`` list that stepped."""
+    out: dict[str, dict] = {}
+    for name in sorted({a.get("style", "") for a in agents}):
+        rows = [a for a in agents if a.get("style", "") == name and a["steps"] > 0]
+        if not rows:
+            continue
+        travel = [a["travel_time_s"] for a in rows if a["travel_time_s"] is not None]
+        dist = sum(a["distance_m"] for a in rows)
+
+        def mean(key, rows=rows):
+            values = [a[key] for a in rows if a.get(key) is not None]
+            return float(np.mean(values)) if values else None
+
+        out[name or "custom"] = {
+            "agents": len(rows), "arrived": len(travel),
+            "gait": sorted({a.get("gait", "elevation_angles") for a in rows}),
+            "travel_time_s": float(np.mean(travel)) if travel else None,
+            "energy_per_metre_J_per_kg_m": (sum(a["energy_J_per_kg"] for a in rows) / dist
+                                            if dist > 0 else None),
+            "mean_step_length_m": mean("mean_step_length_m"),
+            "cadence_steps_per_s": mean("cadence_steps_per_s"),
+        }
+    return out

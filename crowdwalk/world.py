@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from shapely.geometry import Polygon
 
-from crowdwalk.errors import invalid
+from crowdwalk.errors import InputError, invalid
 from crowdwalk.routes import RouteGraph
 from crowdwalk.scenario import Scenario
 from crowdwalk.terrain import Terrain
@@ -29,8 +29,19 @@ def build_world(scenario: Scenario) -> World:
     """Build the terrain and the route graph of a validated ``scenario``.
 
     Raises :class:`~crowdwalk.errors.InputError` for geometry that does not fit together
-    (a corridor leaving the terrain or climbing a wall, a spawn polygon off the ground).
+    (a corridor leaving the terrain or climbing a wall, a spawn polygon off the walkable
+    area, more agents or grid nodes than memory holds), located as ``file:line: ...``.
     """
+    from crowdwalk.checks import check_resources, located
+
+    try:
+        check_resources(scenario)
+        return _build_world(scenario)
+    except InputError as exc:
+        raise located(scenario, exc) from None
+
+
+def _build_world(scenario: Scenario) -> World:
     terrain = scenario.terrain.build()
     routes = scenario.routes.build(terrain, [o.geometry() for o in scenario.obstacles])
     for i, g in enumerate(scenario.groups):
@@ -42,6 +53,10 @@ def build_world(scenario: Scenario) -> World:
             if not terrain.area.covers(poly):
                 raise invalid(f"Scenario.groups[{i}]", "spawn",
                               f"inside the terrain extent {terrain.bounds} [m]", g.spawn)
+            if not routes._walkable_tolerant.covers(poly):
+                raise invalid(f"Scenario.groups[{i}]", "spawn",
+                              "inside the walkable area (a node's area or a corridor) [m]",
+                              g.spawn)
     _check_reachable(scenario, routes)
     _check_behaviours(scenario, routes)
     return World(scenario, terrain, routes)

@@ -10,8 +10,8 @@ not), 1 cm apart, with every ground edge between two samples located by bisectio
 measured exactly. The sole points are rebuilt from the stored root and local joint quaternions by
 forward kinematics (the stored positions have no foot orientation).
 
-The step each agent-frame belongs to comes from the step commands the crowd sends to the
-Animator (logged by wrapping ``Animator.command``): its rise (step-up > 2 cm, step-down,
+The step each agent-frame belongs to comes from the steps the crowd decides (logged by a
+run sink, :class:`StepLog`): its rise (step-up > 2 cm, step-down,
 level), whether the planner supplied a Bezier swing curve (planned) or not (a shortened or
 positioning step, ``_shorten``), and the swing phase. Prints one table per scenario and a
 list of the worst agent-frames.
@@ -30,7 +30,6 @@ import numpy as np
 
 from crowdwalk.body import LEG_JOINTS, Body, forward_kinematics
 from crowdwalk.crowd.run import RunOverrides, run_scenario
-from crowdwalk.gait import animator as animator_mod
 from crowdwalk.record import open_run
 from crowdwalk.scenario import load_scenario
 from crowdwalk.world import build_world
@@ -93,31 +92,28 @@ def penetration(height, sole: np.ndarray, bisections: int = 10) -> np.ndarray:
     return pen
 
 
-class CommandLog:
-    """Wraps ``Animator.command`` and keeps every step command's fields."""
+class StepLog:
+    """A run sink (``crowdwalk.sinks.RunSink``) that keeps every decided step's timing,
+    swing foot, rise, length and whether the planner gave it a swing curve."""
 
     def __init__(self) -> None:
         self.rows: list[dict] = []
-        self._orig = animator_mod.Animator.command
 
-    def __enter__(self):
-        log = self
+    def begin(self, info) -> None:
+        pass
 
-        def command(anim, cmd):
-            bez = cmd.swing_bezier
-            planned = (np.all(np.isfinite(bez), axis=(1, 2)) if bez is not None
-                       else np.zeros(cmd.agent.size, bool))  # fmt: skip
-            log.rows.append(dict(agent=cmd.agent.copy(), t0=cmd.time.copy(),
-                                 duration=cmd.duration.copy(), foot=cmd.swing_foot.copy(),
-                                 rise=cmd.target[:, 2] - cmd.start[:, 2], planned=planned,
-                                 length=cmd.step_length.copy()))  # fmt: skip
-            return log._orig(anim, cmd)
+    def steps(self, batch) -> None:
+        planned = np.all(np.isfinite(batch.swing_bezier), axis=(1, 2))
+        self.rows.append(dict(agent=batch.agent, t0=batch.start_time, duration=batch.duration,
+                              foot=batch.foot.astype(int),
+                              rise=batch.target[:, 2] - batch.start[:, 2], planned=planned,
+                              length=batch.length))  # fmt: skip
 
-        animator_mod.Animator.command = command
-        return self
+    def frame(self, time, snapshot, poses) -> None:
+        pass
 
-    def __exit__(self, *exc):
-        animator_mod.Animator.command = self._orig
+    def end(self, summary) -> None:
+        pass
 
     def table(self) -> dict[str, np.ndarray]:
         return {k: np.concatenate([r[k] for r in self.rows]) for k in self.rows[0]}
@@ -131,9 +127,9 @@ def case_of(rise: np.ndarray, planned: np.ndarray) -> np.ndarray:
 def measure(scenario: str, out: Path, duration=None, fps=None) -> dict:
     """Run ``scenario`` into ``out`` and measure the swing soles; returns arrays over the
     agent-frames (depth [m], agent, time, case, phase, fallback, x, y)."""
-    with CommandLog() as log:
-        run_scenario(ROOT / scenario if not Path(scenario).is_absolute() else scenario, out,
-                     overrides=RunOverrides(poses=True, duration=duration, fps=fps))
+    log = StepLog()
+    run_scenario(ROOT / scenario if not Path(scenario).is_absolute() else scenario, out,
+                 overrides=RunOverrides(poses=True, duration=duration, fps=fps), sinks=[log])
     cmds = log.table()
     terrain = build_world(load_scenario(out / "scenario.yaml")).terrain
     run = open_run(out)

@@ -188,6 +188,7 @@ def test_killed_crowdwalk_run_stays_readable(tmp_path):
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait()
     run = open_run(tmp_path)
+    assert not run.complete  # no summary.json: readers name the folder an incomplete run
     traj = run.trajectories()
     assert traj.frame.max() >= 20 and len(np.unique(traj.id)) >= 2
     steps = run.footsteps()

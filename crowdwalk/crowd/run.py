@@ -9,15 +9,15 @@ readable; Ctrl-C (and SIGTERM at the CLI) still writes ``summary.json`` with
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from crowdwalk.crowd.simulation import ARRIVED, WAITING, CrowdParams, CrowdSimulation
 from crowdwalk.errors import invalid
+from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
 
 __all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
@@ -79,9 +79,8 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
     overrides = overrides or RunOverrides()
     check_overrides(overrides)
     params = params or CrowdParams()
-    from crowdwalk.population import Population
+    from crowdwalk.checks import world_and_population
     from crowdwalk.scenario import Scenario, load_scenario
-    from crowdwalk.world import build_world
 
     if isinstance(scenario, Scenario):
         sc = scenario
@@ -90,9 +89,7 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
         path = Path(scenario)
         sc = load_scenario(path)
         text = path.read_text()
-    world = build_world(sc)
-    rng = np.random.default_rng(sc.simulation.seed)
-    pop = Population.from_scenario(sc, world.routes, rng)
+    world, pop = world_and_population(sc)
     if overrides.planner is not None:
         pop = pop.with_planner(overrides.planner)
     if overrides.max_agents is not None:
@@ -101,23 +98,28 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
     duration = overrides.duration if overrides.duration is not None else sc.simulation.duration
     fps = overrides.fps if overrides.fps is not None else sc.simulation.fps
     want_poses = sc.outputs.poses if overrides.poses is None else overrides.poses
-    animator, pose_note = None, "disabled (outputs.poses is false)"
+    gait, pose_note = None, "disabled (outputs.poses is false)"
     if want_poses:
         try:
-            animator = _make_animator(pop.body_height, world.terrain)
+            gait = _make_gait(pop, world.terrain)
             pose_note = "written"
         except ImportError as exc:  # a build without the gait package: say so, go on
             pose_note = f"not available in this build ({exc})"
     sim = CrowdSimulation(world, pop, dt=sc.simulation.dt, fps=fps, duration=duration,
-                          params=params, animator=animator)
+                          params=params, gait=gait)
     return sc, world, sim, pose_note, text
 
 
-def _make_animator(heights: np.ndarray, terrain):
+def _make_gait(pop, terrain):
+    """The gait engine of the population: each group's (``groups[].gait``) over all bodies,
+    behind one :class:`~crowdwalk.gait.engine.MixedEngine` when groups differ."""
     from crowdwalk.body import Body
-    from crowdwalk.gait.animator import Animator
+    from crowdwalk.gait.engine import MixedEngine, make_engine
 
-    return Animator(Body.from_heights(heights), ground=terrain.height)
+    body = Body.from_heights(pop.body_height)
+    names, choice = np.unique(pop.gait.astype(str), return_inverse=True)
+    engines = [make_engine(str(name), body=body, ground=terrain.height) for name in names]
+    return engines[0] if len(engines) == 1 else MixedEngine(engines, choice)
 
 
 def run_scenario(
@@ -127,6 +129,7 @@ def run_scenario(
     overrides: RunOverrides | None = None,
     progress: ProgressCallback | None = None,
     params: CrowdParams | None = None,
+    sinks: Sequence[RunSink] = (),
 ) -> dict:
     """Simulate ``scenario`` and write the run folder ``out``.
 
@@ -139,6 +142,9 @@ def run_scenario(
     progress : callable, optional
         ``progress(simulated_time [s], duration [s], agents_remaining)`` once per frame.
     params : CrowdParams
+    sinks : sequence of crowdwalk.sinks.RunSink
+        Further observers of the run, after the run folder's writer and the overlap
+        monitor.
 
     Returns
     -------
@@ -149,76 +155,61 @@ def run_scenario(
 
     wall0 = time.perf_counter()
     sc, world, sim, pose_note, text = prepare(scenario, overrides, params)
-    want_poses = sim.animator is not None
-    skeleton = sim.animator.skeleton if sim.animator is not None else None
+    skeleton = sim.gait.skeleton if sim.gait is not None else None
     writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
                        fps=sim.fps, skeleton=skeleton)
+    overlap = OverlapMonitor()
+    everyone: list[RunSink] = [writer, overlap, *sinks]
     pop = sim.pop
-    groups = np.asarray(pop.group_names, dtype=object)[pop.group]
-    if skeleton is not None:
-        writer.write_agents(np.arange(sim.n), pop.body_height, list(groups),
-                            list(pop.planner.astype(str)))
+    info = RunInfo(fps=sim.fps, body_height=pop.body_height, radius=sim.radius,
+                   group=np.asarray(pop.group_names, dtype=object)[pop.group].astype(str),
+                   planner=pop.planner.astype(str))
+    for sink in everyone:
+        sink.begin(info)
     setup = time.perf_counter() - wall0
     timing = {"setup_s": setup, "poses_s": 0.0, "writing_s": 0.0}
-    frames_per_flush = max(1, int(round(sim.fps)))
-    max_overlap = 0.0
     interrupted = False
-    frames = 0
-    r_max = float(sim.radius.max()) if sim.n else 0.0
+
+    def deliver_steps() -> None:
+        batch = sim.take_steps()
+        if batch is not None:
+            for sink in everyone:
+                sink.steps(batch)
+
     try:
-        _write_frame(writer, sim, 0)
+        snapshot = sim.snapshot()
+        for sink in everyone:
+            sink.frame(sim.time, snapshot, None)
         while not sim.finished:
-            if not sim.step():
-                continue
-            frames += 1
+            on_frame = sim.step()
             w0 = time.perf_counter()
-            ids, xy, z, ori = sim.snapshot()
-            writer.write_frame(sim.frame, ids, xy, z, ori)
-            if ids.size > 1:
-                pairs = cKDTree(xy).query_pairs(2 * r_max, output_type="ndarray")
-                if len(pairs):
-                    i, j = pairs[:, 0], pairs[:, 1]
-                    gap = np.linalg.norm(xy[i] - xy[j], axis=1)
-                    over = sim.radius[ids[i]] + sim.radius[ids[j]] - gap
-                    max_overlap = max(max_overlap, float(over.max()))
-            steps = sim.take_footsteps()
-            if steps is not None:
-                writer.write_footsteps(steps)
+            deliver_steps()
             timing["writing_s"] += time.perf_counter() - w0
-            if want_poses:
-                w0 = time.perf_counter()
-                frame = sim.poses()
-                if frame is not None:
-                    writer.write_pose(sim.frame, sim.time, frame.agents, frame.root_position,
-                                      frame.root_quaternion, frame.joints, frame.positions,
-                                      frame.contact, frame.fallback)
-                timing["poses_s"] += time.perf_counter() - w0
-            if frames % frames_per_flush == 0:
-                w0 = time.perf_counter()
-                writer.flush()
-                timing["writing_s"] += time.perf_counter() - w0
+            if not on_frame:
+                continue
+            w0 = time.perf_counter()
+            poses = sim.poses()
+            w1 = time.perf_counter()
+            snapshot = sim.snapshot()
+            for sink in everyone:
+                sink.frame(sim.time, snapshot, poses)
+            timing["poses_s"] += w1 - w0
+            timing["writing_s"] += time.perf_counter() - w1
             if progress is not None:
                 progress(sim.time, sim.duration, sim.remaining)
     except KeyboardInterrupt:
         interrupted = True
         raise
     finally:
-        steps = sim.take_footsteps()
-        if steps is not None:
-            writer.write_footsteps(steps)
+        deliver_steps()
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
                       step_commands_s=sim.wall_commands)
-        summary = summarise(sim, sc, timing, max_overlap=max_overlap,
+        summary = summarise(sim, sc, timing, max_overlap=overlap.max_overlap,
                             interrupted=interrupted, poses=pose_note)
-        writer.write_summary(summary)
-        writer.close()
+        for sink in everyone:
+            sink.end(summary)
     return summary
-
-
-def _write_frame(writer, sim, frame: int) -> None:
-    ids, xy, z, ori = sim.snapshot()
-    writer.write_frame(frame, ids, xy, z, ori)
 
 
 def _stats(values: np.ndarray) -> dict:

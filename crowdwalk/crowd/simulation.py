@@ -49,6 +49,8 @@ from crowdwalk.crowd.navigation import RouteTable
 from crowdwalk.crowd.steering import Neighbours, SteeringParams, choose_steps
 from crowdwalk.errors import invalid
 from crowdwalk.population import Population, cadence_at, step_length_at
+from crowdwalk.sinks import Snapshot
+from crowdwalk.steps import StepBatch
 
 __all__ = ["CrowdParams", "CrowdSimulation", "WAITING", "ACTIVE", "ARRIVED"]
 
@@ -207,15 +209,17 @@ class CrowdSimulation:
         Simulated time limit [s].
     params : CrowdParams
     planner_config : planners.PlannerConfig or None
+    gait : crowdwalk.gait.engine.GaitEngine or None
+        Receives every decided step and answers :meth:`poses` (None: no poses).
     """
 
     def __init__(self, world, population: Population, *, dt: float = 0.05, fps: float = 10.0,
                  duration: float = 600.0, params: CrowdParams = CrowdParams(),
-                 planner_config=None, animator=None) -> None:
+                 planner_config=None, gait=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
-        from planners import Leg
+        from crowdwalk.body import Body
 
         self.world = world
         self.terrain = world.terrain
@@ -235,7 +239,7 @@ class CrowdSimulation:
         # planning legs in 2 cm body-height classes (about 1 % of leg length)
         heights, self.leg_index = np.unique(np.round(population.body_height / 0.02) * 0.02,
                                             return_inverse=True)
-        self.legs = [Leg.from_body_height(float(h)) for h in heights]
+        self.legs = Body.from_heights(heights).planning_legs()
         # the legs' segment lengths per class, gathered per agent as arrays [m]
         self._leg_columns = {name: np.array([getattr(leg, name) for leg in self.legs])
                              for name in _LEG_FIELDS}
@@ -257,14 +261,14 @@ class CrowdSimulation:
         self.table = RouteTable()
         self._route_nodes: dict[int, list[str]] = {}
         self._assign_routes()
-        self.animator = animator
+        self.gait = gait
         self.time = 0.0
         self.tick = 0
         self.wall_planning = 0.0
         self.wall_steering = 0.0
-        self.wall_commands = 0.0  # gait Animator step commands
-        self._pending: list[dict] = []  # step commands not yet sent to the Animator
-        self._step_rows: list[dict[str, np.ndarray]] = []
+        self.wall_commands = 0.0  # gait engine step commands
+        self._pending: list[StepBatch] = []  # steps not yet sent to the gait engine
+        self._decided: list[StepBatch] = []  # steps not yet taken by the run's sinks
         self._edges: dict | None = None  # corridor sample points (_edge_samples)
 
     # -- setup ---------------------------------------------------------------------
@@ -348,21 +352,21 @@ class CrowdSimulation:
         """Index of the output frame at the current time."""
         return self.tick // self.ticks_per_frame
 
-    def snapshot(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Active agents now: ids (k,), positions (k, 2) [m], heights (k,) [m] and unit
-        orientations (k, 2)."""
+    def snapshot(self) -> Snapshot:
+        """The walking agents now (:class:`crowdwalk.sinks.Snapshot`)."""
         idx = self.active
         xy, z = self.state.position(self.time, idx)
         h = self.state.heading[idx]
-        return idx, xy, z, np.column_stack([np.cos(h), np.sin(h)])
+        return Snapshot(frame=self.frame, agents=idx, xy=xy, z=z,
+                        orientation=np.column_stack([np.cos(h), np.sin(h)]))
 
-    def take_footsteps(self) -> dict[str, np.ndarray] | None:
-        """Foot placements decided since the last call (columns of ``footsteps.csv``)."""
-        if not self._step_rows:
+    def take_steps(self) -> StepBatch | None:
+        """The steps decided since the last call (None: none)."""
+        if not self._decided:
             return None
-        rows = {k: np.concatenate([r[k] for r in self._step_rows]) for k in self._step_rows[0]}
-        self._step_rows = []
-        return rows
+        batch = StepBatch.concat(self._decided)
+        self._decided = []
+        return batch
 
     # -- spawning -----------------------------------------------------------------
 
@@ -713,24 +717,26 @@ class CrowdSimulation:
         st.energy[a] += energy[go]
         st.climb[a] += np.maximum(H, 0.0)
         st.stuck[a] = 0.0
-        if self.animator is not None:
-            self._animate(a, t0, duration, foot, st.stance_foot[a].copy(),
-                          np.column_stack([foothold, new_z]), L, H, swing[go], d,
-                          side)
-        st.stance_foot[a] = np.column_stack([foothold, new_z])
-        kind, on_obstacle = self._ground_type(a, foothold, d)
-        self._step_rows.append({
-            "agent": a, "step": st.steps[a].copy(), "time": t0 + duration,
-            "foot": np.where(foot == 0, "left", "right"),
-            "x": foothold[:, 0], "y": foothold[:, 1], "z": new_z,
-            "step_length": L, "step_height": H, "energy": energy[go],
-            "planner": self.planner_of[a].astype(str),
-            "group": np.asarray(self.pop.group_names, dtype=object)[self.pop.group[a]].astype(str),
-            "heading": st.heading[a].copy(), "kind": kind, "on_obstacle": on_obstacle.astype(int),
-            "duration": duration, "start_time": t0,
-            "from_x": st.trail[a][:, 0], "from_y": st.trail[a][:, 1],
-            "swing": swing[go],
-        })
+        start = st.stance_foot[a].copy()
+        target = np.column_stack([foothold, new_z])
+        st.stance_foot[a] = target
+        # stepped over: at most one longest step (1.05 leg lengths) along the direction
+        stride = 1.05 * self._leg_columns["length"][self.leg_index[a]]
+        kind, on_obstacle = self.terrain.footing(foothold, d, stride=stride)
+        batch = StepBatch(
+            agent=a, step=st.steps[a].copy(), start_time=t0, duration=duration, foot=foot,
+            start=start, target=target, stance_centre=st.trail[a].copy(),
+            heading=st.heading[a].copy(), length=L, rise=H, energy=energy[go],
+            planner=self.planner_of[a].astype(str),
+            group=np.asarray(self.pop.group_names, dtype=object)[self.pop.group[a]].astype(str),
+            swing_bezier=self._swing_bezier(a, swing[go], d, side), kind=kind,
+            on_obstacle=on_obstacle)
+        self._decided.append(batch)
+        if self.gait is not None:
+            if self._pending and np.isin(a, np.concatenate([b.agent for b in self._pending])).any():
+                self._flush_commands()  # an agent's earlier step must reach the engine first
+            self._pending.append(batch)
+            st.animated[a] = True
 
     def _durations(self, a: np.ndarray, L: np.ndarray, H: np.ndarray) -> np.ndarray:
         """Duration [s] of steps of length ``L`` and rise ``H`` (k,) [m] by agents ``a``."""
@@ -746,34 +752,11 @@ class CrowdSimulation:
         return np.where(stair, L / (v0 * factor),
                         np.maximum(L / (v0 * factor), self.min_step_time[a]))
 
-    def _ground_type(self, a, foothold, d) -> tuple[np.ndarray, np.ndarray]:
-        """Terrain kind under footholds (k,) and whether each is on an obstacle: a block
-        short enough along the walking direction d (its chord through the foothold at most
-        one longest step, 1.05 leg lengths) that it could have been stepped over (Chen &
-        Li Fig. 11) — not a terrace or a sidewalk one walks along."""
-        import shapely
-
-        own = self.terrain.owner(foothold)
-        features = self.terrain.features
-        codes = np.array([int(f.kind) for f in features] + [0])
-        kind = codes[own]
-        obstacle = np.zeros(a.size, bool)
-        block = np.flatnonzero(kind == 3)
-        if block.size:
-            reach = 2.0
-            lines = shapely.linestrings(np.stack([foothold[block] - reach * d[block],
-                                                  foothold[block] + reach * d[block]], axis=1))
-            polys = np.array([features[k].footprint for k in own[block]], dtype=object)
-            chord = shapely.length(shapely.intersection(lines, polys))
-            longest = 1.05 * self._legs_of(a[block]).length
-            obstacle[block] = chord <= longest
-        return kind, obstacle
-
     # -- poses ---------------------------------------------------------------------
 
-    def _animate(self, a, t0, duration, foot, start, target, L, H, swing, d, side) -> None:
-        """Queue the new steps for the gait Animator (MetaGait step parameters: step length
-        and height, heading, footholds, the planner's swing Bezier in world xyz)."""
+    def _swing_bezier(self, a, swing, d, side) -> np.ndarray:
+        """The planner's swing-ankle Bezier (k, 4, 2) in (s, z) relative to the stance
+        ankle, as world xyz control points (k, 4, 3) [m] (rows of NaN without one)."""
         st = self.state
         stance_c = st.trail[a]  # centre-line point of the stance ankle (before this step)
         stance_z = st.trail_z[a]
@@ -785,39 +768,30 @@ class CrowdSimulation:
             bez[has, :, :2] = (stance_c[has, None, :] + s_[..., None] * d[has, None, :]
                                + lat[:, None, :])
             bez[has, :, 2] = stance_z[has, None] + z_
-        if self._pending and np.isin(a, np.concatenate([c["agent"] for c in self._pending])).any():
-            self._flush_commands()  # an agent's earlier step must reach the Animator first
-        self._pending.append(dict(
-            agent=a, time=t0, duration=duration, swing_foot=foot.astype(int),
-            start=start, target=target, heading=np.arctan2(d[:, 1], d[:, 0]),
-            step_length=np.maximum(L, 0.05), step_height=H, swing_bezier=bez,
-        ))
-        st.animated[a] = True
+        return bez
 
     def _flush_commands(self) -> None:
-        """Send the buffered step commands in one batch (the Animator has a fixed cost per
-        call, so the steps decided between two output frames go together)."""
+        """Send the buffered steps to the gait engine in one batch (an engine has a fixed
+        cost per call, so the steps decided between two output frames go together)."""
         if not self._pending:
             return
-        from crowdwalk.gait.animator import StepCommand
-
         w0 = _time.perf_counter()
-        fields = {k: np.concatenate([c[k] for c in self._pending]) for k in self._pending[0]}
+        batch = StepBatch.concat(self._pending)
         self._pending = []
-        self.animator.command(StepCommand(**fields))
+        self.gait.command(batch)
         self.wall_commands += _time.perf_counter() - w0
 
     def poses(self):
         """Poses of the walking agents that have taken a step, at the current time
-        (a ``gait.animator.PoseFrame``), or None without an Animator."""
-        if self.animator is None:
+        (a :class:`crowdwalk.gait.engine.PoseFrame`), or None without a gait engine."""
+        if self.gait is None:
             return None
         self._flush_commands()
         idx = self.active
         idx = idx[self.state.animated[idx]]
         if idx.size == 0:
             return None
-        return self.animator.pose(self.time, idx)
+        return self.gait.pose(self.time, idx)
 
     # -- re-routing ---------------------------------------------------------------
 

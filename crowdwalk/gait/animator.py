@@ -48,7 +48,6 @@ its ball early in the step (§6.1).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,11 +66,11 @@ from crowdwalk.gait.elevwalker import (
     elevwalker_pose,
     foot_points,
 )
+from crowdwalk.gait.engine import GroundHeight, PoseFrame
+from crowdwalk.steps import StepBatch
 
 __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
 
-GroundHeight = Callable[[np.ndarray], np.ndarray]
-"""Ground height ``z (n,)`` [m] at points ``xy (n, 2)`` [m], e.g. ``Terrain.height``."""
 
 _CLEARANCE = 0.002  # swing foot closer to the ground than this [m] → follow the Bezier
 _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off → 0.95
@@ -149,6 +148,14 @@ class StepCommand:
     toe_out: np.ndarray | None = None
     spin: np.ndarray | None = None
 
+    @classmethod
+    def from_batch(cls, steps: StepBatch) -> StepCommand:
+        """The gait part of the crowd's steps (step lengths below 5 cm requested as 5 cm)."""
+        return cls(agent=steps.agent, time=steps.start_time, duration=steps.duration,
+                   swing_foot=steps.foot.astype(int), start=steps.start, target=steps.target,
+                   heading=steps.heading, step_length=np.maximum(steps.length, _MIN_STEP),
+                   step_height=steps.rise, swing_bezier=steps.swing_bezier)
+
     def __post_init__(self) -> None:
         owner = "StepCommand"
         agent = np.atleast_1d(np.asarray(self.agent))
@@ -186,35 +193,6 @@ class StepCommand:
                 if not np.all(np.isfinite(arr) & (np.abs(arr) < np.pi)):
                     raise invalid(owner, name, "finite and in (-π, π) [rad]", arr)
                 object.__setattr__(self, name, arr)
-
-
-@dataclass(frozen=True, eq=False)
-class PoseFrame:
-    """Poses of k agents at one time.
-
-    Attributes
-    ----------
-    agents : (k,) agent indices.
-    time : float [s].
-    root_position : (k, 3) ``HumanoidRoot`` world position [m].
-    root_quaternion : (k, 4) pelvis world orientation, wxyz.
-    joints : (k, J, 4) local joint rotations, wxyz (joint 0 repeats the root's).
-    positions : (k, J, 3) joint world positions [m].
-    contact : (k, 2) bool, left/right foot on the ground.
-    fallback : (k,) bool, a solve did not converge and the previous pose was kept.
-    stance_left : (k,) bool, the left foot is the stance foot (the one the root is
-        computed from, §4.1); in double support both feet are in ``contact``.
-    """
-
-    agents: np.ndarray
-    time: float
-    root_position: np.ndarray
-    root_quaternion: np.ndarray
-    joints: np.ndarray
-    positions: np.ndarray
-    contact: np.ndarray
-    fallback: np.ndarray
-    stance_left: np.ndarray
 
 
 class Animator:
@@ -296,8 +274,12 @@ class Animator:
         """Joint names (J,) and parent indices (J,) for ``record.RunWriter``."""
         return JOINT_NAMES, PARENTS.copy()
 
-    def command(self, cmd: StepCommand) -> None:
-        """Start steps for the agents in ``cmd`` (batched; call at their heel strikes)."""
+    def command(self, cmd: StepBatch | StepCommand) -> None:
+        """Start steps for the agents in ``cmd`` (batched; call at their heel strikes):
+        the crowd's :class:`~crowdwalk.steps.StepBatch` (the :class:`GaitEngine`
+        protocol) or a :class:`StepCommand`."""
+        if isinstance(cmd, StepBatch):
+            cmd = StepCommand.from_batch(cmd)
         n = len(self.body)
         a = cmd.agent
         if a.size == 0:

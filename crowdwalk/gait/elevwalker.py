@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.body import (
+    JOINT,
     JOINT_NAMES,
     LEG_JOINTS,
     SUBTALAR_AXIS,
@@ -368,6 +369,7 @@ def elevwalker_pose(
     stance_hip_offset: np.ndarray | None = None,
     swing_goal: np.ndarray | None = None,
     swing_toe_angle: np.ndarray | None = None,
+    attributes=None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -408,6 +410,8 @@ def elevwalker_pose(
     swing_toe_angle : (k,), optional
         Swing-foot toe (metatarsal) angle [rad] where finite; default: toes bent to lie
         flat at the swing leg's t = 0.5, straightening by toe-off.
+    attributes : crowdwalk.style.Style, optional
+        The k walkers' KLAW attributes (:func:`styled`); None: ``style`` alone.
 
     Returns
     -------
@@ -425,7 +429,13 @@ def elevwalker_pose(
     h = body.height
     half_hips = 0.5 * body.hip_separation
     sway = style.sway * h * np.sin(2.0 * np.pi * phase)
-    half_width = 0.5 * style.step_width * h
+    half_width = 0.5 * (style.step_width * h if attributes is None else attributes.stride_width)
+    list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
+    rotation = 0.0 if attributes is None else (
+        -side_st * attributes.pelvic_rotation * np.cos(2.0 * np.pi * phase))
+    if attributes is not None:
+        dip = _bounce_dip(body, attributes, phase)
+        stance_hip_offset = dip if stance_hip_offset is None else stance_hip_offset + dip
     w_stance = side_st * (half_width - half_hips - sway)  # Eq. 8's W_st(t), (a - h)·n
     w_swing = side_st * (half_hips - half_width - sway)
 
@@ -455,10 +465,10 @@ def elevwalker_pose(
     )  # fmt: skip
 
     # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
-    lst = side_st * style.pelvic_list * np.sin(2.0 * np.pi * phase)
+    lst = side_st * list_amplitude * np.sin(2.0 * np.pi * phase)
     tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
-    r_pelvis = rotation_z(heading) @ rotation_x(lst) @ rotation_y(tilt)
+    r_pelvis = rotation_z(heading + rotation) @ rotation_x(lst) @ rotation_y(tilt)
     y_pelvis = r_pelvis[:, :, 1]
     root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
     hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
@@ -500,6 +510,11 @@ def elevwalker_pose(
         style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
     )  # fmt: skip
     rows = np.arange(k)
+    if attributes is not None:
+        thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
+        thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
+        _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
+                           attributes)
 
     positions, rotations = forward_kinematics(body, root, r_pelvis, local)
     swing_phase = phase + 0.5
@@ -519,6 +534,44 @@ def elevwalker_pose(
         warm=WarmStart(x_ankle, x_hip, jac_ankle, jac_hip),
         solves=np.stack([ok_ankle, ok_hip, ok_knee_st, ok_knee_sw, ok_foot_sw], axis=1),
     )
+
+
+# KLAW attributes on this engine (crowdwalk.style; docs/architecture.md). The arm follows
+# the opposite thigh's elevation normalised over the natural-speed cycle (Bovi 2011 level
+# walking, the shipped `level_natural` data: thigh elevation -17.4° .. +25.3°); bounciness
+# lowers the stance hip around double support by BOUNCE_DIP body heights per unit above 1.
+THIGH_MID, THIGH_HALF = np.deg2rad(3.97), np.deg2rad(21.38)
+BOUNCE_DIP, BOUNCE_LOW = 0.006, 0.05  # [body heights], stance phase of the lowest hip [1]
+
+
+def _bounce_dip(body: Body, attributes, phase: np.ndarray) -> np.ndarray:
+    """Stance-hip displacement (k, 3) [m]: down by (bounciness − 1) BOUNCE_DIP H at the
+    middle of double support, zero at mid stance (period: one step)."""
+    shape = 0.5 * (1.0 + np.cos(4.0 * np.pi * (phase - BOUNCE_LOW)))
+    out = np.zeros((phase.size, 3))
+    out[:, 2] = -(attributes.bounciness - 1.0) * BOUNCE_DIP * body.height * shape
+    return out
+
+
+def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
+                       attributes) -> None:
+    """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
+    KLAW attributes: trunk tilt and sway over the stance leg, shoulders against the
+    pelvis, arms with the opposite thigh (abducted by arm_out), elbows between their
+    least (arm back) and greatest (arm forward) flexion; the head stays upright."""
+    a = attributes
+    shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
+    sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
+    yaw = rotation_z(heading + shoulder)
+    trunk = yaw @ rotation_x(sway) @ rotation_y(a.torso_tilt)
+    local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ trunk
+    local[:, JOINT["skullbase"]] = np.swapaxes(trunk, 1, 2) @ rotation_z(heading)
+    for side, thigh, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):
+        signal = np.clip((thigh - THIGH_MID) / THIGH_HALF, -1.0, 1.0)
+        upper = yaw @ rotation_x(sign * a.arm_out) @ rotation_y(-a.arm_swing * signal)
+        local[:, JOINT[f"{side}_shoulder"]] = np.swapaxes(trunk, 1, 2) @ upper
+        elbow = a.elbow_min + (a.elbow_max - a.elbow_min) * 0.5 * (signal + 1.0)
+        local[:, JOINT[f"{side}_elbow"]] = rotation_y(-elbow)
 
 
 def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):

@@ -76,7 +76,8 @@ THIGH_OVERSHOOT = np.deg2rad(4.0)  # greatest hip flexion beyond the heel-strike
 HEEL_STRIKE_PITCH = np.deg2rad(15.0)  # foot toe-up at heel strike
 SUBPHASES = (0.3, 0.7)  # ends of swing sub-phases 1 and 2 [fraction of swing]
 MTC_WINDOW = (0.3, 0.85)  # where the least toe clearance is taken [fraction of swing]
-_MTC_SAMPLES = np.linspace(*MTC_WINDOW, 12)
+_MTC_SAMPLES = np.linspace(*MTC_WINDOW, 16)
+_EXTRA_KNEE = np.deg2rad([-40.0, 80.0])  # range of the clearance's knee flexion change
 # Double support per step [fraction of step] at step frequency [steps/s]: the shipped level
 # datasets (crowdwalk/data, Bovi 2011 / Winter), sorted by frequency.
 _DS_FREQ = np.array([1.439, 1.817, 1.822, 2.045, 2.340])
@@ -238,8 +239,8 @@ class KlawEngine:
         self._s = {name: z1.copy() for name in (
             "t0", "T", "tds", "side", "psi0", "psi1", "D", "dmax", "rot", "list", "tflat",
             "p_hs", "yaw_st", "yaw_tr", "yaw_land", "p_tr0", "k_tr0", "front", "lat_to",
-            "lat_hs", "rear", "v_end_x", "v_end_z", "next_p", "p_hs_now", "kmin", "arm", "arm_out",
-            "elbow_min", "elbow_max", "shoulder", "tilt", "sway")}
+            "lat_hs", "rear", "z_land", "v_end_x", "v_end_z", "next_p", "p_hs_now", "kmin",
+            "arm", "arm_out", "elbow_min", "elbow_max", "shoulder", "tilt", "sway")}
         self._s.update({name: z3.copy() for name in (
             "origin", "u", "heel_st", "ball_st", "ball_tr", "hip_b_end", "ankle_hs")})
         self._s.update({name: np.zeros((n, 4)) for name in (
@@ -356,7 +357,7 @@ class KlawEngine:
                     v_end_x=vx1, v_end_z=vz1, origin=origin, u=u, heel_st=heel_st,
                     ball_st=ball_st, ball_tr=ball_tr, hip_b_end=hip_b, ankle_hs=ankle_hs,
                     knots=knots, hx=hx, hz=hz, mx=mx, mz=mz,
-                    front=np.arcsin(np.clip(xf / reach, -1, 1)))
+                    front=np.arcsin(np.clip(xf / reach, -1, 1)), z_land=target[:, 2])
         for k, v in cols.items():
             s[k][a] = v
         s["p_hs_now"][a] = p_hs_st
@@ -378,8 +379,8 @@ class KlawEngine:
         s["lat_hs"][a] = lat_hs
         s["kt"][a] = np.column_stack([tds, tds + SUBPHASES[0] * tsw, tds + SUBPHASES[1] * tsw,
                                       T])
-        s["fp"][a] = np.column_stack([to["pitch_b"], 0.5 * to["pitch_b"], np.zeros(m),
-                                      np.full(m, HEEL_STRIKE_PITCH)])
+        s["fp"][a] = np.column_stack([to["pitch_b"], 0.5 * to["pitch_b"],
+                                      np.full(m, HEEL_STRIKE_PITCH), np.full(m, HEEL_STRIKE_PITCH)])
         th1 = th_to + 0.55 * (th_hs - th_to)
         th2 = th_hs + THIGH_OVERSHOOT
         s["th"][a] = np.column_stack([th_to, th1, th2, th_hs])
@@ -388,16 +389,17 @@ class KlawEngine:
             s["kn"][a] = np.column_stack([kn_to, KNEE_SWING + extra, th2 + extra, kn_hs])
             return self._toe_clearance(a, b, start, target, t_abs, tds, tsw)
 
-        c0, c1 = clearance(np.zeros(m)), clearance(np.full(m, np.deg2rad(20.0)))
-        extra = np.deg2rad(20.0) * (st.toe_clearance - c0) / np.where(
-            np.abs(c1 - c0) > 1e-6, c1 - c0, 1e-6)
-        extra = np.clip(extra, np.deg2rad(-40.0), np.deg2rad(50.0))
-        c2 = clearance(extra)
-        slope = (c2 - c0) / np.where(np.abs(extra) > 1e-6, extra, 1.0)
-        good = np.abs(slope) > 1e-4
-        extra = np.where(good, np.clip(extra + (st.toe_clearance - c2) / np.where(
-            good, slope, 1.0), np.deg2rad(-40.0), np.deg2rad(50.0)), extra)
-        clearance(extra)
+        # bisection on the extra knee flexion (the clearance grows with it), then the
+        # secant between the bracket ends
+        lo, hi = np.full(m, _EXTRA_KNEE[0]), np.full(m, _EXTRA_KNEE[1])
+        c_lo, c_hi = clearance(lo), clearance(hi)
+        for _ in range(7):
+            mid = 0.5 * (lo + hi)
+            below = clearance(mid) < st.toe_clearance
+            lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+        c_lo, c_hi = clearance(lo), clearance(hi)
+        w = np.clip((st.toe_clearance - c_lo) / np.where(c_hi > c_lo, c_hi - c_lo, 1.0), 0, 1)
+        clearance(lo + w * (hi - lo))
         # the stance foot's state at t4 is the next step's trailing foot
         end = self._legs(a, t_abs + T)
         s["next_p"][a] = end["pitch_a"]
@@ -497,6 +499,9 @@ class KlawEngine:
         ankle_sw[:, 2] -= drop
         swinging = tau > tds
         yaw_sw = yaw_tr + wsw * _wrap(s["yaw_land"][a] - yaw_tr)
+        # in the second half of the swing the heel never goes below the landing height
+        heel_sw = ankle_sw[:, 2] + _foot_offsets(b, fp, yaw_sw)[:, 0, 2]
+        ankle_sw[:, 2] += np.where(wsw > 0.5, np.maximum(s["z_land"][a] - heel_sw, 0.0), 0.0)
         ankle_b = np.where(swinging[:, None], ankle_sw, ankle_tr)
         pitch_b = np.where(swinging, fp, p_tr)
         yaw_b = np.where(swinging, yaw_sw, yaw_tr)

@@ -230,6 +230,28 @@ class Terrain:
         codes = np.array([int(f.kind) for f in self.features] + [int(TerrainKind.FLAT)])
         return codes[own]
 
+    def footing(self, xy, direction, *, stride) -> tuple[np.ndarray, np.ndarray]:
+        """What footholds ``xy`` (k, 2) [m] stand on, for steps along unit ``direction``
+        (k, 2): the terrain kind (k,) int (:meth:`kind`) and whether the foothold is on
+        an obstacle (k,) bool — a block whose chord through the foothold along the
+        direction is at most ``stride`` (k,) [m], so that it could have been stepped
+        over (Chen & Li Fig. 11), not a terrace or a sidewalk one walks along."""
+        xy = _points(xy)
+        own = self.owner(xy)
+        codes = np.array([int(f.kind) for f in self.features] + [int(TerrainKind.FLAT)])
+        kind = codes[own]
+        obstacle = np.zeros(len(xy), bool)
+        block = np.flatnonzero(kind == TerrainKind.BLOCK)
+        if block.size:
+            reach = 2.0  # [m] either side: longer than any chord that counts
+            d = np.asarray(direction, float)[block]
+            lines = shapely.linestrings(np.stack([xy[block] - reach * d,
+                                                  xy[block] + reach * d], axis=1))
+            polys = np.array([self.features[k].footprint for k in own[block]], dtype=object)
+            chord = shapely.length(shapely.intersection(lines, polys))
+            obstacle[block] = chord <= np.asarray(stride, float)[block]
+        return kind, obstacle
+
     # -- profile --
 
     @functools.cached_property

@@ -14,7 +14,8 @@ import os
 import subprocess
 import sys
 
-__all__ = ["configure_offscreen", "gl_available", "has_display", "offscreen_plotter"]
+__all__ = ["configure_offscreen", "display_problem", "gl_available", "has_display",
+           "offscreen_plotter"]
 
 _PROBE = """
 import os
@@ -31,7 +32,33 @@ print("ok" if image.shape == (32, 32, 3) and image.std() > 0 else "blank")
 
 def has_display() -> bool:
     """True when an X11 or Wayland display is available for interactive windows."""
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    return display_problem() is None
+
+
+def display_problem() -> str | None:
+    """Why no interactive window can open (None when one can): VTK's windows on Linux are
+    X11 (a Wayland session provides one through XWayland), so the X server named by
+    ``DISPLAY`` is connected to once and released."""
+    display = os.environ.get("DISPLAY")
+    if not display:
+        return "DISPLAY is unset"
+    if sys.platform != "linux":
+        return None
+    import ctypes
+    import ctypes.util
+
+    name = ctypes.util.find_library("X11")
+    if name is None:
+        return None  # no libX11 to ask; let VTK try
+    x11 = ctypes.CDLL(name)
+    x11.XOpenDisplay.restype = ctypes.c_void_p
+    x11.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    handle = x11.XOpenDisplay(display.encode())
+    if not handle:
+        return f"the X display {display!r} cannot be opened"
+    x11.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    x11.XCloseDisplay(handle)
+    return None
 
 
 def configure_offscreen(force: bool = False) -> None:

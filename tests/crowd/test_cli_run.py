@@ -15,7 +15,8 @@ def test_run_writes_the_run_folder(tmp_path):
     result = runner.invoke(app, ["run", str(SCENARIO), "--out", str(tmp_path), "--quiet",
                                  "--duration", "3"])
     assert result.exit_code == 0, result.output
-    assert result.output == ""  # --quiet: no progress bar, no summary line
+    lines = result.output.splitlines()  # --quiet: no progress bar, one line: where and next
+    assert len(lines) == 1 and str(tmp_path) in lines[0] and "next:" in lines[0], lines
     for name in ("scenario.yaml", "trajectories.sqlite", "footsteps.csv", "summary.json"):
         assert (tmp_path / name).exists()
     assert (tmp_path / "scenario.yaml").read_text() == SCENARIO.read_text()

@@ -95,7 +95,7 @@ def test_bounciness_deepens_the_double_support_dip():
     assert excursion[2] / excursion[1] == pytest.approx(1.6, rel=0.15)
 
 
-@pytest.mark.parametrize("clearance", [0.02, 0.06])
+@pytest.mark.parametrize("clearance", [0.02, 0.05])
 def test_toe_clearance_is_the_least_toe_height_in_mid_swing(clearance):
     p, t, left, strikes = _walk([{"toe_clearance": clearance}])
     for s0, s1 in zip(strikes[2:-1], strikes[3:], strict=True):

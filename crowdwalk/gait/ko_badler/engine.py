@@ -1,0 +1,361 @@
+"""The ``ko_badler`` gait engine: per step, the prototype walk generalised to the walker's
+body and the planner's step (Ko & Badler 1992), posed as a full body.
+
+Per walker, once: ψ_{S*}^{S} of the prototype (the walker's own walk, §4; kept instead
+of the prototype, which transitivity allows). Per step (at its heel strike): φ_ρ of it to
+the planner's step length, from the walker's previous step and current hip height (§2).
+Per frame, at the step phase s ∈ [0, 1]:
+
+- **stance foot** from F1/F2/M on its foothold (heel pivot until FGM, ball pivot until
+  MOM, toe-tip pivot after), **hip** from H, the **stance leg** by two-link IK from the
+  hip to the stance ankle (Ko & Badler's Cartesian hip and foot);
+- **swing foot**: until TOM it pushes off on its own foothold (F2/M one step on); after,
+  its ankle follows A and its angle F3; the swing leg by two-link IK to the ankle;
+- **upper body** as ElevWalker (§8 of Sun & Metaxas): trunk upright along the heading,
+  arms swinging with the opposite thigh.
+
+Beyond the paper (straight level walking; docs/architecture.md, "Ko & Badler"):
+footholds and times are the crowd's; the pelvis moves between the midpoints of
+consecutive foothold pairs, timed by H's x; heading turns linearly over the step (as
+ElevWalker §4.4); the floor under each point is the line between the footholds it moves
+between (hip height follows the ground); the swing ankle is lifted to the planner's
+Bezier swing curve where that is higher; the pelvis is lowered where a leg would not
+reach (``stats["lowered"]`` frames, by at most ``stats["lowered_max"]`` [m]).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from crowdwalk.body import (
+    JOINT,
+    JOINT_NAMES,
+    LEG_JOINTS,
+    PARENTS,
+    Body,
+    forward_kinematics,
+    matrix_to_quaternion,
+    rotation_x,
+    rotation_y,
+    rotation_z,
+)
+from crowdwalk.errors import invalid
+from crowdwalk.gait.elevwalker import GaitStyle
+from crowdwalk.gait.ko_badler.generalize import (
+    body_generalization,
+    hip_height_at_heel_strike,
+    step_length_generalization,
+)
+from crowdwalk.gait.ko_badler.walkdata import (
+    SEQUENCES,
+    BodyCondition,
+    StepStart,
+    WalkData,
+    interpolation,
+    load_prototype,
+)
+
+__all__ = ["KoBadlerEngine", "foot_configuration", "two_link_knee"]
+
+_REACH = 0.999  # longest hip–ankle distance, fraction of thigh + shank
+_TOE_RELAX = 0.3  # step fraction after toe-off over which the swing toes straighten
+_EPS = 1e-9
+
+
+def foot_configuration(body: BodyCondition, foot_angle, meta_angle):
+    """Sagittal ankle (x, y) [m] and toe pitch [rad] of a foot on its footprint.
+
+    The footprint's N is the origin. Toe-up foot angles pivot on the heel (−hN, 0);
+    heel-up ones on the ball (bN, 0) while the meta angle is 0, else on the tip of the
+    toes (bN + bt, 0) with the toes at the meta angle (Ko & Badler Fig. 7, Lemma 1).
+
+    Parameters
+    ----------
+    body : BodyCondition
+    foot_angle, meta_angle : numpy.ndarray
+        (k,) [rad]: the foot (toe up +) and meta angle (ball above toe tip +).
+
+    Returns
+    -------
+    ankle : (k, 2) [m]; toe_pitch : (k,) [rad], toe up + (the toes' angle from the floor).
+    """
+    f = np.asarray(foot_angle, dtype=float)
+    m = np.asarray(meta_angle, dtype=float)
+    ah, th = body.ankle_heel, body.heel_angle
+    ab, tb = body.ankle_ball, body.ball_angle
+    heel = np.stack([-body.heel + ah * np.cos(th + f), ah * np.sin(th + f)], axis=-1)
+    ball = np.stack([body.ball + body.toes - body.toes * np.cos(m), body.toes * np.sin(m)], -1)
+    ball = ball + np.stack([-ab * np.cos(tb - f), ab * np.sin(tb - f)], axis=-1)
+    ankle = np.where((f > 0)[..., None], heel, ball)
+    return ankle, np.where(f > 0, 0.0, -m)
+
+
+def two_link_knee(hip, ankle, thigh, shank, forward):
+    """Knee positions (k, 3) [m] of legs from hip to ankle, bending toward ``forward``.
+
+    The hip–ankle distance is clipped to [|thigh − shank|, thigh + shank]; ``forward``
+    (k, 3) is the direction the knee points (projected off the hip–ankle line).
+    """
+    d = ankle - hip
+    dist = np.linalg.norm(d, axis=-1)
+    u = d / np.maximum(dist, _EPS)[:, None]
+    length = np.clip(dist, np.abs(thigh - shank) + 1e-6, thigh + shank - 1e-9)
+    cos_a = np.clip((thigh**2 + length**2 - shank**2) / (2 * thigh * length), -1.0, 1.0)
+    v = forward - np.sum(forward * u, axis=-1, keepdims=True) * u
+    v = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _EPS)
+    return hip + thigh[:, None] * (cos_a[:, None] * u + np.sqrt(1 - cos_a**2)[:, None] * v)
+
+
+def _segment_frame(direction, lateral):
+    """World rotation (k, 3, 3) of a segment whose rest pose points down −z (x forward).
+
+    ``direction`` (k, 3) proximal → distal; ``lateral`` (k, 3) the hinge axis (+y left),
+    made orthogonal to it.
+    """
+    z = -direction / np.linalg.norm(direction, axis=-1, keepdims=True)
+    y = lateral - np.sum(lateral * z, axis=-1, keepdims=True) * z
+    y = y / np.linalg.norm(y, axis=-1, keepdims=True)
+    return np.stack([np.cross(y, z), y, z], axis=-1)
+
+
+def _t(a):
+    return np.swapaxes(a, -1, -2)
+
+
+def _wrap(a):
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+class KoBadlerEngine:
+    """Full-body poses of n walkers by Ko & Badler's generalised walk data.
+
+    Parameters
+    ----------
+    body : Body
+        The n walkers' bodies.
+    ground : callable, optional
+        Unused (the floor is the line between footholds; kept for the engine factory).
+    style : GaitStyle, optional
+        Arm swing and elbow flexion of the upper body (ElevWalker's §8 parameters).
+    prototype : WalkData, optional
+        W̄(S*, sl*); default the shipped one (:func:`load_prototype`).
+    """
+
+    def __init__(self, body: Body, ground=None, style: GaitStyle | None = None,
+                 prototype: WalkData | None = None) -> None:  # fmt: skip
+        if not isinstance(body, Body):
+            raise invalid("KoBadlerEngine", "body", "a crowdwalk.body.Body", type(body).__name__)
+        self.body = body
+        self.ground = ground
+        self.style = style or GaitStyle()
+        proto = prototype or load_prototype()
+        self.condition = BodyCondition.from_body(body)
+        self.own = body_generalization(proto, self.condition)  # ψ, once per walker
+        n = len(body)
+        self._values = {k: getattr(self.own, k).v.copy() for k in SEQUENCES}
+        self._t0 = np.zeros(n)
+        self._duration = np.ones(n)
+        self._length = self.own.step_length.copy()
+        self._before = self.own.step_length.copy()
+        self._hip_end = np.asarray(hip_height_at_heel_strike(proto.law, self.condition,
+                                                             self.own.step_length))  # fmt: skip
+        self._stance_left = np.ones(n, bool)
+        self._start = np.zeros((n, 3))
+        self._target = np.zeros((n, 3))
+        self._trail = np.zeros((n, 3))
+        self._yaw_stance = np.zeros(n)
+        self._yaw_trail = np.zeros(n)
+        self._psi0 = np.zeros(n)
+        self._psi1 = np.zeros(n)
+        self._bezier = np.full((n, 4, 3), np.nan)
+        self._commanded = np.zeros(n, bool)
+        self.stats = {"commands": 0, "poses": 0, "lowered": 0, "lowered_max": 0.0,
+                      "bezier_lifted": 0}  # fmt: skip
+
+    @property
+    def skeleton(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """Joint names (J,) and parent indices (J,)."""
+        return JOINT_NAMES, PARENTS.copy()
+
+    # -- steps ------------------------------------------------------------------------
+    def command(self, steps) -> None:
+        """Start the steps of a :class:`crowdwalk.steps.StepBatch` (at their heel strikes)."""
+        a = np.asarray(steps.agent, dtype=np.intp)
+        if a.size == 0:
+            return
+        n = len(self.body)
+        if np.any((a < 0) | (a >= n)) or np.unique(a).size != a.size:
+            raise invalid("KoBadlerEngine", "agent", f"distinct indices in [0, {n})", a)
+        start = np.asarray(steps.start, dtype=float)
+        target = np.asarray(steps.target, dtype=float)
+        heading = np.asarray(steps.heading, dtype=float)
+        length = np.maximum(np.asarray(steps.length, dtype=float), 0.02)
+        first = ~self._commanded[a]
+        # The swing foot's footprint and the walker's previous step: the last step's, or
+        # for a first step one step behind, mirrored across the walking line.
+        fwd = np.stack([np.cos(heading), np.sin(heading), np.zeros(a.size)], axis=1)
+        centre = np.concatenate([np.asarray(steps.stance_centre, dtype=float),
+                                 start[:, 2:]], axis=1)  # fmt: skip
+        guess = 2 * centre - start - length[:, None] * fwd
+        guess[:, 2] = start[:, 2]
+        trail = np.where(first[:, None], guess, self._start[a])
+        before = np.where(first, length, self._length[a])
+        hip_now = np.where(first, hip_height_at_heel_strike(
+            self.own.law, self.condition.take(a), before), self._hip_end[a])  # fmt: skip
+        yaw_stance = np.where(first, heading, self._psi1[a])
+        self._yaw_trail[a] = np.where(first, heading, self._yaw_stance[a])
+        self._yaw_stance[a] = yaw_stance
+        self._psi0[a] = np.where(first, heading, self._psi1[a])
+        self._psi1[a] = heading
+        # φ_ρ of the walker's own walk to this step (Ko & Badler §2).
+        own = self.own.take(a)
+        w = step_length_generalization(own, length / own.step_length,
+                                       start=StepStart(before, hip_now))  # fmt: skip
+        for k in SEQUENCES:
+            self._values[k][a] = getattr(w, k).v
+        self._hip_end[a] = w.hip.y[:, -1]
+        self._t0[a] = np.asarray(steps.start_time, dtype=float)
+        self._duration[a] = np.asarray(steps.duration, dtype=float)
+        self._before[a] = before
+        self._length[a] = length
+        self._start[a], self._target[a], self._trail[a] = start, target, trail
+        self._stance_left[a] = np.asarray(steps.foot) == 1  # the right foot swings
+        self._bezier[a] = np.asarray(steps.swing_bezier, dtype=float)
+        self._commanded[a] = True
+        self.stats["commands"] += a.size
+
+    # -- poses ------------------------------------------------------------------------
+    def _seq(self, name: str, a: np.ndarray, s: np.ndarray) -> np.ndarray:
+        q = getattr(self.own, name)
+        return interpolation(q.with_values(self._values[name][a]), s)
+
+    def pose(self, t: float, agents: np.ndarray):
+        """Poses of ``agents`` (k,) at time ``t`` [s] as a PoseFrame."""
+        from crowdwalk.gait.animator import PoseFrame
+
+        a = np.atleast_1d(np.asarray(agents, dtype=np.intp))
+        if not np.all(self._commanded[a]):
+            raise invalid("KoBadlerEngine", "agents", "agents that received a step", a)
+        if not np.isfinite(t):
+            raise invalid("KoBadlerEngine", "t", "finite [s]", t)
+        k = a.size
+        body = self.body.take(a)
+        cond = self.condition.take(a)
+        own = self.own
+        s = np.clip((t - self._t0[a]) / self._duration[a], 0.0, 1.0)
+        fgm, mom, tom = own.fgm, own.mom, own.tom
+        start, target, trail = self._start[a], self._target[a], self._trail[a]
+        length, before = self._length[a], self._before[a]
+
+        # Stance foot on its foothold (F1, F2, M).
+        f_st = np.where(s < fgm, self._seq("foot1", a, s), self._seq("foot2", a, s))
+        m_st = np.where(s >= mom, self._seq("meta", a, s), 0.0)
+        ankle_st, toe_st = foot_configuration(cond, f_st, m_st)
+        # Swing foot: push-off on its footprint until TOM (F2, M one step on), then A, F3.
+        push = s < tom
+        s1 = s + 1.0
+        f_push = self._seq("foot2", a, s1)
+        m_push = np.where(s1 >= mom, self._seq("meta", a, s1), 0.0)
+        ankle_push, toe_push = foot_configuration(cond, f_push, m_push)
+        f_fly = self._seq("foot3", a, s)
+        ankle_fly = self._seq("ankle", a, s)
+        f_sw = np.where(push, f_push, f_fly)
+        toe_at_off = -self._values["meta"][a, -1]  # the toes at the meta angle at TOM
+        relax = np.clip((s - tom) / _TOE_RELAX, 0.0, 1.0)
+        toe_fly = f_fly + (1 - relax) * (toe_at_off - self._values["foot3"][a, 0])
+        toe_sw = np.where(push, toe_push, toe_fly)
+
+        def on_print(origin, yaw, xy):  # footprint frame → world
+            c, si = np.cos(yaw), np.sin(yaw)
+            return origin + np.stack([c * xy[:, 0], si * xy[:, 0], xy[:, 1]], axis=1)
+
+        p_ankle_st = on_print(start, self._yaw_stance[a], ankle_st)
+        u = np.clip((ankle_fly[:, 0] + before) / (before + length), 0.0, 1.0)
+        fly = trail + u[:, None] * (target - trail)
+        fly[:, 2] += ankle_fly[:, 1]
+        bez = self._bezier[a]
+        has_bez = np.isfinite(bez).all(axis=(1, 2)) & ~push
+        if has_bez.any():
+            w = np.stack([(1 - u) ** 3, 3 * (1 - u) ** 2 * u, 3 * (1 - u) * u**2, u**3], 1)
+            z_bez = np.einsum("kc,kc->k", w[has_bez], bez[has_bez, :, 2])
+            lift = z_bez > fly[has_bez, 2]
+            fly[np.flatnonzero(has_bez)[lift], 2] = z_bez[lift]
+            self.stats["bezier_lifted"] += int(lift.sum())
+        p_ankle_sw = np.where(push[:, None], on_print(trail, self._yaw_trail[a], ankle_push), fly)
+        yaw_fly = self._yaw_trail[a] + _wrap(self._psi1[a] - self._yaw_trail[a]) * np.clip(
+            (s - tom) / (1 - tom), 0.0, 1.0)  # fmt: skip
+        yaw_sw = np.where(push, self._yaw_trail[a], yaw_fly)
+
+        # Pelvis: H's x times its path between foothold-pair midpoints, H's y above them.
+        hip = self._seq("hip", a, s)
+        hx = self._values["hip"][a][:, :, 0]
+        wpath = (hip[:, 0] - hx[:, 0]) / np.maximum(hx[:, -1] - hx[:, 0], _EPS)
+        c0, c1 = 0.5 * (trail + start), 0.5 * (start + target)
+        pelvis = c0 + wpath[:, None] * (c1 - c0)
+        pelvis[:, 2] += hip[:, 1]
+        yaw_p = self._psi0[a] + _wrap(self._psi1[a] - self._psi0[a]) * s
+        r_pelvis = rotation_z(yaw_p)
+        left_dir = r_pelvis[:, :, 1]
+        side = np.where(self._stance_left[a], 1.0, -1.0)[:, None]
+        half = 0.5 * body.hip_separation[:, None]
+        reach = _REACH * (body.thigh + body.shank)
+        for ankle_p, sgn in ((p_ankle_st, side), (p_ankle_sw, -side)):
+            h = pelvis + sgn * half * left_dir
+            flat = np.linalg.norm((ankle_p - h)[:, :2], axis=1)
+            top = ankle_p[:, 2] + np.sqrt(np.maximum(reach**2 - flat**2, 0.0))
+            low = pelvis[:, 2] - top
+            self.stats["lowered"] += int((low > 0).sum())
+            self.stats["lowered_max"] = max(self.stats["lowered_max"], float(low.max()))
+            pelvis[:, 2] = np.minimum(pelvis[:, 2], top)
+        hip_st = pelvis + side * half * left_dir
+        hip_sw = pelvis - side * half * left_dir
+        forward = r_pelvis[:, :, 0]
+        knee_st = two_link_knee(hip_st, p_ankle_st, body.thigh, body.shank, forward)
+        knee_sw = two_link_knee(hip_sw, p_ankle_sw, body.thigh, body.shank, forward)
+
+        # Joint rotations (BVH semantics: R_world[j] = R_world[parent] @ local[j]).
+        nj = len(JOINT_NAMES)
+        local = np.broadcast_to(np.eye(3), (k, nj, 3, 3)).copy()
+        legs = np.where(self._stance_left[a][:, None], LEG_JOINTS[0], LEG_JOINTS[1])
+        legs_sw = np.where(self._stance_left[a][:, None], LEG_JOINTS[1], LEG_JOINTS[0])
+        rows = np.arange(k)
+        for joints, hp, kn, an, f, yaw, toe in (
+            (legs, hip_st, knee_st, p_ankle_st, f_st, self._yaw_stance[a], toe_st),
+            (legs_sw, hip_sw, knee_sw, p_ankle_sw, f_sw, yaw_sw, toe_sw),
+        ):
+            hinge = np.cross(hp - an, forward)  # normal of the leg's plane (+y at rest)
+            r_thigh = _segment_frame(kn - hp, hinge)
+            r_shank = _segment_frame(an - kn, hinge)
+            r_foot = rotation_z(yaw) @ rotation_y(-f)
+            local[rows, joints[:, 0]] = _t(r_pelvis) @ r_thigh
+            local[rows, joints[:, 1]] = _t(r_thigh) @ r_shank
+            local[rows, joints[:, 2]] = _t(r_shank) @ r_foot
+            local[rows, joints[:, 4]] = rotation_y(-(toe - f))
+        # Upper body (ElevWalker §8): trunk upright along ψ, arms with the opposite thigh.
+        local[:, JOINT["vl5"]] = _t(r_pelvis) @ rotation_z(yaw_p)
+        st_left = self._stance_left[a]
+        elev_st, elev_sw = _elev(hip_st, knee_st, forward), _elev(hip_sw, knee_sw, forward)
+        thigh_left = np.where(st_left, elev_st, elev_sw)
+        thigh_right = np.where(st_left, elev_sw, elev_st)
+        for name, thigh_opp, tilt in (("l", thigh_right, 0.08), ("r", thigh_left, -0.08)):
+            arm = self.style.arm_swing * thigh_opp
+            local[:, JOINT[f"{name}_shoulder"]] = rotation_y(-arm) @ rotation_x(np.full(k, tilt))
+            local[:, JOINT[f"{name}_elbow"]] = rotation_y(
+                -(self.style.elbow_flexion + 0.5 * np.maximum(arm, 0.0)))  # fmt: skip
+        positions, _ = forward_kinematics(body, pelvis, r_pelvis, local)
+        local[:, 0] = r_pelvis
+        quats = matrix_to_quaternion(local)
+        contact = np.ones((k, 2), bool)
+        swing_col = np.where(self._stance_left[a], 1, 0)
+        contact[rows, swing_col] = push
+        self.stats["poses"] += k
+        return PoseFrame(agents=a, time=float(t), root_position=pelvis,
+                         root_quaternion=quats[:, 0].copy(), joints=quats, positions=positions,
+                         contact=contact, fallback=np.zeros(k, bool),
+                         stance_left=self._stance_left[a].copy())  # fmt: skip
+
+
+def _elev(hip, knee, forward):
+    """Thigh elevation: hip→knee from the downward vertical, knee anterior + [rad]."""
+    d = knee - hip
+    return np.arctan2(np.sum(d * forward, axis=1), -d[:, 2])

@@ -1,0 +1,124 @@
+"""Run sinks: everything that observes a run implements :class:`RunSink`
+(docs/architecture.md, "Steps, gait engines and sinks").
+
+``run_scenario`` calls, for every sink in its list and in this order:
+
+1. ``begin(info)`` once, before the first frame (:class:`RunInfo`: the agents);
+2. ``frame(time, snapshot, poses)`` for frame 0 (the start, ``poses`` None), then for
+   every tick, ``steps(batch)`` with the steps decided in it (when there are any), and at
+   every output frame ``frame(time, snapshot, poses)``;
+3. ``end(summary)`` once, also after an interruption (the summary says so).
+
+The simulation knows no output format: :class:`crowdwalk.record.RunWriter` (the run
+folder), :class:`OverlapMonitor` and ``scripts/foot_clearance_report.py``'s step log
+are sinks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from crowdwalk.steps import StepBatch
+
+if TYPE_CHECKING:
+    from crowdwalk.gait.engine import PoseFrame
+
+__all__ = ["RunInfo", "Snapshot", "RunSink", "OverlapMonitor"]
+
+
+@dataclass(frozen=True, eq=False)
+class RunInfo:
+    """The agents of a run (n of them), given to :meth:`RunSink.begin`.
+
+    Attributes
+    ----------
+    fps : float
+        Output frame rate [1/s].
+    body_height : (n,) float [m]
+    radius : (n,) float
+        Body radius [m].
+    group : (n,) str
+        Group name per agent.
+    planner : (n,) str
+        Planner name per agent.
+    """
+
+    fps: float
+    body_height: np.ndarray
+    radius: np.ndarray
+    group: np.ndarray
+    planner: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.body_height.shape[0])
+
+
+@dataclass(frozen=True, eq=False)
+class Snapshot:
+    """The walking agents at an output frame (k of them).
+
+    Attributes
+    ----------
+    frame : int
+        Output frame index (time = frame / fps).
+    agents : (k,) int
+        Agent indices, ascending.
+    xy : (k, 2) float
+        Body positions [m].
+    z : (k,) float
+        Body heights (mean of the two footholds' heights) [m].
+    orientation : (k, 2) float
+        Unit walking directions.
+    """
+
+    frame: int
+    agents: np.ndarray
+    xy: np.ndarray
+    z: np.ndarray
+    orientation: np.ndarray
+
+
+@runtime_checkable
+class RunSink(Protocol):
+    """An observer of a run (see the module docstring for the order of calls)."""
+
+    def begin(self, info: RunInfo) -> None: ...
+
+    def steps(self, batch: StepBatch) -> None: ...
+
+    def frame(self, time: float, snapshot: Snapshot, poses: PoseFrame | None) -> None: ...
+
+    def end(self, summary: dict) -> None: ...
+
+
+class OverlapMonitor:
+    """The largest overlap of two body discs over the run's frames [m]
+    (``max_overlap`` in the summary; 0 when bodies never overlap)."""
+
+    def __init__(self) -> None:
+        self.max_overlap = 0.0
+        self._radius = np.zeros(0)
+
+    def begin(self, info: RunInfo) -> None:
+        self._radius = np.asarray(info.radius, float)
+
+    def steps(self, batch: StepBatch) -> None:
+        pass
+
+    def frame(self, time: float, snapshot: Snapshot, poses) -> None:
+        ids, xy = snapshot.agents, snapshot.xy
+        if ids.size <= 1:
+            return
+        pairs = cKDTree(xy).query_pairs(2 * float(self._radius.max()), output_type="ndarray")
+        if len(pairs):
+            i, j = pairs[:, 0], pairs[:, 1]
+            gap = np.linalg.norm(xy[i] - xy[j], axis=1)
+            over = self._radius[ids[i]] + self._radius[ids[j]] - gap
+            self.max_overlap = max(self.max_overlap, float(over.max()))
+
+    def end(self, summary: dict) -> None:
+        pass

@@ -1,0 +1,75 @@
+"""crowdwalk.gait_report: figures measured from short ``crowdwalk run`` outputs."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from crowdwalk.crowd.run import RunOverrides, run_scenario
+from crowdwalk.gait_report import (
+    WalkerTrack,
+    heel_slides,
+    report_table,
+    run_figures,
+    second_differences,
+    winter_at,
+)
+
+SCENARIOS = Path(__file__).parents[1] / "scenarios"
+
+
+def lone_walker(tmp_path: Path, speed: float, height: float = 1.75, duration: float = 7.0):
+    text = (SCENARIOS / "lone_walker.yaml").read_text()
+    text = text.replace("free_speed: {mean: 1.33", f"free_speed: {{mean: {speed}")
+    text = text.replace("body_height: {mean: 1.75", f"body_height: {{mean: {height}")
+    path = tmp_path / f"lone_{speed}_{height}.yaml"
+    path.write_text(text)
+    out = tmp_path / f"run_{speed}_{height}"
+    run_scenario(path, out, overrides=RunOverrides(duration=duration))
+    return run_figures(out)[0]
+
+
+@pytest.fixture(scope="module")
+def natural(tmp_path_factory):
+    return lone_walker(tmp_path_factory.mktemp("gait"), 1.33)
+
+
+def test_lone_walker_at_natural_speed(natural):
+    f = natural
+    assert abs(f.speed / f.free_speed - 1) <= 0.05
+    assert abs(f.step_length_z) <= 2 and abs(f.cadence_z) <= 2
+    assert f.joint_r[0] >= 0.95 and f.joint_r[1] >= 0.95
+    assert f.heel_slide_max <= 0.010 and f.stances_turning_over_10deg == 0
+    assert f.pelvis_d2_max <= 0.02
+    assert f.toe_drag_fraction == 0.0
+    assert "agent 0" in report_table([f])
+
+
+def test_winter_reference_interpolates_by_cadence():
+    slow, _ = winter_at(87.0)
+    fast, _ = winter_at(123.0)
+    mid, _ = winter_at(105.0)
+    assert mid.shape == (3, 51)
+    assert not np.allclose(slow, fast)
+    np.testing.assert_allclose(winter_at(60.0)[0], slow)  # clamped
+
+
+def test_heel_slide_and_jumps_are_detected():
+    """A planted foot dragged 3 cm shows as a 3 cm slide; a 10 cm jump as a d2 spike."""
+    f, j = 40, 20
+    pos = np.zeros((f, j, 3))
+    pos[:, 2, :] = [0.0, 0.1, 0.9]   # l_hip
+    pos[:, 7, :] = [0.0, -0.1, 0.9]  # r_hip
+    for ankle, ball, y in ((4, 6, 0.1), (9, 11, -0.1)):
+        pos[:, ankle] = [0.0, y, 0.068]
+        pos[:, ball] = [0.128, y, 0.0]
+    pos[:, 4, 0] += np.linspace(0, 0.03, f)  # the left foot slides 3 cm while planted
+    pos[:, 6, 0] += np.linspace(0, 0.03, f)
+    track = WalkerTrack(agent=0, body_height=1.75, time=np.arange(f) / 25,
+                        positions=pos, contact=np.ones((f, 2), bool), fps=25.0)
+    slides, turns = heel_slides(track, 0)
+    assert slides[0] == pytest.approx(0.03, abs=1e-6) and turns[0] == pytest.approx(0.0)
+    assert heel_slides(track, 1)[0][0] == pytest.approx(0.0, abs=1e-9)
+    jump = pos[:, 4].copy()
+    jump[20] += [0.0, 0.0, 0.10]
+    assert second_differences(jump, 25.0).max() == pytest.approx(0.20, abs=1e-6)
