@@ -2,7 +2,7 @@
 
 Prints a table for 100, 1,000 and 5,000 agents: simulated seconds per wall second (and
 per CPU second of this process, which is what the machine's other load does not change)
-with the ``best_first`` planner,
+with the ``best_first_multistart`` planner,
 
 - ``traj+steps``: trajectories (10 fps) and footsteps written, no poses;
 - ``full poses``: trajectories, footsteps and full-body poses at 25 fps;
@@ -58,7 +58,8 @@ def measure(path: Path, out: Path, seconds: float, poses: bool) -> dict:
             started.append(time.process_time())
 
     summary = run_scenario(path, out, progress=first_frame, overrides=RunOverrides(
-        planner="best_first", duration=seconds, poses=poses, fps=25.0 if poses else 10.0))
+        planner="best_first_multistart", duration=seconds, poses=poses,
+        fps=25.0 if poses else 10.0))
     cpu = time.process_time() - started[0]
     tm = summary["timing"]
     steps = sum(a["steps"] for a in summary["agents"])

@@ -1,14 +1,18 @@
-"""Planner benchmark: a Table-2-style timing table, batch throughput and best-first quality.
+"""Planner benchmark: a Table-2-style timing table with the work done, batch throughput,
+the speed targets and the quality of each search against ``optimal``.
 
-Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N]``. Prints:
+Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N] [--agents N]``.
+Prints:
 
-1. per terrain and grid resolution (13/11/7 intervals, n = 4): median and p95 wall time
-   per plan of ``best_first``, nodes expanded, ``optimal`` median time, the time ratio
-   best_first / optimal and the energy gap (to the horizon's end) of best_first over optimal;
-2. ``plan_batch`` throughput for a crowd of walkers (time per plan, amortised);
-3. on random terrain profiles, how often ``best_first`` is within 1 % of ``optimal``
-   (for 1 start -- the paper's single search -- and the default starts), and the gap of
-   ``fixed``.
+1. per terrain and grid resolution (13/11/7 intervals, n = 4), for each planner: median,
+   p95 and min wall time per plan and the counted work (``Plan.stats``): nodes expanded,
+   legality checks, lattice steps evaluated, key-frame solves, swing curves built (and
+   reused from the flat-ground cache), and the energy gap (to the horizon's end) over
+   ``optimal``;
+2. ``plan_batch`` throughput for a crowd of walkers on random terrain (per plan, amortised);
+3. the speed targets of issue 15 against what was measured;
+4. on random terrain profiles, how often each search is within 1 % of ``optimal``
+   (``best_first_multistart`` for several numbers of starts).
 """
 
 from __future__ import annotations
@@ -100,41 +104,70 @@ def _to_reach(p) -> float:
     return p.energy_total + p.stats["terminal_energy"]
 
 
-def table_2(repeat: int) -> None:
+SEARCHES = ("best_first", "best_first_multistart", "optimal", "fixed")
+
+
+def table_2(repeat: int) -> dict:
+    """Prints the Table 2 analogue; returns the median ms per plan {(terrain, planner)}."""
     leg = Leg.from_body_height(1.75)
-    print("Table 2 (n = 4 steps, 1.75 m body, 1.34 m/s); best_first wall time per plan [ms]"
-          " (median, p95, min), CPU time (median), optimal CPU median")
-    print(f"{'terrain':<15}{'int':>4}{'med':>7}{'p95':>7}{'min':>7}{'cpu':>7}{'nodes':>8}"
-          f"{'opt cpu':>8}{'bf/opt':>7}{'gap %':>7}{'fixed gap %':>12}  status")
+    print("Table 2 (n = 4 steps, 1.75 m body, 1.34 m/s): wall time per plan [ms] and the "
+          "counted work of each plan")
+    print(f"{'terrain':<15}{'int':>4} {'planner':<22}{'med':>7}{'p95':>7}{'min':>7}"
+          f"{'nodes':>7}{'checks':>8}{'steps':>6}{'IK':>6}{'swings':>7}{'reused':>7}"
+          f"{'gap %':>7}")
+    medians = {}
     for name, profile in terrains().items():
         for intervals in (13, 11, 7):
             config = PlannerConfig(intervals=intervals)
-            bf_t, bf_c, bf = timed(profile, leg, "best_first", config, repeat)
-            _, op_c, op = timed(profile, leg, "optimal", config, repeat)
-            fx = plan(profile, leg, 1.34, "fixed", config)
-            gap = 100 * (_to_reach(bf) / _to_reach(op) - 1) if op.ok else np.nan
-            fgap = 100 * (_to_reach(fx) / _to_reach(op) - 1) if fx.ok else np.nan
-            print(f"{name:<15}{intervals:>4}{np.median(bf_t):>7.2f}"
-                  f"{np.percentile(bf_t, 95):>7.2f}{bf_t.min():>7.2f}{np.median(bf_c):>7.2f}"
-                  f"{bf.stats['nodes_expanded']:>8}{np.median(op_c):>8.2f}"
-                  f"{np.median(bf_c) / np.median(op_c):>7.2f}{gap:>7.2f}{fgap:>12.2f}"
-                  f"  {bf.status}")
+            _, _, best = timed(profile, leg, "optimal", config, 1)
+            for planner in SEARCHES:
+                wall, _, p = timed(profile, leg, planner, config, repeat)
+                st = p.stats
+                gap = 100 * (_to_reach(p) / _to_reach(best) - 1) if best.ok and p.ok else np.nan
+                if intervals == 13:
+                    medians[name, planner] = float(np.median(wall))
+                print(f"{name:<15}{intervals:>4} {planner:<22}{np.median(wall):>7.2f}"
+                      f"{np.percentile(wall, 95):>7.2f}{wall.min():>7.2f}"
+                      f"{st['nodes_expanded']:>7}{st['legality_checks']:>8}"
+                      f"{st['lattice_steps']:>6}{st['key_frame_solves']:>6}"
+                      f"{st['swing_curves']:>7}{st['swing_curves_reused']:>7}{gap:>7.2f}"
+                      + ("" if p.ok else "  " + p.status))
+    return medians
 
 
-def batch(agents: int) -> None:
+def batch(agents: int) -> dict:
+    """Prints the batch table; returns ms per plan (amortised) per planner."""
     rng = np.random.default_rng(7)
     profiles = [random_terrain(rng) for _ in range(agents)]
     legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
     speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
     print(f"\nplan_batch: {agents} walkers on random terrain (per plan, amortised)")
-    print(f"{'planner':<12}{'total [ms]':>12}{'per plan [ms]':>15}{'ok':>6}")
-    for planner in ("best_first", "optimal", "fixed"):
+    print(f"{'planner':<22}{'total [ms]':>12}{'per plan [ms]':>15}{'ok':>6}")
+    per_plan = {}
+    for planner in SEARCHES:
         plan_batch(profiles[:4], legs[:4], speeds[:4], planner)
         t0 = time.perf_counter()
         plans = plan_batch(profiles, legs, speeds, planner)
         total = 1e3 * (time.perf_counter() - t0)
         ok = sum(p.ok for p in plans)
-        print(f"{planner:<12}{total:>12.1f}{total / agents:>15.2f}{ok:>6}")
+        per_plan[planner] = total / agents
+        print(f"{planner:<22}{total:>12.1f}{total / agents:>15.3f}{ok:>6}")
+    return per_plan
+
+
+def targets(medians: dict, per_plan: dict, agents: int) -> None:
+    print("\nSpeed targets (issue 15) against this run [ms per plan]")
+    print(f"{'target':<44}{'limit':>7}" + "".join(f"{p:>23}" for p in SEARCHES))
+    rows = [("single plan, flat ground (median)", 0.5, [medians["flat ground", p]
+                                                        for p in SEARCHES]),
+            ("single plan, upstairs (median)", 1.5, [medians["upstairs", p] for p in SEARCHES]),
+            ("single plan, downstairs (median)", 1.5, [medians["downstairs", p]
+                                                       for p in SEARCHES]),
+            (f"batch of {agents} on random terrain (amortised)", 0.1,
+             [per_plan[p] for p in SEARCHES])]
+    for label, limit, values in rows:
+        print(f"{label:<44}{limit:>7.2f}" + "".join(
+            f"{v:>17.3f} {'met' if v <= limit else 'NOT':>5}" for v in values))
 
 
 def quality(count: int) -> None:
@@ -143,25 +176,25 @@ def quality(count: int) -> None:
     leg = Leg.from_body_height(1.75)
     optimal = plan_batch(profiles, leg, 1.34, "optimal")
     fixed = plan_batch(profiles, leg, 1.34, "fixed")
-    print(f"\nbest_first against optimal on {count} random terrain profiles "
+    print(f"\nthe searches against optimal on {count} random terrain profiles "
           "(energy to the horizon's end, the searches' criterion; ok plans only)")
-    print(f"{'search':<26}{'within 1 %':>11}{'median gap %':>14}{'p90 gap %':>11}"
+    print(f"{'search':<32}{'within 1 %':>11}{'median gap %':>14}{'p90 gap %':>11}"
           f"{'max gap %':>11}{'time [ms]':>11}")
-    for starts in (1, 2, 3, 5, 8, 14):
-        config = PlannerConfig(search_starts=starts)
+    cases = [("best_first (Chen & Li)", "best_first", PlannerConfig())] + [
+        (f"multistart, {s} start" + ("s" if s > 1 else "") + (" (default)" if s == 8 else ""),
+         "best_first_multistart", PlannerConfig(search_starts=s)) for s in (1, 2, 3, 5, 8, 14)]
+    for label, planner, config in cases:
         t0 = time.perf_counter()
-        bf = plan_batch(profiles, leg, 1.34, "best_first", config)
+        bf = plan_batch(profiles, leg, 1.34, planner, config)
         per_plan = 1e3 * (time.perf_counter() - t0) / count
         gaps = np.array([_to_reach(b) / _to_reach(o) - 1
                          for b, o in zip(bf, optimal, strict=True) if o.ok and b.ok])
-        label = f"best_first, {starts} start" + ("s" if starts > 1 else "") + (
-            " (paper)" if starts == 1 else " (default)" if starts == 8 else "")
-        print(f"{label:<26}{100 * np.mean(gaps < 0.01):>10.1f}%"
+        print(f"{label:<32}{100 * np.mean(gaps < 0.01):>10.1f}%"
               f"{100 * np.median(gaps):>14.2f}{100 * np.percentile(gaps, 90):>11.2f}"
               f"{100 * gaps.max():>11.2f}{per_plan:>11.2f}")
     gaps = np.array([_to_reach(f) / _to_reach(o) - 1
                      for f, o in zip(fixed, optimal, strict=True) if o.ok and f.ok])
-    print(f"{'fixed (unplanned)':<26}{100 * np.mean(gaps < 0.01):>10.1f}%"
+    print(f"{'fixed (unplanned)':<32}{100 * np.mean(gaps < 0.01):>10.1f}%"
           f"{100 * np.median(gaps):>14.2f}{100 * np.percentile(gaps, 90):>11.2f}"
           f"{100 * gaps.max():>11.2f}")
     print(f"optimal found a legal plan on {sum(o.ok for o in optimal)} of {count}")
@@ -171,11 +204,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30, help="timed plans per cell")
     parser.add_argument("--profiles", type=int, default=200, help="random profiles")
-    parser.add_argument("--agents", type=int, default=200, help="walkers in the batch")
+    parser.add_argument("--agents", type=int, default=1000, help="walkers in the batch")
     args = parser.parse_args()
     start = time.perf_counter()
-    table_2(args.repeat)
-    batch(args.agents)
+    medians = table_2(args.repeat)
+    per_plan = batch(args.agents)
+    targets(medians, per_plan, args.agents)
     quality(args.profiles)
     print(f"\n(total {time.perf_counter() - start:.0f} s; machine load average "
           f"{statistics.mean(__import__('os').getloadavg()):.1f})")

@@ -123,17 +123,20 @@ def schema() -> None:
 def plan_command(
     profile: Path = typer.Option(..., "--profile", help="CSV with columns s,z [m]; a vertical "
                                  "height change is two rows with the same s."),
-    planner: str = typer.Option("best_first", "--planner",
-                                help="best_first (Chen & Li), fixed (unplanned) or optimal."),
+    planner: str = typer.Option("best_first_multistart", "--planner",
+                                help="best_first (Chen & Li as written), "
+                                "best_first_multistart, fixed (unplanned) or optimal."),
     body_height: float = typer.Option(1.75, "--body-height", help="Body height [m]."),
     speed: float = typer.Option(1.34, "--speed", help="Walking speed [m/s]."),
+    horizon: bool = typer.Option(False, "--horizon", help="Plan one horizon from s = 0 "
+                                 "instead of walking the whole profile."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     plot: Path | None = typer.Option(None, "--plot", help="Write a plot of the plan (PNG)."),
 ) -> None:
-    """Plan the next footsteps on a ground profile (exit 1 when no legal foothold)."""
+    """Walk a ground profile by receding horizon (exit 1 where no legal foothold)."""
     from crowdwalk.planning import format_plan, plan_profile
 
-    result = plan_profile(profile, planner, body_height, speed, plot)
+    result = plan_profile(profile, planner, body_height, speed, plot, horizon=horizon)
     typer.echo(format_plan(result, as_json))
     if plot is not None and not as_json:
         typer.echo(f"wrote the plan plot {plot}")
@@ -228,8 +231,9 @@ def run(
 @friendly_errors
 def compare(
     scenario: Path = typer.Argument(..., help="Scenario YAML file."),
-    planners: str = typer.Option("best_first,fixed", "--planners",
-                                 help="Comma-separated planners to compare."),
+    planners: str = typer.Option("best_first,best_first_multistart,optimal,fixed",
+                                 "--planners", help="Comma-separated planners to compare "
+                                 "(each against fixed, the unplanned walker)."),
     out: Path = typer.Option(..., "--out", help="Folder for the runs and report.md."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),

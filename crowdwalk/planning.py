@@ -1,4 +1,8 @@
-"""The ``crowdwalk plan`` command: read an ``s,z`` profile CSV and plan footsteps on it."""
+"""The ``crowdwalk plan`` command: read an ``s,z`` profile CSV and walk or plan on it.
+
+By default the walker walks the whole profile by receding horizon
+(:func:`planners.walk.walk`); ``horizon=True`` plans one horizon from ``s = 0``.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.errors import invalid
+from crowdwalk.errors import InputError, invalid
 
 __all__ = ["read_profile_csv", "plan_profile", "format_plan"]
 
@@ -48,8 +52,8 @@ def read_profile_csv(path: str | Path):
                 raise invalid("ProfileCSV", "header", "columns named s and z", ",".join(header))
             cols = (header.index("s"), header.index("z"))
             rows = rows[1:]
-    if not rows:
-        raise invalid("ProfileCSV", "rows", f"at least one s,z row in {path}", 0)
+    if len(rows) < 2:
+        raise invalid("ProfileCSV", "rows", f"at least two s,z rows in {path}", len(rows))
     s, z = [], []
     for line, row in rows:
         try:
@@ -69,13 +73,18 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def plan_profile(profile_path: str | Path, planner: str = "best_first",
-                 body_height: float = 1.75, speed: float = 1.34, plot: str | Path | None = None):
-    """Plan footsteps on the profile in ``profile_path`` for a body ``body_height`` [m].
+def plan_profile(profile_path: str | Path, planner: str = "best_first_multistart",
+                 body_height: float = 1.75, speed: float = 1.34, plot: str | Path | None = None,
+                 *, horizon: bool = False):
+    """Walk (or, with ``horizon``, plan one horizon) on the profile in ``profile_path``.
 
-    Returns the :class:`planners.Plan`; with ``plot`` also writes the plan plot (PNG).
+    The walker, ``body_height`` [m] tall at ``speed`` [m/s], starts with its stance foot
+    at ``s = 0``. Returns the :class:`planners.Plan` (for a walk, every step taken); with
+    ``plot`` also writes the plan plot (PNG). A profile ending less than one neutral step
+    beyond ``s = 0`` is bad input.
     """
-    from planners import PLANNERS, Leg, plan
+    from planners import PLANNERS, Leg, ProfileError, plan
+    from planners.walk import walk
 
     if planner not in PLANNERS:
         raise invalid("plan", "planner", f"one of {', '.join(sorted(PLANNERS))}", planner)
@@ -84,7 +93,14 @@ def plan_profile(profile_path: str | Path, planner: str = "best_first",
     if not (math.isfinite(speed) and 0 < speed <= 3):
         raise invalid("plan", "speed", "in (0, 3] [m/s]", speed)
     profile = read_profile_csv(profile_path)
-    result = plan(profile, Leg.from_body_height(body_height), speed, planner)
+    leg = Leg.from_body_height(body_height)
+    if horizon:
+        result = plan(profile, leg, speed, planner)
+    else:
+        try:
+            result = walk(profile, leg, speed, planner)
+        except ProfileError as err:
+            raise InputError(f"{profile_path}: {err}") from None
     if plot is not None:
         from crowdwalk.plots import plot_plan
 
@@ -96,7 +112,7 @@ def format_plan(result, as_json: bool = False) -> str:
     """The plan as one JSON object or as a short human-readable table."""
     if as_json:
         return json.dumps(result.to_dict())
-    lines = [f"status: {result.status}" + (f" - {result.message}" if result.message else "")]
+    lines = [f"status: {result.message or result.status}"]
     lines.append(f"{'step':>4} {'s [m]':>8} {'z [m]':>7} {'length':>7} {'rise':>6} "
                  f"{'E [J/kg]':>9} {'time [s]':>8}")
     lines.append(f"{0:>4} {result.footholds_s[0]:>8.3f} {result.footholds_z[0]:>7.3f}")
@@ -110,7 +126,10 @@ def format_plan(result, as_json: bool = False) -> str:
                      f"{result.energy_per_metre:.3f} J/(kg m); efficiency "
                      f"{result.efficiency:.4f} m kg/J")
     st = result.stats
-    lines.append(f"search: {st['nodes_expanded']} nodes expanded, {st['legality_checks']} "
-                 f"legality checks, {st['swing_curves']} swing curves "
-                 f"({st['swing_adjustments']} adjustments), {1e3 * st['time_s']:.1f} ms")
+    plans = f"{st['plans']} plans, " if "plans" in st else ""
+    lines.append(f"search: {plans}{st['nodes_expanded']} nodes expanded, "
+                 f"{st['legality_checks']} legality checks, {st['lattice_steps']} lattice "
+                 f"steps ({st['key_frame_solves']} key-frame solves), {st['swing_curves']} "
+                 f"swing curves built ({st['swing_adjustments']} adjustments, "
+                 f"{st['swing_curves_reused']} reused), {1e3 * st['time_s']:.1f} ms")
     return "\n".join(lines)

@@ -400,7 +400,7 @@ class Group(_Model):
     density: Positive | None = Field(None, le=6.0, description="start density [1/m²]")
     body_height: Normal = Field(DEFAULT_BODY_HEIGHT, description="[m]")
     free_speed: Normal = Field(DEFAULT_FREE_SPEED, description="[m/s]")
-    planner: PlannerName = "best_first"
+    planner: PlannerName = "best_first_multistart"
     gait: GaitName = Field("elevation_angles", description="gait engine of the group")
     style: StyleSpec | None = Field(None, description="KLAW style (crowdwalk.style)")
     lock: LockSpec | None = Field(None, description="locked locomotion parameter(s)")

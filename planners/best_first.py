@@ -1,228 +1,228 @@
-"""Chen & Li's planner: FIND_INIT (Fig. 3) then best-first planning BFP (Fig. 4)."""
+"""Chen & Li's planner as written: FIND_INIT (Fig. 3), then best-first planning BFP (Fig. 4).
+
+One search per agent, from ``q_init = (s_init, ..., s_init)`` (the neutral step), over the
+grid neighbours of a configuration: one step length one interval longer or shorter
+(2n neighbours). Compiled with numba; the step tables are looked up, never recomputed.
+"""
 
 from __future__ import annotations
 
-from functools import lru_cache
-
+import numba as nb
 import numpy as np
 
-from planners.dp import cheapest
 from planners.lattice import StepTables
-from planners.search import SearchResult, neighbour_deltas
+from planners.search import SearchResult
 
-__all__ = ["find_init", "budget", "greedy", "hill_climb", "best_first"]
-
-
-@lru_cache(maxsize=64)
-def _rings(n: int, J: int, centre: int):
-    """Configurations ordered by grid (L1) distance from (centre, ..., centre).
-
-    Returns the ordered configurations (J**n, n) and, per distance d, the end of ring d.
-    """
-    grid = np.indices((J,) * n).reshape(n, -1).T
-    dist = np.abs(grid - centre).sum(axis=1)
-    order = np.argsort(dist, kind="stable")
-    ends = np.searchsorted(dist[order], np.arange(dist.max() + 1), side="right")
-    return grid[order], ends
+__all__ = ["best_first", "bfp", "find_init"]
 
 
-#: Local optima within this relative efficiency of each other count as the same.
-AGREE = 1e-3
+def best_first(tables: StepTables) -> SearchResult:
+    """FIND_INIT then BFP for every agent of ``tables`` (counts add up)."""
+    init = find_init(tables)
+    climb = bfp(tables, init)
+    return SearchResult(climb.configs, init.found, init.expanded + climb.expanded,
+                        init.checks + climb.checks)
 
 
-def find_init(tables: StepTables, centres: np.ndarray | None = None,
-              agents: np.ndarray | None = None) -> SearchResult:
-    """FIND_INIT (Fig. 3): the legal configuration nearest to (s_init, ..., s_init).
-
-    Breadth-first search on the grid from ``q_init`` expands illegal configurations until
-    it meets a legal one, i.e. it returns a legal configuration at the smallest grid
-    (L1) distance from ``q_init``. Where ``q_init`` itself is illegal that nearest legal
-    configuration is found exactly by dynamic programming over the lattice (distance is
-    a sum over steps; ties go to the lower energy, an order Fig. 3 leaves open).
-    ``checks`` and ``expanded`` count the configurations breadth-first search would
-    examine (all closer ones, plus one) and expand (all closer ones).
-
-    Parameters
-    ----------
-    tables : StepTables
-    centres : ndarray of int, shape (B,), optional
-        Step-length index of ``q_init`` per search; default the neutral step.
-    agents : ndarray of int, shape (B,), optional
-        Table row of each search (rows may repeat); default every agent once.
-
-    Returns
-    -------
-    SearchResult
-        One entry per search (B).
-    """
+def _run(kernel, tables: StepTables, configs: np.ndarray, found: np.ndarray) -> SearchResult:
     st = tables.struct
-    n, J = st.n, st.J
-    agents = np.arange(tables.neutral.size) if agents is None else agents
-    centres = tables.neutral[agents] if centres is None else centres
-    A = agents.size
-    configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
-    legal, _ = tables.evaluate(agents, configs)
-    found = legal.copy()
-    checks = np.ones(A, dtype=np.int64)
-    blocked = np.flatnonzero(~legal)
-    if blocked.size:
-        dist = np.abs(st.step_j[None, :] - centres[blocked, None])
-        cost = dist + 1e-7 * tables.cost[agents[blocked]]
-        best, ok = cheapest(tables, cost, agents[blocked])
-        configs[blocked[ok]] = best[ok]
-        found[blocked] = ok
-        d = np.abs(best - centres[blocked, None]).sum(axis=1)
-        closer = np.array([_rings(n, J, int(c))[1][max(int(k) - 1, 0)] if k > 0 else 0
-                           for c, k in zip(centres[blocked], d, strict=True)])
-        checks[blocked] = np.where(ok, closer + 1, J**n)
-    return SearchResult(configs, found, np.maximum(checks - 1, 1), checks)
-
-
-def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
-    """BFP (Fig. 4) from ``configs`` (B, n) for table rows ``agents`` (B,), vectorised.
-
-    Returns the local optima (B, n), their efficiencies (B,), expansions and checks (B,).
-    """
-    J = tables.struct.J
-    deltas = neighbour_deltas(tables.struct.n)
-    configs = configs.copy()
-    B = agents.size
-    expanded = np.zeros(B, dtype=np.int64)
-    checks = np.zeros(B, dtype=np.int64)
-    _, current = tables.evaluate(agents, configs)
-    active = np.arange(B)
-    while active.size:
-        neighbours = configs[active, None, :] + deltas[None, :, :]
-        inside = ((neighbours >= 0) & (neighbours < J)).all(axis=-1)
-        legal, eff = tables.evaluate(agents[active], np.clip(neighbours, 0, J - 1))
-        eff = np.where(inside & legal, eff, -np.inf)
-        expanded[active] += 1
-        checks[active] += inside.sum(axis=1)
-        best = np.argmax(eff, axis=1)
-        best_eff = eff[np.arange(active.size), best]
-        better = best_eff > current[active] * (1 + 1e-12)
-        movers = active[better]
-        configs[movers] = neighbours[better, best[better]]
-        current[movers] = best_eff[better]
-        active = movers
-    return configs, current, expanded, checks
-
-
-def greedy(tables: StepTables) -> SearchResult:
-    """Step by step, the legal step of highest own efficiency (length / E); no lookahead."""
-    st = tables.struct
-    A, n, J = tables.neutral.size, st.n, st.J
-    configs = np.zeros((A, n), dtype=np.int64)
-    found = np.ones(A, dtype=bool)
-    rows = np.arange(A)[:, None]
-    for k in range(n):
-        trial = np.repeat(configs[:, None, :], J, axis=1)
-        trial[:, :, k] = np.arange(J)
-        steps, swings = st.indices(trial)
-        s, w = steps[:, :, k], swings[:, :, k]
-        score = np.where(tables.step_legal[rows, s] & tables.swing_ok[rows, w],
-                         tables.length[rows, s] / tables.E[rows, s], -np.inf)
-        best = np.argmax(score, axis=1)
-        found &= np.isfinite(score[rows[:, 0], best])
-        configs[:, k] = best
-    checks = np.full(A, n * J, dtype=np.int64)
-    return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
-
-
-def budget(tables: StepTables) -> SearchResult:
-    """The legal configuration of least ``sum(E - lam0 * L)`` (one DP pass).
-
-    ``lam0`` is the walker's energy per metre on flat ground: each metre of progress is
-    worth what it normally costs. This is the linearisation of Eq. 5 at the neutral
-    walk, a start for the best-first search that already accounts for the terrain. E and
-    L are the tables' ``cost`` and ``progress`` (with the terminal energy, see
-    :class:`~planners.config.PlannerConfig`).
-    """
-    cost = tables.cost - tables.neutral_cost[:, None] * tables.progress
-    configs, found = cheapest(tables, cost)
-    per_pass = tables.struct.swing_back.size * tables.struct.J
-    A = found.size
-    return SearchResult(configs, found, np.full(A, per_pass // tables.struct.J),
-                        np.full(A, per_pass))
-
-
-def best_first(tables: StepTables, starts: int | None = None) -> SearchResult:
-    """Best-first planning (Fig. 4) after FIND_INIT, all agents at once.
-
-    Fig. 4 pops the most efficient open configuration, opens its better unvisited legal
-    neighbours and stops at a configuration none of whose legal neighbours is better.
-    Since every opened neighbour is better than the node that opened it and the best
-    open node is always expanded next, this is steepest-ascent hill climbing on
-    efficiency over the grid neighbourhood, run here with one vectorised neighbour
-    evaluation per expansion for every agent.
-
-    Deviations (measured in ``benchmarks/bench_planners.py``): the neighbourhood also
-    moves single footholds (see :func:`~planners.search.neighbour_deltas`), and the
-    search runs from ``starts`` initial configurations (``PlannerConfig.search_starts``)
-    -- FIND_INIT from the neutral step, then the energy-budget configuration
-    (:func:`budget`), the step-by-step greedy configuration, FIND_INIT from constant
-    steps spread over the grid -- keeping the best local optimum; ``starts = 1`` is the
-    paper's single search.
-    """
-    J = tables.struct.J
-    starts = tables.config.search_starts if starts is None else starts
-    seeds = [find_init(tables)]
-    if starts >= 2:
-        seeds.append(budget(tables))
-    if starts >= 3:
-        seeds.append(greedy(tables))
-    configs, eff, found, expanded, checks, spread_out = _climb_all(tables, seeds, None)
-    extra = np.linspace(0, J - 1, max(starts - 3, 0) + 2)[1:-1].round().astype(np.int64)
-    # Where the first starts disagree the terrain is hard: climb from the extra starts too.
-    hard = np.flatnonzero(spread_out & found) if extra.size else np.zeros(0, dtype=int)
-    if hard.size:
-        rows = np.repeat(hard, extra.size)
-        sub = find_init(tables, np.tile(extra, hard.size), rows)
-        start = sub.found
-        local, more_eff, exp, chk = hill_climb(tables, rows[start], sub.configs[start])
-        np.add.at(expanded, rows, sub.expanded)
-        np.add.at(checks, rows, sub.checks)
-        np.add.at(expanded, rows[start], exp)
-        np.add.at(checks, rows[start], chk)
-        order = np.lexsort((-more_eff, rows[start]))
-        firsts = np.ones(order.size, dtype=bool)
-        firsts[1:] = rows[start][order][1:] != rows[start][order][:-1]
-        winners = rows[start][order][firsts]
-        win_eff = more_eff[order][firsts]
-        better = win_eff > eff[winners]
-        configs[winners[better]] = local[order][firsts][better]
+    A = tables.neutral.size
+    expanded = np.zeros(A, dtype=np.int64)
+    checks = np.zeros(A, dtype=np.int64)
+    kernel(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
+           np.ascontiguousarray(tables.progress), st.J,
+           np.asarray(st.step_offset, dtype=np.int64), np.asarray(st.swing_offset, dtype=np.int64),
+           np.asarray(st.swing_strides, dtype=np.int64), configs, found, expanded, checks)
     return SearchResult(configs, found, expanded, checks)
 
 
-def _climb_all(tables: StepTables, seeds: list[SearchResult], only: np.ndarray | None):
-    """Hill-climb every found seed (of the agents ``only``); keep each agent's best.
+def find_init(tables: StepTables) -> SearchResult:
+    """FIND_INIT (Fig. 3): breadth-first search from ``q_init`` for a legal configuration.
 
-    Returns configs (A, n), efficiency (A,), found (A,), expanded (A,), checks (A,) and
-    whether an agent's local optima differ (A,).
+    Pops configurations in FIFO order, returns the first legal one, and enqueues the
+    unvisited grid neighbours of each illegal one (order: step 1 shorter, step 1 longer,
+    step 2 shorter, ...). The result is a legal configuration at the least grid (L1)
+    distance from ``q_init``. Counted: ``checks`` -- configurations popped and looked up
+    (Collide); ``expanded`` -- illegal ones whose neighbours were generated. Where nothing
+    is legal the whole grid is searched and ``found`` is False.
     """
-    A = tables.neutral.size
-    keep = np.ones(A, dtype=bool) if only is None else np.isin(np.arange(A), only)
-    rows = np.concatenate([np.flatnonzero(r.found & keep) for r in seeds])
-    start_configs = np.concatenate([r.configs[r.found & keep] for r in seeds])
-    expanded = sum(np.where(keep, r.expanded, 0) for r in seeds)
-    checks = sum(np.where(keep, r.checks, 0) for r in seeds)
-    found = np.zeros(A, dtype=bool)
-    for r in seeds:
-        found |= r.found & keep
-    configs = seeds[0].configs.copy()
-    best_eff = np.full(A, -np.inf)
-    differ = np.zeros(A, dtype=bool)
-    if rows.size:
-        local, eff, exp, chk = hill_climb(tables, rows, start_configs)
-        np.add.at(expanded, rows, exp)
-        np.add.at(checks, rows, chk)
-        order = np.lexsort((-eff, rows))  # per agent, best first
-        first = np.ones(order.size, dtype=bool)
-        first[1:] = rows[order][1:] != rows[order][:-1]
-        winners = rows[order][first]
-        configs[winners] = local[order][first]
-        best_eff[winners] = eff[order][first]
-        worst = np.full(A, np.inf)
-        np.minimum.at(worst, rows, eff)
-        differ = worst < best_eff * (1 - AGREE)
-    return configs, best_eff, found, expanded, checks, differ
+    A, n = tables.neutral.size, tables.struct.n
+    configs = np.repeat(tables.neutral.astype(np.int64)[:, None], n, axis=1)
+    return _run(_find_init, tables, configs, np.zeros(A, dtype=np.bool_))
+
+
+def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
+    """BFP (Fig. 4) from the configurations ``init`` found by :func:`find_init`.
+
+    Keeps an OPEN list: pops the configuration of highest efficiency (the first inserted
+    among equals), inserts every legal unvisited grid neighbour more efficient than it,
+    and returns it when every legal neighbour is less efficient (a local optimum). Where
+    OPEN runs empty first (a plateau of equal efficiencies, which Fig. 4 leaves open) the
+    most efficient configuration popped is returned. Efficiency is the tables'
+    ``progress / cost`` (Eq. 5, or Eq. 5 for the same progress with
+    ``PlannerConfig.terminal_cost``), rounded to 1e-12 like :meth:`StepTables.evaluate`.
+    Counted: ``expanded`` -- configurations popped; ``checks`` -- in-grid neighbours
+    looked up. Agents not ``init.found`` keep their configuration.
+    """
+    return _run(_bfp, tables, init.configs.copy(), init.found.copy())
+
+
+@nb.njit(cache=True, nogil=True)
+def _evaluate(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
+    """Legality and rounded efficiency of configuration ``q`` (n,) for agent ``a``."""
+    n = q.size
+    m_prev = 0  # lattice index of the stance foothold f_{k-1}
+    m_prev2 = 0  # of the lift-off foothold f_{k-2}
+    j_prev = 0
+    legal = True
+    energy = 0.0
+    length = 0.0
+    for k in range(n):
+        step = step_off[k] + m_prev * J + q[k]
+        stride = q[k] + (j_prev if k > 0 else 0)
+        swing = swing_off[k] + m_prev2 * strides[k] + stride
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            legal = False
+        energy += cost[a, step]
+        length += progress[a, step]
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return legal, np.rint(length / energy * 1e12) / 1e12
+
+
+@nb.njit(cache=True, nogil=True)
+def _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
+    """Legality of configuration ``q`` (n,) for agent ``a`` (stops at the first illegal
+    step)."""
+    m_prev = 0
+    m_prev2 = 0
+    j_prev = 0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            return False
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return True
+
+
+@nb.njit(cache=True, nogil=True)
+def _code(q, J):
+    c = 0
+    for k in range(q.size):
+        c = c * J + q[k]
+    return c
+
+
+@nb.njit(cache=True, nogil=True)
+def _decode(c, n, J, out):
+    for k in range(n - 1, -1, -1):
+        out[k] = c % J
+        c //= J
+
+
+@nb.njit(cache=True, nogil=True)
+def _find_init(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+               configs, found, expanded, checks):
+    A, n = configs.shape
+    total = J**n
+    visited = np.zeros(total, dtype=np.bool_)
+    queue = np.empty(total, dtype=np.int64)
+    q = np.empty(n, dtype=np.int64)
+    place = np.empty(n, dtype=np.int64)  # code change of step k by one interval
+    for k in range(n):
+        place[k] = J ** (n - 1 - k)
+    for a in range(A):
+        visited[:] = False
+        start = _code(configs[a], J)
+        queue[0] = start
+        visited[start] = True
+        head, tail = 0, 1
+        while head < tail:
+            c = queue[head]
+            head += 1
+            _decode(c, n, J, q)
+            checks[a] += 1
+            if _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
+                configs[a, :] = q
+                found[a] = True
+                break
+            expanded[a] += 1
+            for k in range(n):
+                if q[k] > 0 and not visited[c - place[k]]:
+                    visited[c - place[k]] = True
+                    queue[tail] = c - place[k]
+                    tail += 1
+                if q[k] < J - 1 and not visited[c + place[k]]:
+                    visited[c + place[k]] = True
+                    queue[tail] = c + place[k]
+                    tail += 1
+
+
+@nb.njit(cache=True, nogil=True)
+def _bfp(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+         configs, found, expanded, checks):
+    A, n = configs.shape
+    total = J**n
+    visited = np.zeros(total, dtype=np.bool_)
+    open_code = np.empty(total, dtype=np.int64)
+    open_eff = np.empty(total)
+    q = np.empty(n, dtype=np.int64)
+    r = np.empty(n, dtype=np.int64)
+    for a in range(A):
+        if not found[a]:
+            continue
+        visited[:] = False
+        init = _code(configs[a], J)
+        visited[init] = True
+        _, e0 = _evaluate(a, configs[a], step_legal, swing_ok, cost, progress, J, step_off,
+                          swing_off, strides)
+        open_code[0] = init
+        open_eff[0] = e0
+        size = 1
+        best_code, best_eff = init, e0
+        result = -1
+        while size > 0:
+            pick = 0
+            for i in range(1, size):
+                if open_eff[i] > open_eff[pick]:
+                    pick = i
+            c, e = open_code[pick], open_eff[pick]
+            for i in range(pick, size - 1):  # keep insertion order among the rest
+                open_code[i] = open_code[i + 1]
+                open_eff[i] = open_eff[i + 1]
+            size -= 1
+            if e > best_eff:
+                best_code, best_eff = c, e
+            _decode(c, n, J, q)
+            expanded[a] += 1
+            all_worse = True
+            for k in range(n):
+                for d in (-1, 1):
+                    v = q[k] + d
+                    if v < 0 or v >= J:
+                        continue
+                    r[:] = q
+                    r[k] = v
+                    checks[a] += 1
+                    legal, e2 = _evaluate(a, r, step_legal, swing_ok, cost, progress, J,
+                                          step_off, swing_off, strides)
+                    if not legal:
+                        continue
+                    if e2 >= e:
+                        all_worse = False
+                    c2 = _code(r, J)
+                    if e2 > e and not visited[c2]:
+                        open_code[size] = c2
+                        open_eff[size] = e2
+                        size += 1
+                        visited[c2] = True
+            if all_worse:
+                result = c
+                break
+        _decode(result if result >= 0 else best_code, n, J, configs[a])

@@ -10,6 +10,12 @@ from planners.errors import invalid
 __all__ = ["EnergyWeights", "PlannerConfig"]
 
 
+#: Fitted by ``scripts/fit_energy_constants.py`` (see :meth:`EnergyWeights.fitted`).
+FITTED_BETA = 0.0361
+FITTED_DOWN_RATIO = 0.148
+FITTED_C_CALF = 0.1
+
+
 @dataclass(frozen=True)
 class EnergyWeights:
     """Weights of the energy model, Eqs. (3)-(4) of Chen & Li.
@@ -49,6 +55,20 @@ class EnergyWeights:
     c_calf: float = 0.1
     down_ratio: float = 1.0 / 3.0
     vertical: str = "linear"
+
+    @classmethod
+    def fitted(cls) -> EnergyWeights:
+        """Constants fitted to measured metabolic costs (``scripts/fit_energy_constants.py``).
+
+        ``beta`` and ``down_ratio`` from the gross cost of one 15 cm stair step up and down
+        (Teh & Aziz 2002), validated against Bassett et al. 1997 (stairs) and Minetti et
+        al. 2002 (slopes). ``c_calf / c_thigh`` stays 0.1: fitted to WBDS preferred step
+        lengths at the comfortable speed (Fukuchi et al. 2018: 0.375 body heights) any
+        ratio from 0 to 1 gives the same flat optimum, 0.375 body heights, so the data
+        cannot fix it. Not the default: the defaults are the hand-set constants the crowd
+        was validated with; Chen & Li's printed Eq. 2 is ``EnergyWeights(vertical="paper")``.
+        """
+        return cls(beta=FITTED_BETA, down_ratio=FITTED_DOWN_RATIO, c_calf=FITTED_C_CALF)
 
     def __post_init__(self) -> None:
         if self.vertical not in ("paper", "linear"):

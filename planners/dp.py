@@ -9,12 +9,24 @@ for all agents at once.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
 from planners.lattice import StepTables, Structure
 
-__all__ = ["cheapest"]
+__all__ = ["DPWork", "cheapest"]
+
+
+class DPWork(NamedTuple):
+    """Work of one DP pass per agent (the same for every agent of a pass).
+
+    ``states``: (m_{k-1}, j_{k-1}) states expanded over all depths; ``transitions``:
+    state -> j_k transitions whose legality was looked up.
+    """
+
+    states: int
+    transitions: int
 
 
 @lru_cache(maxsize=16)
@@ -68,6 +80,8 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     -------
     configs : ndarray of int, shape (B, n)
     found : ndarray of bool, shape (B,)
+    work : DPWork
+        States and transitions the pass went through, per agent.
     """
     st = tables.struct
     J, n = st.J, st.n
@@ -76,9 +90,12 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     step_cost = np.round(step_cost, 10)  # ties broken alike whatever the offsets
     value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
     choices = []
+    states = transitions = 0
     legal = dp_legal(tables)
     every = B == tables.neutral.size and np.array_equal(agents, np.arange(B))
-    for k, (step, _, _, m_next, j_next) in enumerate(_depth_indices(st), start=1):
+    for k, (step, _, valid, m_next, j_next) in enumerate(_depth_indices(st), start=1):
+        states += int(valid[..., 0].sum())
+        transitions += int(valid.sum())
         # illegal transitions cost +inf; the step cost broadcasts over j_{k-1}
         total = value[..., None] + np.take(
             step_cost, step[:, :1, :].reshape(step.shape[0], -1), axis=1)[:, :, None, :]
@@ -104,4 +121,4 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
         configs[:, k - 1] = j_cur
         jp = choices[k - 1][np.arange(B), m_cur, j_cur]
         m_cur, j_cur = m_cur - j_cur, jp
-    return configs, found
+    return configs, found, DPWork(states, transitions)

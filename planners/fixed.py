@@ -18,7 +18,8 @@ def fixed(tables: StepTables) -> SearchResult:
     lookahead, so it steps onto low obstacles (Fig. 11a) and only shortens or lengthens
     a step where it would land on an edge or cannot swing over. The swing curve gets the
     same §5.2 adjustment. Agents that run into a dead end retry with depth-first
-    backtracking (rare).
+    backtracking (rare). Counted: ``expanded`` -- step decisions (a foothold whose
+    candidate landings were tried), ``checks`` -- candidate steps looked up.
     """
     st = tables.struct
     A, n, J = tables.neutral.size, st.n, st.J
@@ -41,20 +42,27 @@ def fixed(tables: StepTables) -> SearchResult:
         checks += np.where(has, first + 1, J)
         configs[:, k] = order[rows, first]
         found &= has
+    expanded = np.full(A, n, dtype=np.int64)
     for a in np.flatnonzero(~found):
-        result = _backtrack(tables, a, order[a])
+        result, pushes, looked = _backtrack(tables, a, order[a])
+        expanded[a] += pushes
+        checks[a] += looked
         if result is not None:
             configs[a], found[a] = result, True
-    return SearchResult(configs, found, checks.copy(), checks)
+    return SearchResult(configs, found, expanded, checks)
 
 
 def _backtrack(tables: StepTables, agent: int, order: np.ndarray):
-    """Depth-first search in preference order for one agent; None if nothing is legal."""
+    """Depth-first search in preference order for one agent.
+
+    Returns the configuration (None if nothing is legal), the step decisions opened and
+    the candidate steps looked up."""
     st = tables.struct
     n = st.n
     prefix: list[int] = []
     stack = [iter(order)]
     budget = 20000
+    looked = pushes = 0
     while stack and budget > 0:
         try:
             choice = int(next(stack[-1]))
@@ -64,12 +72,14 @@ def _backtrack(tables: StepTables, agent: int, order: np.ndarray):
                 prefix.pop()
             continue
         budget -= 1
+        looked += 1
         trial = np.array([*prefix, choice] + [0] * (n - len(prefix) - 1))
         steps, swings = st.indices(trial)
         k = len(prefix)
         if tables.step_legal[agent, steps[k]] and tables.swing_ok[agent, swings[k]]:
             prefix.append(choice)
             if len(prefix) == n:
-                return np.array(prefix)
+                return np.array(prefix), pushes, looked
             stack.append(iter(order))
-    return None
+            pushes += 1
+    return None, pushes, looked

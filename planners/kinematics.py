@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from planners.leg import Leg
@@ -15,7 +16,7 @@ __all__ = ["KeyFrames", "leg_angles", "key_frames", "TOE_OFF_FOOT_ANGLE",
            "TOE_OFF_PELVIS_FRACTION"]
 
 #: Foot pitch at toe-off of the back leg (key frame 3) [rad]; Winter (1990) ~30-40 deg.
-TOE_OFF_FOOT_ANGLE = np.radians(35.0)
+TOE_OFF_FOOT_ANGLE = float(np.radians(35.0))
 #: Pelvis position at toe-off, as a fraction of the step from back to front foot [-].
 TOE_OFF_PELVIS_FRACTION = 0.70
 #: Hip-ankle distance of the straighter leg in double support, fraction of leg length.
@@ -85,7 +86,7 @@ def key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg: Le
 
     The swing foot moves past the ``stance`` foot to ``front``; ground heights are of the
     footholds [m], ``summit`` is the highest ankle point of the swing curve [m]. ``leg``
-    may hold arrays (one leg per step) instead of floats.
+    may hold arrays (one leg per step) instead of floats; everything broadcasts.
 
     Key frames (Fig. 5): K1 mid-swing (pelvis above the stance ankle, swing ankle at
     the summit); K2 front heel strike (pelvis midway, both feet flat); K3 back toe-off
@@ -94,53 +95,97 @@ def key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg: Le
     foot). The pelvis is ``pelvis_ratio`` x leg length above the stance ankle at
     mid-stance; in double support it is as high as both legs allow with the straighter
     leg at 99 % of its length (knees nearly straight at heel strike and toe-off).
+    Compiled (:func:`_key_frames`), one step at a time.
     """
-    a = leg.ankle_height
-    L = leg.length
-    H = pelvis_ratio * L
-    cos_knee = np.cos(np.pi - knee_max_flexion)
-    min_reach = np.sqrt(leg.thigh**2 + leg.shank**2 - 2 * leg.thigh * leg.shank * cos_knee)
-    zs, zf = stance_z + a, front_z + a  # ankle heights
+    arrays = [np.asarray(x, dtype=float) for x in (
+        stance_s, stance_z, front_s, front_z, summit_s, summit_z, leg.thigh, leg.shank,
+        leg.toe_offset, leg.ankle_height, nominal_lift)]
+    shape = np.broadcast_shapes(*(x.shape for x in arrays))
+    # numba gets contiguous writeable (n,) arrays: the inputs as they are where they can,
+    # copies of broadcast ones
+    flat = [x.reshape(-1) if x.shape == shape and x.flags.c_contiguous and x.flags.writeable
+            else np.broadcast_to(x, shape).flatten() for x in arrays]
+    thigh = np.empty(flat[0].size)
+    calf = np.empty(flat[0].size)
+    reachable = np.empty(flat[0].size, dtype=np.bool_)
+    _key_frames(*flat, float(pelvis_ratio), float(np.cos(np.pi - knee_max_flexion)),
+                thigh, calf, reachable)
+    return KeyFrames(thigh.reshape(shape), calf.reshape(shape), reachable.reshape(shape))
 
-    reach = DOUBLE_SUPPORT_REACH * L
 
-    def pelvis_between(p_s, s1, z1, s2, z2):
-        # Highest pelvis from which both ankles are at most ``reach`` away.
-        r1 = np.sqrt(np.maximum(reach * reach - (p_s - s1) ** 2, 0.0))
-        r2 = np.sqrt(np.maximum(reach * reach - (p_s - s2) ** 2, 0.0))
-        return _soft_min(z1 + r1, z2 + r2)
+_jit = nb.njit(cache=True, nogil=True)
 
-    # K1: mid-swing of the front-going leg F, stance leg S.
-    p1s, p1z = stance_s, zs + H
-    f1 = leg_angles(p1s, p1z, summit_s, summit_z, leg, min_reach)
-    s1 = leg_angles(p1s, p1z, stance_s, zs, leg, min_reach)
-    # K2: heel strike of F, pelvis midway.
-    p2s = 0.5 * (stance_s + front_s)
-    p2z = pelvis_between(p2s, stance_s, zs, front_s, zf)
-    f2 = leg_angles(p2s, p2z, front_s, zf, leg, min_reach)
-    s2 = leg_angles(p2s, p2z, stance_s, zs, leg, min_reach)
-    # K3: toe-off of S; its ankle rotates about the toe.
-    toe_s = stance_s + leg.toe_offset
-    r_toe = np.hypot(leg.toe_offset, a)
-    pitch = TOE_OFF_FOOT_ANGLE + np.arctan2(a, leg.toe_offset)
-    back_ankle_s = toe_s - r_toe * np.cos(pitch)
-    back_ankle_z = stance_z + r_toe * np.sin(pitch)
-    p3s = stance_s + TOE_OFF_PELVIS_FRACTION * (front_s - stance_s)
-    p3z = pelvis_between(p3s, back_ankle_s, back_ankle_z, front_s, zf)
-    f3 = leg_angles(p3s, p3z, front_s, zf, leg, min_reach)
-    s3 = leg_angles(p3s, p3z, back_ankle_s, back_ankle_z, leg, min_reach)
-    # K1': legs swapped, S at a nominal mid-swing above F; F stands as S did at K1.
-    p4s, p4z = front_s, zf + H
-    f4 = s1
-    s4 = leg_angles(p4s, p4z, front_s, np.maximum(zf, zs) + nominal_lift, leg, min_reach)
 
-    def rotation(frames, part):
-        angles = [frame[part] for frame in frames]
-        return sum(np.abs(b - a) for a, b in zip(angles[:-1], angles[1:], strict=True))
+@_jit
+def _angles(hip_s, hip_z, ankle_s, ankle_z, a, b, L, min_reach):
+    """:func:`leg_angles` of one leg: thigh and shank elevation, reachable."""
+    ds = ankle_s - hip_s
+    dz = hip_z - ankle_z
+    d = np.hypot(ds, dz)
+    ok = (d <= L * (1 + 1e-9)) and (d >= min_reach)
+    dc = min(max(d, max(min_reach, 1e-6)), L)
+    direction = np.arctan2(ds, dz)
+    at_hip = np.arccos(min(max((a * a + dc * dc - b * b) / (2 * a * dc), -1.0), 1.0))
+    at_ankle = np.arccos(min(max((b * b + dc * dc - a * a) / (2 * b * dc), -1.0), 1.0))
+    return direction + at_hip, direction - at_ankle, ok
 
-    thigh = rotation((f1, f2, f3, f4), 0) + rotation((s1, s2, s3, s4), 0)
-    calf = rotation((f1, f2, f3, f4), 1) + rotation((s1, s2, s3, s4), 1)
-    reachable = np.ones(np.shape(thigh), dtype=bool)
-    for frame in (f1, s1, f2, s2, f3, s3, f4, s4):
-        reachable &= frame[2]
-    return KeyFrames(thigh, calf, reachable)
+
+@_jit
+def _soft_min_1(a, b):
+    """:func:`_soft_min` of two floats (scale 0.02 m)."""
+    return min(a, b) - 0.02 * np.log1p(np.exp(-abs(a - b) / 0.02))
+
+
+@_jit
+def _pelvis_between(p_s, s1, z1, s2, z2, reach):
+    r1 = np.sqrt(max(reach * reach - (p_s - s1) ** 2, 0.0))
+    r2 = np.sqrt(max(reach * reach - (p_s - s2) ** 2, 0.0))
+    return _soft_min_1(z1 + r1, z2 + r2)
+
+
+@_jit
+def _key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, thigh, shank,
+                toe_offset, ankle_height, nominal_lift, pelvis_ratio, cos_knee,
+                out_thigh, out_calf, out_reachable):
+    """Joint rotations and reachability of each step (see :func:`key_frames`)."""
+    pitch0 = TOE_OFF_FOOT_ANGLE
+    for i in range(stance_s.size):
+        a_len, b_len = thigh[i], shank[i]
+        ankle = ankle_height[i]
+        L = a_len + b_len
+        H = pelvis_ratio * L
+        min_reach = np.sqrt(a_len**2 + b_len**2 - 2 * a_len * b_len * cos_knee)
+        ss, fs = stance_s[i], front_s[i]
+        zs, zf = stance_z[i] + ankle, front_z[i] + ankle
+        reach = DOUBLE_SUPPORT_REACH * L
+        # K1: mid-swing of the front-going leg F, stance leg S
+        p1z = zs + H
+        f1 = _angles(ss, p1z, summit_s[i], summit_z[i], a_len, b_len, L, min_reach)
+        s1 = _angles(ss, p1z, ss, zs, a_len, b_len, L, min_reach)
+        # K2: heel strike of F, pelvis midway
+        p2s = 0.5 * (ss + fs)
+        p2z = _pelvis_between(p2s, ss, zs, fs, zf, reach)
+        f2 = _angles(p2s, p2z, fs, zf, a_len, b_len, L, min_reach)
+        s2 = _angles(p2s, p2z, ss, zs, a_len, b_len, L, min_reach)
+        # K3: toe-off of S; its ankle rotates about the toe
+        toe = toe_offset[i]
+        toe_s = ss + toe
+        r_toe = np.hypot(toe, ankle)
+        pitch = pitch0 + np.arctan2(ankle, toe)
+        back_s = toe_s - r_toe * np.cos(pitch)
+        back_z = stance_z[i] + r_toe * np.sin(pitch)
+        p3s = ss + TOE_OFF_PELVIS_FRACTION * (fs - ss)
+        p3z = _pelvis_between(p3s, back_s, back_z, fs, zf, reach)
+        f3 = _angles(p3s, p3z, fs, zf, a_len, b_len, L, min_reach)
+        s3 = _angles(p3s, p3z, back_s, back_z, a_len, b_len, L, min_reach)
+        # K1': legs swapped, S at a nominal mid-swing above F; F stands as S did at K1
+        p4z = zf + H
+        f4 = s1
+        s4 = _angles(fs, p4z, fs, max(zf, zs) + nominal_lift[i], a_len, b_len, L, min_reach)
+        # summed as the reference: each leg's three changes, then both legs
+        out_thigh[i] = ((abs(f2[0] - f1[0]) + abs(f3[0] - f2[0]) + abs(f4[0] - f3[0]))
+                        + (abs(s2[0] - s1[0]) + abs(s3[0] - s2[0]) + abs(s4[0] - s3[0])))
+        out_calf[i] = ((abs(f2[1] - f1[1]) + abs(f3[1] - f2[1]) + abs(f4[1] - f3[1]))
+                       + (abs(s2[1] - s1[1]) + abs(s3[1] - s2[1]) + abs(s4[1] - s3[1])))
+        out_reachable[i] = (f1[2] and s1[2] and f2[2] and s2[2] and f3[2] and s3[2]
+                            and f4[2] and s4[2])

@@ -24,15 +24,13 @@ from planners.energy import (
     walking_energy,
 )
 from planners.legality import Reason, foot_support, snap_to_support
-from planners.profile import _VERTICAL, GroundProfile
+from planners.profile import _VERTICAL, RASTER_CELL, GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
 
-__all__ = ["Structure", "StepTables", "structure", "build_tables", "combine_profiles",
-           "grid", "neutral_index"]
+__all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables",
+           "combine_profiles", "grid", "neutral_index"]
 
 
-#: Cell of the conservative height raster used for swing collision checks [m].
-RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 #: Extra clearance of the reusable curves for straight sloped spans [m].
 SLOPE_EXTRA = 0.03
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
@@ -262,6 +260,33 @@ class _LegArrays:
 
 
 @dataclass(frozen=True, eq=False)
+class TableWork:
+    """What building the tables did, per agent (A,) each, counted where it was done.
+
+    Attributes
+    ----------
+    steps : ndarray of int
+        Lattice steps whose legality and energy were evaluated.
+    key_frames : ndarray of int
+        Steps whose key frames were solved by inverse kinematics (the others are level
+        steps on level ground, looked up in the per-leg cache).
+    swing_curves : ndarray of int
+        Swing curves built and checked by the §5.2 adjustment.
+    swing_curves_reused : ndarray of int
+        Swing curves taken from the per-leg flat-ground cache (sheared to a slope) and
+        checked against the slack the cache recorded.
+    swing_adjustments : ndarray of int
+        §5.2 adjustment rounds of the curves built.
+    """
+
+    steps: np.ndarray
+    key_frames: np.ndarray
+    swing_curves: np.ndarray
+    swing_curves_reused: np.ndarray
+    swing_adjustments: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class StepTables:
     """Per-agent tables (A agents, Nn nodes, Ns steps, Np swings).
 
@@ -297,6 +322,8 @@ class StepTables:
         0 where unused) [J/kg].
     reach : ndarray, shape (A,)
         Farthest last foothold of the lattice, relative to the stance foot [m].
+    work : TableWork
+        What building the tables did, per agent.
     """
 
     struct: Structure
@@ -321,6 +348,7 @@ class StepTables:
     progress: np.ndarray
     terminal: np.ndarray
     reach: np.ndarray
+    work: TableWork
 
     @cached_property
     def step_legal(self) -> np.ndarray:
@@ -515,6 +543,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     Ej = np.take_along_axis(flat_Ej, np.broadcast_to(st.step_j, rise.shape), axis=1)
     reachable = np.take_along_axis(flat_reach, np.broadcast_to(st.step_j, rise.shape), axis=1)
     other = np.nonzero(~level)
+    key_frames = np.bincount(other[0], minlength=A)
     if other[0].size:
         sub = legs_col.take(other[0])
         summit_z = highest[other] + sub.ankle_height + 0.75 * config.swing_lift
@@ -559,6 +588,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     controls = np.zeros((A, P, 4, 2))
     rounds = np.full((A, P), -1)
     swing_ok = np.zeros((A, P), dtype=bool)
+    built, reused, adjustments = (np.zeros(A, dtype=np.int64) for _ in range(3))
     agent_of, which = np.nonzero(needed)
     if agent_of.size:
         b_node, f_node = back[which], front[which]
@@ -602,6 +632,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             controls[ag, which[rows]] = ctrl
             rounds[ag, which[rows]] = 0
             swing_ok[ag, which[rows]] = True
+            reused += np.bincount(ag, minlength=A)
         rest = ~flat
         if rest.any():
             margin = 2 * float(legs_col.foot_length.max())
@@ -615,6 +646,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
             controls[ag, which[rest]] = ctrl
             rounds[ag, which[rest]] = swing.rounds
             swing_ok[ag, which[rest]] = swing.ok
+            built += np.bincount(ag, minlength=A)
+            adjustments += np.bincount(ag, weights=swing.rounds, minlength=A).astype(np.int64)
     return StepTables(st, lo, delta, neutral, per_metre,
                       node_s, node_z, length, rise, En, Ev, Ej, E, reason,
-                      swing_ok, controls, rounds, config, cost, progress, terminal, far)
+                      swing_ok, controls, rounds, config, cost, progress, terminal, far,
+                      TableWork(np.full(A, rise.shape[1]), key_frames, built, reused,
+                                adjustments))

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.best_first import find_init
 from planners.dp import cheapest
 from planners.lattice import StepTables
+from planners.multistart import nearest_legal
 from planners.search import SearchResult
 
 __all__ = ["optimal"]
@@ -23,36 +23,33 @@ def optimal(tables: StepTables) -> SearchResult:
     configuration so far, dynamic programming finds the legal configuration minimising
     ``sum(E - lam * L)``; if that sum is negative the new configuration is more efficient
     and ``lam`` moves to it, otherwise ``lam`` is optimal. All agents iterate together.
-    ``nodes_expanded`` counts DP states, ``legality_checks`` DP transitions. E and L are
+    ``nodes_expanded`` counts the DP states and ``legality_checks`` the DP transitions
+    of every pass (plus those of the start, :func:`~planners.multistart.nearest_legal`). E and L are
     the tables' ``cost`` and ``progress``: with ``PlannerConfig.terminal_cost`` every
     configuration progresses equally and the optimum is the least energy for it.
     """
     A = tables.neutral.size
-    st = tables.struct
-    init = find_init(tables)
+    init = nearest_legal(tables)
     configs = init.configs.copy()
     found = init.found.copy()
     agents = np.flatnonzero(found)
     eff = np.zeros(A)
     if agents.size:
         _, eff[agents] = tables.evaluate(agents, configs[agents])
-    per_pass_states = sum(((st.J - 1) * (k - 1) + 1) * (1 if k == 1 else st.J)
-                          for k in range(1, st.n + 1))
-    passes = np.zeros(A, dtype=np.int64)
+    expanded, checks = init.expanded.copy(), init.checks.copy()
     active = agents
     for _ in range(MAX_ITERATIONS):
         if active.size == 0:
             break
         lam = 1.0 / eff[active, None]
-        best, ok = cheapest(tables, tables.cost[active] - lam * tables.progress[active],
-                            active)
-        passes[active] += 1
+        best, ok, work = cheapest(tables, tables.cost[active] - lam * tables.progress[active],
+                                  active)
+        expanded[active] += work.states
+        checks[active] += work.transitions
         _, new = tables.evaluate(active, best)
         better = ok & (new > eff[active] * (1 + 1e-12))
         movers = active[better]
         configs[movers] = best[better]
         eff[movers] = new[better]
         active = movers
-    expanded = init.expanded + passes * per_pass_states
-    checks = init.checks + passes * per_pass_states * st.J
     return SearchResult(configs, found, expanded, checks)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -16,16 +16,20 @@ from planners.fixed import fixed
 from planners.lattice import StepTables, build_tables
 from planners.leg import Leg
 from planners.legality import Reason, describe
+from planners.multistart import best_first_multistart
 from planners.optimal import optimal
 from planners.profile import GroundProfile
 from planners.search import SearchResult
 from planners.timing import phase_durations
+from planners.turning import split_turn
 
 __all__ = ["Plan", "PLANNERS", "plan", "plan_batch"]
 
-_SEARCHES = {"best_first": best_first, "fixed": fixed, "optimal": optimal}
-#: Names of the planners: Chen & Li's ``best_first``, the unplanned ``fixed`` walker and
-#: the exact ``optimal`` over the same grid and horizon.
+_SEARCHES = {"best_first": best_first, "best_first_multistart": best_first_multistart,
+             "fixed": fixed, "optimal": optimal}
+#: Names of the planners: Chen & Li's ``best_first`` (FIND_INIT + BFP as written), the
+#: improved ``best_first_multistart`` (several starts, a wider neighbourhood), the
+#: unplanned ``fixed`` walker and the exact ``optimal`` over the same grid and horizon.
 PLANNERS = frozenset(_SEARCHES)
 #: Agents planned together in one vectorised pass (bounds memory).
 BATCH_CHUNK = 64
@@ -62,13 +66,25 @@ class Plan:
     efficiency : float
         Eq. 5 over the plan: total length / total energy [m kg/J].
     stats : dict
-        ``nodes_expanded``, ``legality_checks``, ``swing_curves``,
-        ``swing_adjustments``, ``time_s`` (per plan, amortised over a batch) and the grid
-        (``step_min``, ``step_increment`` [m], ``neutral_step`` [m]).
+        Counted work: the search's ``nodes_expanded`` and ``legality_checks`` (see each
+        search), and the tables' ``lattice_steps``, ``key_frame_solves``,
+        ``swing_curves`` (built by §5.2), ``swing_curves_reused`` (from the flat-ground
+        cache), ``swing_adjustments`` (see :class:`~planners.lattice.TableWork`);
+        ``time_s`` (per plan, amortised over a batch); the grid (``step_min``,
+        ``step_increment``, ``neutral_step`` [m]); ``reach`` and ``terminal_energy``.
     speed : float
         Target speed [m/s].
     trailing_s : float
         Arc length of the trailing foot at the start [m].
+    foot_rotations : ndarray, shape (k,)
+        Heading increment of each new foothold on a curved path (§5.4,
+        :func:`~planners.turning.split_turn` of the path's heading change over the plan
+        with ``PlannerConfig.turn_threshold``; the inside foot turns first) [rad]; a turn
+        needing more placements than the plan has continues in the next plan. Zeros on a
+        straight path.
+    feet : tuple of str, length k
+        ``"left"`` or ``"right"``: the foot making each step (the first is the trailing
+        foot, alternating); empty strings when the caller did not say which foot.
     """
 
     status: str
@@ -88,6 +104,8 @@ class Plan:
     stats: dict = field(default_factory=dict)
     speed: float = float("nan")
     trailing_s: float = float("nan")
+    foot_rotations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    feet: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -125,6 +143,8 @@ class Plan:
             "step_heights": self.step_heights.tolist(),
             "swing_controls": self.swing_controls.tolist(),
             "phase_durations": self.phase_durations.tolist(),
+            "foot_rotations": self.foot_rotations.tolist(),
+            "feet": list(self.feet),
             "energy": {"En": self.En.tolist(), "Ev": self.Ev.tolist(),
                        "Ej": self.Ej.tolist(), "E": self.E.tolist()},
             "energy_total": self.energy_total,
@@ -148,7 +168,7 @@ def plan(profile: GroundProfile, leg: Leg, speed: float, planner: str = "best_fi
         Leg geometry [m].
     speed : float
         Target walking speed along the path [m/s], in (0, 3].
-    planner : {"best_first", "fixed", "optimal"}
+    planner : {"best_first", "best_first_multistart", "fixed", "optimal"}
     config : PlannerConfig, optional
     trailing : float, optional
         Arc length of the trailing foot (the one that swings next) relative to the stance
@@ -167,7 +187,8 @@ def plan(profile: GroundProfile, leg: Leg, speed: float, planner: str = "best_fi
 
 def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], speeds,
                planner: str = "best_first", config: PlannerConfig | None = None, *,
-               trailing=None, origins=None) -> list[Plan]:
+               trailing=None, origins=None, heading_change=None,
+               first_foot=None) -> list[Plan]:
     """Plan for many walkers in one vectorised pass per chunk of agents.
 
     Parameters
@@ -176,12 +197,19 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     legs : Leg or sequence of Leg (length A)
     speeds : float or array_like (A,)
         Target speeds [m/s].
-    planner : {"best_first", "fixed", "optimal"}
+    planner : {"best_first", "best_first_multistart", "fixed", "optimal"}
     config : PlannerConfig, optional
     trailing : array_like (A,), optional
         Trailing-foot arc lengths relative to each stance foot [m], < 0.
     origins : array_like (A,), optional
         Stance-foot arc lengths on each profile [m]; default 0.
+    heading_change : array_like (A,), optional
+        Change of walking direction along each path over the plan [rad], positive left;
+        gives :attr:`Plan.foot_rotations` (default straight paths).
+    first_foot : sequence of str (A,), optional
+        ``"left"`` or ``"right"``: the foot making each agent's next step (which foot
+        turns first, :attr:`Plan.feet`); default ``"left"`` where ``heading_change`` is
+        given.
 
     Returns
     -------
@@ -205,6 +233,12 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     if bad.size:
         raise invalid("plan", "speed", "finite and in (0, 3] [m/s]", float(speeds[bad[0]]))
     origins = np.zeros(A) if origins is None else _vector(origins, A, "origins")
+    turns = None if heading_change is None else _vector(heading_change, A, "heading_change")
+    if first_foot is None:
+        first_foot = ["left" if turns is not None else ""] * A
+    first_foot = list(first_foot)
+    if len(first_foot) != A or not set(first_foot) <= {"left", "right", ""}:
+        raise invalid("plan", "first_foot", f"{A} of 'left' or 'right'", first_foot)
     if trailing is not None:
         trailing = _vector(trailing, A, "trailing")
         bad = np.flatnonzero(~((trailing < 0) & (trailing > -3.0)))
@@ -218,9 +252,25 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
                               None if trailing is None else trailing[sl], origins[sl], config)
         result = _SEARCHES[planner](tables)
         elapsed = (time.perf_counter() - t0) / len(profiles[sl])
-        plans += _assemble(tables, result, planner, legs[sl], speeds[sl], origins[sl],
-                           elapsed)
-    return plans
+        plans += _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],
+                           origins[sl], elapsed)
+    if turns is None and not any(first_foot):
+        return plans
+    return [_turned(p, None if turns is None else float(turns[a]), first_foot[a], config)
+            for a, p in enumerate(plans)]
+
+
+def _turned(p: Plan, change: float | None, foot: str, config: PlannerConfig) -> Plan:
+    """``p`` with the §5.4 foot rotations of a heading change ``change`` [rad] and the
+    stepping feet (``foot`` first)."""
+    k = p.step_lengths.size
+    rotations = np.zeros(k)
+    if change is not None:
+        split, _ = split_turn(change, config.turn_threshold, foot or "left")
+        rotations[:min(k, split.size)] = split[:k]
+    other = {"left": "right", "right": "left", "": ""}[foot]
+    feet = tuple(foot if i % 2 == 0 else other for i in range(k))
+    return replace(p, foot_rotations=rotations, feet=feet)
 
 
 def _vector(values, count: int, name: str) -> np.ndarray:
@@ -234,8 +284,8 @@ def _vector(values, count: int, name: str) -> np.ndarray:
     return arr
 
 
-def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, speeds,
-              origins, elapsed: float) -> list[Plan]:
+def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, legs,
+              speeds, origins, elapsed: float) -> list[Plan]:
     """Turn search results into :class:`Plan` objects (gathers, no numerics per agent)."""
     st = tables.struct
     A = speeds.size
@@ -243,7 +293,8 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
     failed = np.flatnonzero(~result.found)
     messages = {}
     for a, (message, prefix, depth) in zip(failed.tolist(),
-                                           _diagnose(tables, failed, origins), strict=True):
+                                           _diagnose(tables, failed, profiles, origins),
+                                           strict=True):
         messages[a] = message, depth
         result.configs[a] = prefix  # a failed agent keeps its longest legal prefix
     steps, swings = st.indices(result.configs)
@@ -259,15 +310,17 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
     durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
     terms = {name: getattr(tables, name)[rows, steps] for name in ("En", "Ev", "Ej", "E")}
     efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
-    used_rounds = np.clip(tables.rounds, 0, None).sum(axis=1)
-    curves = (tables.rounds >= 0).sum(axis=1)
+    work = tables.work
     plans = []
     for a in range(A):
         stats = {
             "nodes_expanded": int(result.expanded[a]),
             "legality_checks": int(result.checks[a]),
-            "swing_curves": int(curves[a]),
-            "swing_adjustments": int(used_rounds[a]),
+            "lattice_steps": int(work.steps[a]),
+            "key_frame_solves": int(work.key_frames[a]),
+            "swing_curves": int(work.swing_curves[a]),
+            "swing_curves_reused": int(work.swing_curves_reused[a]),
+            "swing_adjustments": int(work.swing_adjustments[a]),
             "time_s": elapsed,
             "step_min": float(tables.step_min[a]),
             "step_increment": float(tables.step_delta[a]),
@@ -287,21 +340,23 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, legs, spee
                               foot_z[a, :k + 1], lengths[a, :k], rises[a, :k],
                               controls[a, :k], durations[a, :k], terms["En"][a, :k],
                               terms["Ev"][a, :k], terms["Ej"][a, :k], e, eff, stats,
-                              float(speeds[a]), trailing_s))
+                              float(speeds[a]), trailing_s, np.zeros(k)))
             continue
         plans.append(Plan(OK, "", planner, foot_s[a], foot_z[a], lengths[a], rises[a],
                           controls[a], durations[a], terms["En"][a], terms["Ev"][a],
                           terms["Ej"][a], terms["E"][a], float(efficiency[a]), stats,
-                          float(speeds[a]), trailing_s))
+                          float(speeds[a]), trailing_s, np.zeros(st.n)))
     return plans
 
 
-def _diagnose(tables: StepTables, agents: np.ndarray, origins: np.ndarray) -> list:
+def _diagnose(tables: StepTables, agents: np.ndarray, profiles, origins: np.ndarray) -> list:
     """Where and why no legal configuration exists, for each agent in ``agents``.
 
     Returns (message, configuration, depth) per agent: the configuration nearest to the
     neutral one among those whose first ``depth`` steps are legal, ``depth`` being the
-    most steps any configuration can make.
+    most steps any configuration can make. The message names where the walker is stopped:
+    for a rise beyond ``max_step_rise`` the first profile vertex past the stance foot
+    that is too high or too low, otherwise the failing landing nearest the neutral one.
     """
     if agents.size == 0:
         return []
@@ -324,10 +379,18 @@ def _diagnose(tables: StepTables, agents: np.ndarray, origins: np.ndarray) -> li
         landing = tables.node_s[a, st.step_front[s_idx]] + origins[a]
         lo = stance + tables.step_min[a]
         hi = lo + tables.step_delta[a] * (st.J - 1)
-        rise = float(tables.rise[a, s_idx])
-        detail = f", rise {rise:+.2f} m" if reason & Reason.STEP_HEIGHT else ""
+        at, why = landing, describe(reason)
+        if reason & Reason.STEP_HEIGHT:
+            limit = tables.config.max_step_rise
+            p = profiles[a]
+            z0 = tables.node_z[a, st.step_stance[s_idx]]
+            beyond = np.flatnonzero((p.s > stance) & (p.s <= hi)
+                                    & (np.abs(p.z - z0) > limit))
+            rise = float(tables.rise[a, s_idx])
+            if beyond.size:
+                at, rise = float(p.s[beyond[0]]), float(p.z[beyond[0]] - z0)
+            why = f"rise {rise:+.2f} m exceeds the largest step rise {limit:.2f} m"
         messages.append((
-            f"no legal foothold for step {depth + 1} from s = {stance:.2f} m (landings "
-            f"s = {lo:.2f}..{hi:.2f} m tried): {describe(reason)} (e.g. landing at "
-            f"s = {landing:.2f} m{detail})", grid[pick], depth))
+            f"no legal foothold at s = {at:.2f} m: {why} (step {depth + 1} from "
+            f"s = {stance:.2f} m, landings s = {lo:.2f}..{hi:.2f} m tried)", grid[pick], depth))
     return messages

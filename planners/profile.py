@@ -9,7 +9,10 @@ import numpy as np
 
 from planners.errors import invalid
 
-__all__ = ["GroundProfile", "HeightRaster"]
+__all__ = ["GroundProfile", "HeightRaster", "RASTER_CELL"]
+
+#: Cell of the conservative height raster used for swing collision checks [m].
+RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
 
 #: Rows closer than this in s [m] form a vertical height change.
 _VERTICAL = 1e-12
@@ -244,8 +247,8 @@ class HeightRaster:
         self.cell = float(cell)
         c = heights.size
         cells = np.clip(((vertex_s - self.start) / self.cell).astype(np.intp), 0, c - 1)
-        self._vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
-        self._heights = heights
+        self.vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
+        self.heights = heights
         # the levels of the range-maximum table are built as queries need them (swing
         # queries span a few dozen cells, the raster tens of thousands)
         self._table = heights[None, :]
@@ -255,11 +258,19 @@ class HeightRaster:
     def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Number of profile vertices in the cells covering ``[a, b]`` [m] (>= the number
         in the interval itself: a conservative count)."""
-        c = self._vertex_cum.size - 1
+        c = self.vertex_cum.size - 1
         scale = 1.0 / self.cell
         ia = np.clip(((np.asarray(a) - self.start) * scale).astype(np.intp), 0, c - 1)
         ib = np.clip(((np.asarray(b) - self.start) * scale).astype(np.intp), ia, c - 1)
-        return self._vertex_cum[ib + 1] - self._vertex_cum[ia]
+        return self.vertex_cum[ib + 1] - self.vertex_cum[ia]
+
+    def table(self, levels: int) -> np.ndarray:
+        """The range-maximum table (at least ``levels`` levels, as many as the cells
+        allow) of the cell heights, shape (L, c): row k holds the maximum of the 2**k
+        cells from each cell."""
+        if self._table.shape[0] < levels:
+            self._table = _range_max_table(self.heights, levels)
+        return self._table
 
     def max_height(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Highest ground [m] over ``[a, b]`` [m] (same shapes), never underestimated.
@@ -275,7 +286,7 @@ class HeightRaster:
         np.clip(ib, ia, c - 1, out=ib)
         k = self._log2[ib - ia + 1]
         if k.size and k.max() >= self._table.shape[0]:
-            self._table = _range_max_table(self._heights, int(k.max()) + 1)
+            self._table = _range_max_table(self.heights, int(k.max()) + 1)
             flat = self._table.ravel()
         row = k * c
         return np.maximum(flat.take(row + ia), flat.take(row + ib - (1 << k) + 1))

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from planners.config import PlannerConfig
 from planners.leg import Leg
-from planners.profile import GroundProfile
+from planners.profile import RASTER_CELL, GroundProfile
 
 __all__ = ["SwingResult", "bernstein", "bezier_points", "adjust_swings", "sole_clearance"]
 
@@ -106,7 +107,7 @@ def sole_clearance(points: np.ndarray, start_s: np.ndarray, end_s: np.ndarray,
     return need - (z_lo - ankle - ground)
 
 
-def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: Leg,
+def adjust_swings(start_s, start_z, end_s, end_z, profile, leg: Leg,
                   config: PlannerConfig) -> SwingResult:
     """Swing-ankle curves from ``start`` to ``end`` footholds, adjusted per §5.2.
 
@@ -114,6 +115,9 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: L
     ----------
     start_s, start_z, end_s, end_z : ndarray, shape (C,)
         Lift-off and touch-down footholds (ground under the ankle) [m].
+    profile : GroundProfile or HeightRaster
+        The ground; a profile is checked through its conservative raster of
+        :data:`~planners.profile.RASTER_CELL` cells.
     leg : Leg
         Foot geometry [m]; its fields may be arrays of shape (C,).
 
@@ -127,76 +131,176 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile: GroundProfile, leg: L
     of a fixed increment, which needs 1-3 rounds instead of tens; control points are
     kept between the footholds in s (the ankle never moves backward) and the curve is
     illegal once a control point is ``max_swing_lift`` above the higher foothold's ankle.
+    The collision rule is :func:`sole_clearance`'s; compiled (:func:`_adjust`), one curve
+    at a time.
     """
     start_s = np.asarray(start_s, dtype=float).reshape(-1)
     end_s = np.asarray(end_s, dtype=float).reshape(-1)
     C = start_s.size
-    feet = {name: _per_curve(getattr(leg, name), C)
-            for name in ("heel_offset", "toe_offset", "ankle_height", "foot_length")}
-    a = feet["ankle_height"]
-    p0 = np.stack([start_s, np.asarray(start_z, dtype=float).reshape(-1) + a], axis=-1)
-    p3 = np.stack([end_s, np.asarray(end_z, dtype=float).reshape(-1) + a], axis=-1)
-    mid = 0.5 * (p0 + p3)
-    p1 = mid + np.array([0.0, config.swing_lift])
-    controls = np.stack([p0, p1, p1.copy(), p3], axis=1)  # (C, 4, 2)
-    top = np.maximum(p0[:, 1], p3[:, 1]) + config.max_swing_lift
+    feet = [_per_curve(getattr(leg, name), C)
+            for name in ("heel_offset", "toe_offset", "ankle_height", "foot_length")]
+    if isinstance(profile, GroundProfile):
+        margin = 2 * float(feet[3].max()) if C else 0.0
+        lo = np.floor((float(start_s.min(initial=0.0)) - margin) / RASTER_CELL) * RASTER_CELL
+        profile = profile.raster(lo, float(end_s.max(initial=0.0)) + margin, RASTER_CELL)
     samples = config.bezier_samples
-    basis_t = bernstein(np.linspace(0.0, 1.0, samples)).T  # (4, T)
-    t_mid = np.linspace(0.0, 1.0, samples)
-    t_mid = 0.5 * (t_mid[:-1] + t_mid[1:])
-    influence = (3 * t_mid * (1 - t_mid) ** 2, 3 * t_mid**2 * (1 - t_mid))  # P1, P2
-
-    ok = np.zeros(C, dtype=bool)
-    rounds = np.zeros(C, dtype=int)
-    active = np.arange(C)
-    for round_ in range(config.max_adjustments + 1):
-        ctrl = controls[active]
-        pts = np.stack([ctrl[..., 0] @ basis_t, ctrl[..., 1] @ basis_t], axis=-1)
-        view = _FootView({k: v[active] for k, v in feet.items()})
-        deficit = sole_clearance(pts, start_s[active], end_s[active], profile, view, config)
-        clear = ~(deficit > 1e-9).any(axis=1)
-        ok[active[clear]] = True
-        keep = ~clear
-        active, pts, deficit = active[keep], pts[keep], deficit[keep]
-        if active.size == 0 or round_ == config.max_adjustments:
-            break
-        rounds[active] += 1
-        rows = np.arange(active.size)
-        # Ties (a level obstacle top, a symmetric curve) are broken on values rounded to
-        # 1 nm so that translating the problem cannot change the adjustment path.
-        summit = np.argmax(np.round(pts[..., 1] - pts[:, :1, 1], 9), axis=1)
-        left_half = np.arange(samples - 1)[None, :] < summit[:, None]
-        moves = np.zeros((active.size, 2, 2))  # (curve, P1/P2, s/z)
-        for side, half in ((0, left_half), (1, ~left_half)):
-            d = np.where(half, deficit, -np.inf)
-            worst = np.argmax(np.round(d, 9), axis=1)
-            need = d[rows, worst]
-            hit = need > 1e-9
-            target = 0.5 * (pts[rows, worst] + pts[rows, worst + 1])
-            target[:, 1] += np.maximum(need, 0.0)
-            u = target - mid[active]
-            u[:, 1] = np.maximum(u[:, 1], _MIN_UPWARD * np.abs(u[:, 0]) + 1e-9)
-            u /= np.linalg.norm(u, axis=1, keepdims=True)
-            weight = influence[side][worst]
-            dist = np.clip(2.0 * need / np.maximum(weight * u[:, 1], 1e-3) + 0.002, 0.005, 0.3)
-            moves[:, side] = np.where(hit[:, None], dist[:, None] * u, 0.0)
-        # A half without collision follows the other one upward by the same amount.
-        lift = moves[:, :, 1]
-        moves[:, 0, 1] = np.where(lift[:, 0] > 0, lift[:, 0], lift[:, 1])
-        moves[:, 1, 1] = np.where(lift[:, 1] > 0, lift[:, 1], lift[:, 0])
-        new = controls[active]
-        new[:, 1:3] += moves
-        new[:, 1:3, 0] = np.clip(new[:, 1:3, 0], start_s[active, None], end_s[active, None])
-        controls[active] = new
-        inside = ~(new[:, 1:3, 1] > top[active, None]).any(axis=1)
-        active = active[inside]
-        if active.size == 0:
-            break
-    pts_z = controls[..., 1] @ basis_t
-    best = np.argmax(pts_z, axis=1)
-    summit = np.stack([(controls[..., 0] @ basis_t)[np.arange(C), best],
-                       pts_z[np.arange(C), best]], axis=-1)
+    t = np.linspace(0.0, 1.0, samples)
+    t_mid = 0.5 * (t[:-1] + t[1:])
+    influence = np.stack([3 * t_mid * (1 - t_mid) ** 2, 3 * t_mid**2 * (1 - t_mid)])
+    basis = np.ascontiguousarray(bernstein(t).T)  # (4, T)
+    controls = np.empty((C, 4, 2))
+    summit = np.empty((C, 2))
+    ok = np.zeros(C, dtype=np.bool_)
+    rounds = np.zeros(C, dtype=np.int64)
+    _adjust(start_s, _per_curve(start_z, C), end_s, _per_curve(end_z, C), *feet,
+            profile.start, profile.cell, profile.table(TABLE_LEVELS), profile.vertex_cum,
+            basis,
+            influence, config.clearance, config.swing_lift, config.max_swing_lift,
+            config.max_foot_slope, config.max_adjustments, controls, summit, ok, rounds)
     return SwingResult(controls, ok, summit, rounds)
+
+
+_jit = nb.njit(cache=True, nogil=True)
+#: Levels of the raster's range-maximum table the kernel uses: spans up to 2**7 cells
+#: (0.5 m) take two look-ups, longer ones a few more.
+TABLE_LEVELS = 7
+
+
+@_jit
+def _round9(x):
+    """``np.round(x, 9)`` of a float."""
+    return np.rint(x * 1e9) / 1e9
+
+
+@_jit
+def _raster_max(a, b, start, scale, table):
+    """:meth:`HeightRaster.max_height` of one interval [m], from the raster's
+    range-maximum table (L, c)."""
+    levels, c = table.shape
+    ia = min(max(int((a - start) * scale), 0), c - 1)
+    ib = min(max(int((b - start) * scale), ia), c - 1)
+    span = ib - ia + 1
+    k = 0
+    while (2 << k) <= span and k + 1 < levels:
+        k += 1
+    width = 1 << k
+    best = table[k, ia]
+    i = ia + width
+    while i + width <= ib + 1:  # spans longer than the table's widest level
+        best = max(best, table[k, i])
+        i += width
+    return max(best, table[k, ib - width + 1])
+
+
+@_jit
+def _raster_vertices(a, b, start, scale, vertex_cum):
+    """:meth:`HeightRaster.vertices_between` of one interval."""
+    c = vertex_cum.size - 1
+    ia = min(max(int((a - start) * scale), 0), c - 1)
+    ib = min(max(int((b - start) * scale), ia), c - 1)
+    return vertex_cum[ib + 1] - vertex_cum[ia]
+
+
+@_jit
+def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cell, table,
+            vertex_cum, basis, influence, clearance, swing_lift, max_swing_lift,
+            max_foot_slope, max_adjustments, controls, out_summit, ok, rounds):
+    """§5.2 adjustment of each curve (see :func:`adjust_swings`); fills ``controls``
+    (C, 4, 2), ``out_summit`` (C, 2) (the highest sample of the final curve), ``ok`` (C,)
+    and ``rounds`` (C,)."""
+    T = basis.shape[1]
+    scale = 1.0 / cell
+    ps = np.empty(T)
+    pz = np.empty(T)
+    deficit = np.empty(T - 1)
+    moves = np.zeros((2, 2))
+    for c in range(start_s.size):
+        p0s, p0z = start_s[c], start_z[c] + ankle[c]
+        p3s, p3z = end_s[c], end_z[c] + ankle[c]
+        ms, mz = 0.5 * (p0s + p3s), 0.5 * (p0z + p3z)
+        ctrl = controls[c]
+        ctrl[0, 0], ctrl[0, 1] = p0s, p0z
+        ctrl[1, 0], ctrl[1, 1] = ms, mz + swing_lift
+        ctrl[2, 0], ctrl[2, 1] = ms, mz + swing_lift
+        ctrl[3, 0], ctrl[3, 1] = p3s, p3z
+        top = max(p0z, p3z) + max_swing_lift
+        zone = 0.5 * foot[c]
+        for round_ in range(max_adjustments + 1):
+            for i in range(T):
+                ps[i] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
+                         + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
+                pz[i] = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
+                         + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
+            clear = True
+            for i in range(T - 1):  # sole_clearance
+                s_lo, s_hi = min(ps[i], ps[i + 1]), max(ps[i], ps[i + 1])
+                z_lo = min(pz[i], pz[i + 1])
+                in_zone = (s_hi <= p0s + zone) or (s_lo >= p3s - zone)
+                if in_zone:
+                    ground = _raster_max(s_lo, s_hi, r_start, scale, table)
+                    straight = _raster_vertices(s_lo, s_hi, r_start, scale, vertex_cum) == 0
+                    need = -(max_foot_slope * (s_hi - s_lo) if straight else 0.0)
+                else:
+                    ground = _raster_max(s_lo - heel[c], s_hi + toe[c], r_start, scale,
+                                         table)
+                    need = clearance
+                deficit[i] = need - (z_lo - ankle[c] - ground)
+                if deficit[i] > 1e-9:
+                    clear = False
+            if clear:
+                ok[c] = True
+                break
+            if round_ == max_adjustments:
+                break
+            rounds[c] += 1
+            summit, high = 0, _round9(pz[0] - pz[0])
+            for i in range(1, T):
+                v = _round9(pz[i] - pz[0])
+                if v > high:
+                    summit, high = i, v
+            for side in range(2):
+                worst, worst_r = 0, -np.inf
+                for i in range(T - 1):
+                    if (i < summit) == (side == 0):
+                        r = _round9(deficit[i])
+                        if r > worst_r:
+                            worst, worst_r = i, r
+                need = deficit[worst] if worst_r > -np.inf else -np.inf
+                if not need > 1e-9:
+                    moves[side, 0] = 0.0
+                    moves[side, 1] = 0.0
+                    continue
+                us = 0.5 * (ps[worst] + ps[worst + 1]) - ms
+                uz = 0.5 * (pz[worst] + pz[worst + 1]) + need - mz
+                uz = max(uz, 0.3 * abs(us) + 1e-9)
+                norm = np.sqrt(us * us + uz * uz)
+                us, uz = us / norm, uz / norm
+                weight = influence[side, worst]
+                dist = min(max(2.0 * need / max(weight * uz, 1e-3) + 0.002, 0.005), 0.3)
+                moves[side, 0] = dist * us
+                moves[side, 1] = dist * uz
+            # a half without collision follows the other one upward by the same amount
+            if not moves[0, 1] > 0:
+                moves[0, 1] = moves[1, 1]
+            if not moves[1, 1] > 0:
+                moves[1, 1] = moves[0, 1]
+            inside = True
+            for k in range(2):
+                ctrl[1 + k, 0] = min(max(ctrl[1 + k, 0] + moves[k, 0], p0s), p3s)
+                ctrl[1 + k, 1] += moves[k, 1]
+                if ctrl[1 + k, 1] > top:
+                    inside = False
+            if not inside:
+                break
+        high = -np.inf  # the final curve's highest sample
+        for i in range(T):
+            zi = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
+                  + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
+            if zi > high:
+                high = zi
+                out_summit[c, 0] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
+                                    + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
+        out_summit[c, 1] = high
 
 
 class _FootView:

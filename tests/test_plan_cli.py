@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -22,7 +23,7 @@ STAIRS = "s,z\n-2,0\n0.4,0\n0.4,0.17\n0.7,0.17\n0.7,0.34\n1.0,0.34\n1.0,0.51\n6,
 
 def test_json_output_has_the_documented_fields(tmp_path):
     path = write(tmp_path, STAIRS)
-    result = runner.invoke(app, ["plan", "--profile", str(path), "--json"])
+    result = runner.invoke(app, ["plan", "--profile", str(path), "--json", "--horizon"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output)
     assert data["status"] == "ok"
@@ -62,7 +63,9 @@ def test_human_readable_table(tmp_path):
         ("s,z\n0,0\n1,abc\n", "ProfileCSV.line 3 must be two numbers s,z [m]; got '1,abc'."),
         ("s,z\n1,0\n0,0\n", "GroundProfile.s must be non-decreasing [m]"),
         ("s,z\n0,0\n1,nan\n", "GroundProfile.z must be finite [m]"),
-        ("s,z\n", "ProfileCSV.rows must be at least one s,z row"),
+        ("s,z\n", "ProfileCSV.rows must be at least two s,z rows"),
+        ("s,z\n0,0\n", "ProfileCSV.rows must be at least two s,z rows"),
+        ("s,z\n-1,0\n0.4,0\n", "walk.profile must be at least one step (0.65 m) long"),
         ("a,b\n0,0\n", "ProfileCSV.header must be columns named s and z"),
     ],
 )
@@ -86,11 +89,36 @@ def test_missing_file_and_bad_options_exit_2(tmp_path):
 
 def test_wall_reports_no_legal_foothold_with_exit_1(tmp_path):
     path = write(tmp_path, "s,z\n-2,0\n1.0,0\n1.0,0.6\n5,0.6\n")
-    result = runner.invoke(app, ["plan", "--profile", str(path), "--json"])
+    result = runner.invoke(app, ["plan", "--profile", str(path), "--json", "--horizon"])
     assert result.exit_code == 1
     data = json.loads(result.output)
     assert data["status"] == "no legal foothold"
     assert "rise +0.60 m" in data["message"]
+
+
+@pytest.mark.parametrize("planner", ["best_first", "best_first_multistart", "fixed"])
+def test_walk_stops_in_front_of_a_wall_and_says_where_and_why(tmp_path, planner):
+    path = write(tmp_path, "s,z\n-2,0\n3.0,0\n3.0,0.6\n5,0.6\n")
+    result = runner.invoke(app, ["plan", "--profile", str(path), "--planner", planner])
+    assert result.exit_code == 1
+    first = result.output.splitlines()[0]
+    assert first.startswith("status: no legal foothold at s = 3.00 m: rise +0.60 m exceeds "
+                            "the largest step rise 0.25 m")
+    data = json.loads(runner.invoke(app, ["plan", "--profile", str(path), "--planner",
+                                          planner, "--json"]).output)
+    s = [f["s"] for f in data["footholds"]]
+    assert 2.5 < s[-1] < 3.0 and len(s) > 4  # walked up to the wall, not one horizon
+
+
+def test_walk_covers_the_whole_profile(tmp_path):
+    result = runner.invoke(app, ["plan", "--profile", str(write(tmp_path, STAIRS)), "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    s = np.array([f["s"] for f in data["footholds"]])
+    z = np.array([f["z"] for f in data["footholds"]])
+    assert data["status"] == "ok" and 6 - 0.9 < s[-1] <= 6
+    assert z[-1] == pytest.approx(0.51) and np.all(np.diff(s) > 0)
+    assert data["stats"]["plans"] == len(s) - 1
 
 
 def test_csv_without_header_and_with_comments(tmp_path):

@@ -77,7 +77,7 @@ def test_quickstart_has_the_promised_features():
     sc = load_scenario(ROOT / "scenarios" / "quickstart.yaml")
     kinds = {f.type for f in sc.terrain.features}
     assert {"stairs", "block", "slope", "ramp"} <= kinds
-    assert {g.planner for g in sc.groups} >= {"best_first", "fixed"}
+    assert {g.planner for g in sc.groups} >= {"best_first_multistart", "fixed"}
     assert 20 <= sum(g.count for g in sc.groups) <= 200
 
 
@@ -95,7 +95,7 @@ def test_defaults_cite_body_height_and_free_speed():
     g = sc.groups[0]
     assert g.body_height == DEFAULT_BODY_HEIGHT and g.body_height.mean == 1.71
     assert g.free_speed == DEFAULT_FREE_SPEED and g.free_speed.mean == 1.34
-    assert g.free_speed.sd == 0.26 and g.planner == "best_first"
+    assert g.free_speed.sd == 0.26 and g.planner == "best_first_multistart"
     assert sc.simulation.seed == 0 and sc.outputs.poses is True
 
 
@@ -141,7 +141,8 @@ def line_of(text, needle):
     ("destinations: [b]", "destinations: [b]\n    free_speed: {mean: 1.3, sd: -1}",
      r"groups\[0\]\.free_speed\.sd must be ≥ 0\.0 \[m/s\]; got -1\.", "free_speed"),
     ("destinations: [b]", "destinations: [b]\n    planner: smart",
-     r"groups\[0\]\.planner must be one of 'best_first', 'fixed' or 'optimal'; got 'smart'",
+     r"groups\[0\]\.planner must be one of 'best_first', 'best_first_multistart', 'fixed' "
+     r"or 'optimal'; got 'smart'",
      "planner"),
     ("    count: 3\n", "", r"groups\[0\]\.count is required\.", "- name: g"),
     ("width: 2}", "width: 2, oneway: maybe}", r"routes\.edges\[0\]\.oneway must be true or "

@@ -11,6 +11,7 @@ register a factory here under their name and are chosen per group (scenario
 from __future__ import annotations
 
 import importlib
+import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -84,21 +85,28 @@ class GaitEngine(Protocol):
 
 
 #: Engine name -> "module:callable" of its factory ``factory(body=Body (n),
-#: ground=GroundHeight) -> GaitEngine`` (imported only when the engine is used).
+#: ground=GroundHeight[, attributes=crowdwalk.style.Style (n)]) -> GaitEngine`` (imported
+#: only when the engine is used; a factory with an ``attributes`` parameter gets the
+#: walkers' styles).
 GAIT_ENGINES: dict[str, str] = {
     "elevation_angles": "crowdwalk.gait.animator:Animator",
+    "klaw": "crowdwalk.gait.klaw:KlawEngine",
 }
 
 
-def make_engine(name: str, *, body: Body, ground: GroundHeight | None) -> GaitEngine:
-    """The gait engine registered as ``name`` for the n agents of ``body``."""
+def make_engine(name: str, *, body: Body, ground: GroundHeight | None,
+                attributes=None) -> GaitEngine:
+    """The gait engine registered as ``name`` for the n agents of ``body``; ``attributes``
+    the n walkers' :class:`crowdwalk.style.Style` (None: the default style)."""
     if name not in GAIT_ENGINES:
         raise invalid("make_engine", "name", f"one of {sorted(GAIT_ENGINES)}", name)
     module, attr = GAIT_ENGINES[name].split(":")
     factory = importlib.import_module(module)
     for part in attr.split("."):
         factory = getattr(factory, part)
-    return factory(body=body, ground=ground)
+    extra = {"attributes": attributes} if "attributes" in inspect.signature(factory).parameters \
+        else {}
+    return factory(body=body, ground=ground, **extra)
 
 
 class MixedEngine:

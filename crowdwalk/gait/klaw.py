@@ -219,19 +219,23 @@ class KlawEngine:
     ----------
     body : Body
         n bodies; agent i is row i.
-    style : Style
-        n styles (:mod:`crowdwalk.style`); replace ``engine.style`` to change them, each
-        walker takes the new values at its next step.
     ground : callable, optional
         ``ground(xy (p, 2)) -> z (p,)`` [m] for the swing foot's toe clearance; without it
         the ground is the line between the step's footholds.
+    attributes : Style, optional
+        n styles (:mod:`crowdwalk.style`, default: the normal walk); kept as
+        ``engine.style`` — replace it to change them, each walker takes the new values at
+        its next step.
     """
 
     name = "klaw"
 
-    def __init__(self, body: Body, style, ground=None) -> None:
+    def __init__(self, body: Body, ground=None, attributes=None) -> None:
+        from crowdwalk.style import Style
+
+        style = Style.default(body.height, 1.34) if attributes is None else attributes
         if len(style) != len(body):
-            raise invalid("KlawEngine", "style", f"of {len(body)} walkers", len(style))
+            raise invalid("KlawEngine", "attributes", f"of {len(body)} walkers", len(style))
         self.body, self.style, self.ground = body, style, ground
         n = len(body)
         self._commanded = np.zeros(n, bool)

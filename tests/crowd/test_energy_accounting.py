@@ -17,12 +17,12 @@ def _energy_to(steps, x):
 @pytest.mark.parametrize("scenario", ["rimea1_corridor", "stairs_up_down"])
 def test_lone_planned_walker_spends_no_more_than_the_fixed_one_on_the_same_route(run_of,
                                                                                 scenario):
-    runs = {p: run_of(scenario, planner=p) for p in ("best_first", "fixed")}
+    runs = {p: run_of(scenario, planner=p) for p in ("best_first_multistart", "fixed")}
     steps = {p: r[1].footsteps() for p, r in runs.items()}
     for p, (summary, _) in runs.items():
         assert summary["agents_arrived"] == 1, p
     end = min(float(s["x"].max()) for s in steps.values())
-    planned, fixed = (_energy_to(steps[p], end) for p in ("best_first", "fixed"))
+    planned, fixed = (_energy_to(steps[p], end) for p in ("best_first_multistart", "fixed"))
     assert planned <= fixed * (1 + 1e-9)
     if scenario == "rimea1_corridor":  # level ground: the neutral step is the optimum
         assert planned == pytest.approx(fixed, rel=1e-9)

@@ -40,7 +40,7 @@ def test_distributions_bounds_and_groups(tmp_path):
     np.testing.assert_allclose(pop.body_height, np.round(pop.body_height, 2))
     np.testing.assert_allclose(pop.spawn_time[~first], 5.0 + 2.0 * np.arange(10))
     assert np.all(pop.spawn_time[first] == 0.0)
-    assert list(pop.planner) == ["best_first"] * 400 + ["fixed"] * 10
+    assert list(pop.planner) == ["best_first_multistart"] * 400 + ["fixed"] * 10
     room = world.routes.node_area("room")
     assert shapely.contains_xy(room, pop.spawn_xy[first, 0], pop.spawn_xy[first, 1]).all()
     assert pop.destinations[0] == ("outside",) and pop.destinations[-1] == ("room",)

@@ -22,7 +22,7 @@ def _walk(style_columns=None, steps=8, change=None):
     base = Style.default(body.height, 1.3)
     cols = {k: np.array([v.get(k, getattr(base, k)[0]) for v in variants]) for k in
             {k for v in variants for k in v}}
-    engine = KlawEngine(body, base.with_values(**cols) if cols else base)
+    engine = KlawEngine(body, attributes=base.with_values(**cols) if cols else base)
     feet = {0: np.array([0.0, WIDTH / 2, 0.0]), 1: np.array([0.0, -WIDTH / 2, 0.0])}
     stance, t, frames, times, sides, strikes = 1, 0.0, [], [], [], []
     for k in range(steps):

@@ -33,7 +33,11 @@ def configs() -> dict[str, PlannerConfig]:
 
 
 def _random_profile(rng: np.random.Generator) -> GroundProfile:
-    """Flat runs, stair flights, low blocks and ramps [m] (as the benchmark draws them)."""
+    """Flat runs, stair flights, low blocks and ramps [m].
+
+    A frozen copy of ``benchmarks/bench_planners.random_terrain`` (grades rounded to
+    1e-4): the stored plans must not change when the benchmark's generator does.
+    """
     s, z = [-2.0], [0.0]
     x = rng.uniform(0.25, 0.8)
     while x < 5.0:

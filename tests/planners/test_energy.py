@@ -128,3 +128,19 @@ def test_terminal_energy_lets_a_low_obstacle_be_stridden_over(leg):
                - 2 * 6.3 * 3.0)
     over = terminal_energy(low, *args) - 6.3 * 3.0
     assert 0 < over < step_on
+
+
+def test_fitted_constants_are_selectable_and_price_descent_below_ascent(leg):
+    """The measured constants (scripts/fit_energy_constants.py) plan like any others; a
+    stair step down costs less than the step up, by more than with the hand-set ones."""
+    from planners import EnergyWeights, GroundProfile, PlannerConfig, plan
+
+    fitted = PlannerConfig(weights=EnergyWeights.fitted())
+    ratios = []
+    for config in (PlannerConfig(), fitted):
+        up = plan(GroundProfile.stairs(0.17, 0.30, 6, first_edge=0.4), leg, 0.6, config=config)
+        down = plan(GroundProfile.stairs(-0.17, 0.30, 6, first_edge=0.4), leg, 0.6,
+                    config=config)
+        assert up.ok and down.ok
+        ratios.append(down.energy_per_metre / up.energy_per_metre)
+    assert ratios[1] < ratios[0] < 1

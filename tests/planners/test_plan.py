@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from planner_strategies import terrain_profiles
 
-from planners import GroundProfile, Leg, PlannerConfig, plan, plan_batch
+from planners import PLANNERS, GroundProfile, Leg, PlannerConfig, plan, plan_batch
 from planners.lattice import build_tables
 from planners.optimal import optimal
 from planners.search import all_configs_evaluated
@@ -30,7 +30,7 @@ def _to_reach(p):
 @given(terrain_profiles())
 def test_optimal_is_best_and_fixed_never_beats_it(leg, profile):
     # the searches' criterion: the least energy to the horizon's common reach
-    plans = {name: plan(profile, leg, 1.34, name) for name in ("best_first", "fixed", "optimal")}
+    plans = {name: plan(profile, leg, 1.34, name) for name in PLANNERS}
     best = plans["optimal"]
     for name, p in plans.items():
         if p.ok:
@@ -39,8 +39,7 @@ def test_optimal_is_best_and_fixed_never_beats_it(leg, profile):
             assert _to_reach(best) <= _to_reach(p) * (1 + 1e-12), name
     # the paper's criterion (Eq. 5 over the planned steps alone)
     paper = PlannerConfig(terminal_cost=False)
-    plans = {name: plan(profile, leg, 1.34, name, paper)
-             for name in ("best_first", "fixed", "optimal")}
+    plans = {name: plan(profile, leg, 1.34, name, paper) for name in PLANNERS}
     best = plans["optimal"]
     for name, p in plans.items():
         if p.ok:
@@ -65,7 +64,7 @@ def test_optimal_equals_exhaustive_enumeration(leg, profile):
 
 @settings(max_examples=20, deadline=None)
 @given(terrain_profiles(), st.floats(-3, 3), st.floats(-2, 2),
-       st.sampled_from(["best_first", "fixed", "optimal"]))
+       st.sampled_from(sorted(PLANNERS)))
 def test_translation_changes_only_offsets(leg, profile, ds, dz, planner):
     a = plan(profile, leg, 1.34, planner)
     b = plan(profile.shifted(ds, dz), leg, 1.34, planner, origin=ds)
@@ -82,7 +81,7 @@ def test_plans_are_deterministic_and_batches_match_single_plans(leg):
                 GroundProfile([-2, 0, 3, 8], [0, 0, 0.3, 0.3])]
     legs = [leg, Leg.from_body_height(1.55), Leg.from_body_height(1.9), leg]
     speeds = [1.34, 1.0, 1.5, 1.2]
-    for planner in ("best_first", "fixed", "optimal"):
+    for planner in sorted(PLANNERS):
         batch = plan_batch(profiles, legs, speeds, planner)
         again = plan_batch(profiles, legs, speeds, planner)
         for p, q, prof, lg, v in zip(batch, again, profiles, legs, speeds, strict=True):
@@ -94,10 +93,10 @@ def test_plans_are_deterministic_and_batches_match_single_plans(leg):
             assert np.allclose(single.E, p.E, rtol=1e-9)
 
 
-def test_fig_11_planned_walker_strides_over_a_low_block_the_fixed_one_steps_on(leg):
+def test_fig_11_multistart_walker_strides_over_a_low_block_the_fixed_one_steps_on(leg):
     block = GroundProfile([-2, 1.15, 1.15, 1.5, 1.5, 8], [0, 0, 0.1, 0.1, 0, 0])
     fixed = plan(block, leg, 1.34, "fixed")
-    planned = plan(block, leg, 1.34, "best_first")
+    planned = plan(block, leg, 1.34, "best_first_multistart")
     assert fixed.ok and planned.ok
     assert np.any(fixed.footholds_z > 0.05)  # steps onto the block
     assert np.all(planned.footholds_z == 0)  # strides across
@@ -133,27 +132,63 @@ def test_negative_leg_lengths_are_rejected():
         Leg(-0.4, 0.4, 0.26, 0.06, 0.2)
 
 
+def _better_neighbour(tables, config, deltas):
+    """Whether a legal grid neighbour of ``config`` (n,) in ``deltas`` is more efficient."""
+    row = np.array([0])
+    _, eff = tables.evaluate(row, config[None])
+    neighbours = config + deltas
+    inside = ((neighbours >= 0) & (neighbours < tables.struct.J)).all(axis=1)
+    legal, n_eff = tables.evaluate(row, np.clip(neighbours, 0, tables.struct.J - 1)[None])
+    return bool(np.any(inside & legal[0] & (n_eff[0] > eff[0])))
+
+
 @settings(max_examples=20, deadline=None)
 @given(terrain_profiles())
-def test_best_first_ends_in_a_local_optimum_and_more_starts_never_hurt(leg, profile):
+def test_searches_end_in_local_optima_of_their_neighbourhoods(leg, profile):
     from planners.best_first import best_first
+    from planners.multistart import best_first_multistart
     from planners.search import neighbour_deltas
 
     tables = build_tables([profile], [leg], np.array([1.34]), None, np.zeros(1),
-                          PlannerConfig(search_starts=1))
-    single = best_first(tables, starts=1)
-    multi = best_first(tables, starts=8)
-    if not single.found[0]:
-        assert not multi.found[0]
+                          PlannerConfig())
+    paper = best_first(tables)
+    single = best_first_multistart(tables, starts=1)
+    multi = best_first_multistart(tables, starts=8)
+    legal, _ = all_configs_evaluated(tables, np.array([0]))
+    assert paper.found[0] == single.found[0] == multi.found[0] == legal.any()
+    if not paper.found[0]:
         return
+    n = tables.struct.n
+    assert not _better_neighbour(tables, paper.configs[0], neighbour_deltas(n, shifts=False))
+    assert not _better_neighbour(tables, single.configs[0], neighbour_deltas(n))
     row = np.array([0])
-    _, eff = tables.evaluate(row, single.configs)
-    neighbours = single.configs[0] + neighbour_deltas(tables.struct.n)
-    inside = ((neighbours >= 0) & (neighbours < tables.struct.J)).all(axis=1)
-    legal, n_eff = tables.evaluate(row, np.clip(neighbours, 0, tables.struct.J - 1)[None])
-    assert not np.any(inside & legal[0] & (n_eff[0] > eff[0] * (1 + 1e-12)))
-    _, m_eff = tables.evaluate(row, multi.configs)
-    assert m_eff[0] >= eff[0]
+    _, (e1,) = tables.evaluate(row, single.configs)
+    _, (e8,) = tables.evaluate(row, multi.configs)
+    assert e8 >= e1
+
+
+@settings(max_examples=20, deadline=None)
+@given(terrain_profiles(), st.integers(1, 4))
+def test_find_init_is_breadth_first_from_the_neutral_steps(leg, profile, n_steps):
+    """FIND_INIT returns a legal configuration nearest (L1) to q_init, having expanded
+    every configuration nearer than it and none farther."""
+    from planners.best_first import find_init
+
+    config = PlannerConfig(n_steps=n_steps)
+    tables = build_tables([profile], [leg], np.array([1.34]), None, np.zeros(1), config)
+    grid = tables.struct.all_configs.astype(int)
+    legal, _ = all_configs_evaluated(tables, np.array([0]))
+    dist = np.abs(grid - tables.neutral[0]).sum(axis=1)
+    result = find_init(tables)
+    assert result.found[0] == legal.any()
+    if not legal.any():
+        assert result.checks[0] == result.expanded[0] == grid.shape[0]
+        return
+    d = dist[legal[0]].min()
+    code = result.configs[0] @ (tables.struct.J ** np.arange(n_steps - 1, -1, -1))
+    assert legal[0, code] and dist[code] == d
+    assert result.checks[0] == result.expanded[0] + 1
+    assert (dist < d).sum() <= result.expanded[0] < (dist <= d).sum()
 
 
 def test_batches_larger_than_a_chunk(leg):
@@ -206,11 +241,11 @@ _CROWD = PlannerConfig(n_steps=3, min_step_ratio=0.15)  # crowdwalk.crowd's plan
 
 
 @pytest.mark.parametrize("ground", sorted(_GROUNDS))
-def test_planned_lone_walker_never_spends_more_than_the_fixed_one(leg, ground):
+def test_multistart_lone_walker_never_spends_more_than_the_fixed_one(leg, ground):
     """Walked step by step over the same ground to the same point, the planned walker's
     summed energy is at most the unplanned one's (equal on level ground)."""
     profile = _GROUNDS[ground]
-    planned, steps = _walk(profile, leg, "best_first", _CROWD, 6.0)
+    planned, steps = _walk(profile, leg, "best_first_multistart", _CROWD, 6.0)
     fixed, _ = _walk(profile, leg, "fixed", _CROWD, 6.0)
     assert planned <= fixed * (1 + 1e-9)
     if ground == "flat":
@@ -226,7 +261,20 @@ def test_without_the_terminal_cost_the_planner_shuffles_before_a_flight(leg):
 
     paper = replace(_CROWD, terminal_cost=False)
     profile = _GROUNDS["stairs up"]
-    planned, steps = _walk(profile, leg, "best_first", paper, 6.0)
+    planned, steps = _walk(profile, leg, "best_first_multistart", paper, 6.0)
     fixed, _ = _walk(profile, leg, "fixed", paper, 6.0)
     assert steps.min() < 0.2
     assert planned > fixed
+
+
+def test_plan_batch_splits_the_path_turn_over_the_steps_inside_foot_first(leg):
+    """§5.4 in the plans: a 180 deg left turn is four 45 deg rotations; turning right with
+    the left foot next, the left foot steps straight and the right one turns first."""
+    flat = [GroundProfile.flat()] * 3
+    left, right, straight = plan_batch(flat, leg, 1.34, heading_change=[np.pi, -0.6, 0.0],
+                                       first_foot=["left", "left", "right"])
+    assert np.degrees(left.foot_rotations) == pytest.approx([45, 45, 45, 45])
+    assert left.feet == ("left", "right", "left", "right")
+    assert np.degrees(right.foot_rotations) == pytest.approx([0, -34.377468, 0, 0])
+    assert straight.feet[0] == "right" and not straight.foot_rotations.any()
+    assert plan(flat[0], leg, 1.34).foot_rotations.tolist() == [0.0] * 4

@@ -77,7 +77,7 @@ def test_raster_cells_equal_the_exact_range_maxima(vertices, start, width, cell,
     count = max(1, int(np.ceil((stop - start) / cell)))
     edges = start + cell * np.arange(count + 1)
     # bitwise: the raster finds the cells from the vertices instead of searching every edge
-    assert np.array_equal(raster._heights, p.max_height(edges[:-1], edges[1:]))
+    assert np.array_equal(raster.heights, p.max_height(edges[:-1], edges[1:]))
 
 
 @settings(max_examples=40, deadline=None)

@@ -11,19 +11,17 @@ from replay_cases import configs, profiles, walkers
 from planners import plan_batch
 
 FIXTURE = json.loads((Path(__file__).parent / "data" / "replay.json").read_text())
-#: Stored search -> the planner that must reproduce it.
-PLANNER_OF = {"best_first_multistart": "best_first", "fixed": "fixed", "optimal": "optimal"}
 
 
 @pytest.mark.parametrize("key", sorted(FIXTURE["plans"]))
 def test_replay_gives_the_stored_plans(key):
-    cname, stored = key.split("/")
+    cname, planner = key.split("/")  # stored under the name that must reproduce it
     grounds = profiles()
     assert list(grounds) == FIXTURE["profiles"]
     legs, speeds, trailing = walkers(len(grounds))
     got = []
     for tr in (trailing, None):
-        got += plan_batch(list(grounds.values()), legs, speeds, PLANNER_OF[stored],
+        got += plan_batch(list(grounds.values()), legs, speeds, planner,
                           configs()[cname], trailing=tr)
     for i, (p, want) in enumerate(zip(got, FIXTURE["plans"][key], strict=True)):
         where = f"{key} {FIXTURE['profiles'][i % len(grounds)]} #{i}"
