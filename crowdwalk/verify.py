@@ -234,11 +234,14 @@ def ring_scenario(density: float, width: float, radius: float, duration: float, 
              for k in range(sectors)]
     laps = int(np.ceil(duration * 1.6 / (2 * np.pi * radius))) + 1
     groups = []
-    r0, r1 = radius * np.cos(np.pi / sectors) - width / 2 + 0.05, radius + width / 2 - 0.05
+    xy = np.array([n["xy"] for n in nodes])
     for k in range(sectors):
-        a = np.linspace(ang[k] + 0.02, ang[k] + 2 * np.pi / sectors - 0.02, 6)
-        poly = np.vstack([np.column_stack([r0 * np.cos(a), r0 * np.sin(a)]),
-                          np.column_stack([r1 * np.cos(a[::-1]), r1 * np.sin(a[::-1])])])
+        # the chord's corridor, 0.05 m inside its sides and 0.2 m short of its ends
+        p, q = xy[k], xy[(k + 1) % sectors]
+        along = (q - p) / np.linalg.norm(q - p)
+        side = np.array([-along[1], along[0]]) * (width / 2 - 0.05)
+        p, q = p + 0.2 * along, q - 0.2 * along
+        poly = np.array([p - side, q - side, q + side, p + side])
         from shapely import Polygon
 
         # the sector's share of the ring at ``density``, packed into the spawn area
