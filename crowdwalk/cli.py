@@ -269,10 +269,21 @@ def compare(
 @app.command()
 @friendly_errors
 def analyse(run_dir: Path = typer.Argument(..., help="Run folder.")) -> None:
-    """Analyse the scenario's measurement lines and areas with PedPy into RUN/analysis/."""
+    """PedPy analysis into RUN/analysis/: speeds along the 3-D path (speeds_3d.csv) and the
+    scenario's measurement lines and areas."""
     from crowdwalk.analysis import analyse_run
+    from crowdwalk.record import open_run
+    from crowdwalk.scenario import parse_scenario
+    from crowdwalk.speeds3d import write_walking_speeds
 
-    result = analyse_run(run_dir)
+    _warn_incomplete(run_dir)
+    typer.echo(write_walking_speeds(run_dir))
+    scenario = open_run(run_dir).scenario_path
+    measurement = parse_scenario(scenario.read_text(encoding="utf-8"), str(scenario)).measurement
+    if not (measurement.lines or measurement.areas):
+        typer.echo("no measurement lines or areas in the scenario: nothing more to analyse.")
+        return
+    result = analyse_run(run_dir, measurement)
     for kind in ("lines", "areas"):
         for row in result[kind]:
             typer.echo(f"{kind[:-1]} {row['name']}: " + ", ".join(
@@ -418,6 +429,28 @@ def render(
     what = "the picture" if suffix == ".png" else "the movie"
     typer.echo(f"wrote {what} {out}; next: open it in an image viewer"
                + (f", or `crowdwalk view {target}` to explore" if target.is_dir() else ""))
+
+
+# --- gait engines against people (issue 13): gait-compare ---------------------------
+
+
+@app.command("gait-compare")
+@friendly_errors
+def gait_compare_command(
+    out: Path = typer.Option(Path("gait_compare"), "--out", help="Folder for the runs."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write the curves figure (PNG)."),
+) -> None:
+    """Run the same lone walker at 1.0, 1.33 and 1.7 m/s with every gait engine and print
+    joint-angle RMS / r against Winter and step length / cadence against WBDS."""
+    from crowdwalk.gait.engine import GAIT_ENGINES
+    from crowdwalk.gait_compare import comparison_table, plot_comparison, run_comparison
+
+    engines = tuple(GAIT_ENGINES)
+    rows = run_comparison(out, engines=engines,
+                          progress=lambda e, v: typer.echo(f"ran {e} at {v:g} m/s", err=True))
+    typer.echo(comparison_table(rows))
+    if plot is not None:
+        typer.echo(f"wrote {plot_comparison(rows, plot)}")
 
 
 def main() -> None:

@@ -46,6 +46,11 @@ class EnergyWeights:
         body), while people shorten their steps uphill; with the linear form it drops
         from 0.65 m (level) to 0.60 m (5 %) and 0.55 m (10 %). Both cost the same for a
         17 cm stair riser.
+    frequency : float
+        Weight kappa of the step-frequency term (``PlannerConfig.step_model =
+        "normal_mode"``, :func:`planners.energy.frequency_energy`): a step taken at a
+        frequency a fraction x off the normal-mode frequency for the speed costs
+        ``kappa x^2`` times its Eq. 1 walking energy more [-].
     """
 
     alpha: float = 4.184
@@ -55,6 +60,7 @@ class EnergyWeights:
     c_calf: float = 0.1
     down_ratio: float = 1.0 / 3.0
     vertical: str = "linear"
+    frequency: float = 10.0
 
     @classmethod
     def fitted(cls) -> EnergyWeights:
@@ -75,7 +81,8 @@ class EnergyWeights:
             raise invalid("EnergyWeights", "vertical", "'linear' or 'paper'", self.vertical)
         if self.beta is None:
             object.__setattr__(self, "beta", 0.0961 if self.vertical == "paper" else 0.0549)
-        for name in ("alpha", "beta", "gamma", "c_thigh", "c_calf", "down_ratio"):
+        for name in ("alpha", "beta", "gamma", "c_thigh", "c_calf", "down_ratio",
+                     "frequency"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
                 raise invalid("EnergyWeights", name, "finite and >= 0", value)
@@ -144,6 +151,15 @@ class PlannerConfig:
         and costs more per metre than the unplanned walker (measured in
         ``docs/architecture.md``). On level ground the plans are the same either way.
         False gives the paper's criterion.
+    step_model : {"normal_mode", "paper"}
+        ``"normal_mode"`` (deviation from Chen & Li, issue 11): steps follow the speed as
+        people's do. Each agent's step-length grid is shifted (by under half an
+        increment) so that the normal-mode step for its speed and leg
+        (:mod:`planners.normal_mode`, fitted to WBDS) is a grid node, that node is the
+        neutral step (s_init), and every step pays the step-frequency term of
+        :func:`planners.energy.frequency_energy`. ``"paper"``: the fixed grid of §6.2, the
+        neutral step the most efficient on flat ground, Eqs. 1-4 alone (the step is then
+        the same at every speed: 0.668 m for a 1.75 m body).
     weights : EnergyWeights
         Energy model weights.
     """
@@ -167,6 +183,7 @@ class PlannerConfig:
     search_starts: int = 8
     snap: bool = True
     terminal_cost: bool = True
+    step_model: str = "normal_mode"
     weights: EnergyWeights = field(default_factory=EnergyWeights)
 
     def __post_init__(self) -> None:
@@ -197,5 +214,8 @@ class PlannerConfig:
             raise invalid("PlannerConfig", "snap", "True or False", self.snap)
         if not isinstance(self.terminal_cost, bool):
             raise invalid("PlannerConfig", "terminal_cost", "True or False", self.terminal_cost)
+        if self.step_model not in ("normal_mode", "paper"):
+            raise invalid("PlannerConfig", "step_model", "'normal_mode' or 'paper'",
+                          self.step_model)
         if not isinstance(self.weights, EnergyWeights):
             raise invalid("PlannerConfig", "weights", "an EnergyWeights", self.weights)

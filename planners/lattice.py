@@ -10,19 +10,22 @@ agents together; the searches then only look tables up.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
 
 from planners.config import PlannerConfig
 from planners.energy import (
+    frequency_energy,
+    normal_step,
     step_energy,
     terminal_energy,
     total_energy,
     vertical_energy,
     walking_energy,
 )
+from planners.leg import Leg
 from planners.legality import Reason, foot_support, snap_to_support
 from planners.profile import _VERTICAL, RASTER_CELL, GroundProfile
 from planners.swing import adjust_swings, bezier_points, sole_clearance
@@ -426,10 +429,38 @@ def flat_swings(legs, config: PlannerConfig, extra: float = 0.0):
 
 
 def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Shortest step and increment (A,) [m] of each leg's step-length grid."""
+    """Shortest step and increment (A,) [m] of each leg's step-length grid (shifted by
+    ``grid_shift`` increments for an :class:`AnchoredLeg`)."""
     length = np.array([leg.length for leg in legs])
     lo = config.min_step_ratio * length
-    return lo, (config.max_step_ratio * length - lo) / config.intervals
+    delta = (config.max_step_ratio * length - lo) / config.intervals
+    shift = np.array([getattr(leg, "grid_shift", 0.0) for leg in legs])
+    return lo + shift * delta, delta
+
+
+#: Grid shifts are multiples of 1/GRID_SHIFTS increment (so the per-leg caches stay small).
+GRID_SHIFTS = 16
+
+
+@dataclass(frozen=True)
+class AnchoredLeg(Leg):
+    """A leg whose step-length grid is anchored on its normal-mode step for one speed
+    (``PlannerConfig.step_model = "normal_mode"``): the grid is shifted by ``grid_shift``
+    increments (|shift| <= 1/2) so that grid node ``neutral`` is that step."""
+
+    grid_shift: float = 0.0
+    neutral: int = 0
+
+
+def anchored_legs(legs, speeds: np.ndarray, config: PlannerConfig) -> list[AnchoredLeg]:
+    """Each leg anchored on its normal-mode step at its speed [m/s] (to 1/32 increment)."""
+    lo, delta = grid(legs, config)
+    u = (normal_step(_LegArrays(legs), np.asarray(speeds, float)[:, None])[:, 0] - lo) / delta
+    k = np.clip(np.floor(u + 0.5), 0, config.intervals).astype(int)
+    shift = np.round(np.clip(u - k, -0.5, 0.5) * GRID_SHIFTS) / GRID_SHIFTS
+    names = [f.name for f in fields(Leg)]
+    return [AnchoredLeg(**{n: getattr(leg, n) for n in names}, grid_shift=float(q),
+                        neutral=int(j)) for leg, q, j in zip(legs, shift, k, strict=True)]
 
 
 _NEUTRAL_CACHE: dict = {}
@@ -452,8 +483,14 @@ def neutral_energy_per_metre(legs, speeds: np.ndarray, config: PlannerConfig) ->
     entries = [_NEUTRAL_CACHE[(leg, config)] for leg in legs]
     v = 60.0 * np.asarray(speeds, dtype=float)
     # En per metre is (32 + 0.005 v^2) / v [cal/(kg m)]; the rest does not depend on v.
-    alpha = config.weights.alpha
-    return alpha * (32.0 + 0.005 * v**2) / v + np.array([e[1] for e in entries])
+    w = config.weights
+    walking = w.alpha * (32.0 + 0.005 * v**2) / v
+    if config.step_model == "normal_mode":
+        lo, delta = grid(legs, config)
+        L = lo + delta * np.array([e[0] for e in entries])
+        normal = normal_step(_LegArrays(legs), np.asarray(speeds, float)[:, None])[:, 0]
+        walking = walking * (1.0 + w.frequency * (normal / L - 1.0) ** 2)
+    return walking + np.array([e[1] for e in entries])
 
 
 def _neutral(legs, config: PlannerConfig) -> None:
@@ -465,10 +502,15 @@ def _neutral(legs, config: PlannerConfig) -> None:
     leg = _LegArrays(missing)
     zero = np.zeros_like(L)
     summit = leg.ankle_height + 0.75 * config.swing_lift + zero
-    En, _, Ej, E, reachable = step_energy(zero, zero, L, zero, summit, leg, 1.0, config)
+    # Eqs. 1-4 alone: the speed-dependent frequency term is added per speed by the callers
+    paper = replace(config, step_model="paper")
+    En, _, Ej, E, reachable = step_energy(zero, zero, L, zero, summit, leg, 1.0, paper)
     if len(_NEUTRAL_CACHE) > 4096:
         _NEUTRAL_CACHE.clear()
     best = np.argmax(L / E, axis=1)
+    anchored = np.array([isinstance(m, AnchoredLeg) for m in missing])
+    if anchored.any():
+        best = np.where(anchored, [getattr(m, "neutral", 0) for m in missing], best)
     rows = np.arange(len(missing))
     rest = (E - config.weights.alpha * En)[rows, best] / L[rows, best]  # [J/(kg m)]
     for i, leg_i in enumerate(missing):
@@ -507,6 +549,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     """
     A = len(profiles)
     st = structure(config.n_steps, config.intervals + 1)
+    if config.step_model == "normal_mode":
+        legs = anchored_legs(legs, speeds, config)
     lo, delta = grid(legs, config)
     neutral = neutral_index(legs, config)
     if trailing is None:
@@ -554,6 +598,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     En = walking_energy(length, speeds[:, None])
     Ev = vertical_energy(rise, w.down_ratio, w.vertical)
     E = total_energy(En, Ev, Ej, w)
+    if config.step_model == "normal_mode":
+        E = E + frequency_energy(En, length, normal_step(legs_col, speeds[:, None]), w)
     per_metre = neutral_energy_per_metre(legs, speeds, config)
     last = slice(st.node_offset[st.n], None)  # the nodes of depth n
     far = node_s[:, last].max(axis=1)  # (A,) every plan's common end

@@ -65,7 +65,7 @@ def test_human_readable_table(tmp_path):
         ("s,z\n0,0\n1,nan\n", "GroundProfile.z must be finite [m]"),
         ("s,z\n", "ProfileCSV.rows must be at least two s,z rows"),
         ("s,z\n0,0\n", "ProfileCSV.rows must be at least two s,z rows"),
-        ("s,z\n-1,0\n0.4,0\n", "walk.profile must be at least one step (0.65 m) long"),
+        ("s,z\n-1,0\n0.4,0\n", "walk.profile must be at least one step (0.67 m) long"),
         ("a,b\n0,0\n", "ProfileCSV.header must be columns named s and z"),
     ],
 )

@@ -123,3 +123,22 @@ def test_style_rejects_values_out_of_range():
         s.with_values(pelvic_list=math.radians(30))
     with pytest.raises(InputError, match="elbow_max"):
         s.with_values(elbow_min=math.radians(50), elbow_max=math.radians(40))
+
+
+def test_summary_and_compare_report_per_style():
+    from crowdwalk.compare import _style_lines
+    from crowdwalk.style import summary_by_style
+
+    def agent(style, energy, dist, travel, steps=10):
+        return {"style": style, "gait": "klaw", "steps": steps, "travel_time_s": travel,
+                "distance_m": dist, "energy_J_per_kg": energy, "mean_step_length_m": 0.7,
+                "cadence_steps_per_s": 1.8}
+
+    agents = [agent("proud", 30.0, 10.0, 9.0), agent("proud", 50.0, 10.0, None),
+              agent("tired", 40.0, 5.0, 12.0), agent("tired", 0.0, 0.0, None, steps=0)]
+    table = summary_by_style(agents)
+    assert table["proud"]["energy_per_metre_J_per_kg_m"] == pytest.approx(4.0)
+    assert table["proud"]["arrived"] == 1 and table["proud"]["travel_time_s"] == 9.0
+    assert table["tired"]["agents"] == 1  # the walker that never stepped is left out
+    lines = _style_lines(["best_first"], {"best_first": {"agents": agents}})
+    assert "| best_first | proud | klaw | 2 | 1 | 9 | 4 | 0.7 | 1.8 |" in lines

@@ -91,6 +91,7 @@ class GaitEngine(Protocol):
 GAIT_ENGINES: dict[str, str] = {
     "elevation_angles": "crowdwalk.gait.animator:Animator",
     "klaw": "crowdwalk.gait.klaw:KlawEngine",
+    "ko_badler": "crowdwalk.gait.ko_badler.engine:KoBadlerEngine",
 }
 
 

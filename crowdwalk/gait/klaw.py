@@ -241,7 +241,7 @@ class KlawEngine:
         self._commanded = np.zeros(n, bool)
         z1, z3 = np.zeros(n), np.zeros((n, 3))
         self._s = {name: z1.copy() for name in (
-            "t0", "T", "tds", "side", "psi0", "psi1", "D", "dmax", "rot", "list", "tflat",
+            "t0", "T", "tds", "side", "psi0", "psi1", "dmax", "rot", "list", "tflat",
             "p_hs", "yaw_st", "yaw_tr", "yaw_land", "p_tr0", "k_tr0", "front", "lat_to",
             "lat_hs", "rear", "z_land", "v_end_x", "v_end_z", "next_p", "p_hs_now", "kmin",
             "arm", "arm_out", "elbow_min", "elbow_max", "shoulder", "tilt", "sway")}
@@ -353,7 +353,7 @@ class KlawEngine:
         mz = kochanek_bartels(knots, hz, vz0, vz1)
 
         cols = dict(t0=np.asarray(cmd.start_time, float), T=T, tds=tds, side=side, psi0=psi0,
-                    psi1=psi1, D=D, dmax=dmax, rot=st.pelvic_rotation, list=st.pelvic_list,
+                    psi1=psi1, dmax=dmax, rot=st.pelvic_rotation, list=st.pelvic_list,
                     tflat=t2, p_hs=np.full(m, HEEL_STRIKE_PITCH), yaw_st=yaw_st, yaw_tr=yaw_tr,
                     yaw_land=yaw_land, p_tr0=p_tr0, kmin=kmin, arm=st.arm_swing,
                     arm_out=st.arm_out, elbow_min=st.elbow_min, elbow_max=st.elbow_max,

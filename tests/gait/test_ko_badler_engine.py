@@ -120,3 +120,74 @@ def test_legs_reach_their_feet_and_knees_bend_forward(walked):
     flex = np.concatenate(flex)
     assert flex.min() >= 0 and 50 < flex.max() < 75
     assert engine.stats["poses"] > 0 and np.isfinite(frames[-1][-1].joints).all()
+
+
+def test_swing_ankle_rises_to_the_planner_curve_over_a_step_up():
+    """On a step up the swing ankle is never below the planner's Bezier (and lands)."""
+    steps, dur = straight_steps(3, 0.6, 1.0)
+    rise = 0.15
+    last = steps[-1]
+    last.target = last.target + [0.0, 0.0, rise]
+    trail = steps[-2].start[0]
+    ctrl = np.array([trail + [0, 0, 0.08], trail + [0.3, 0, 0.45],
+                     last.target[0] + [-0.3, 0, 0.45], last.target[0] + [0, 0, 0.08]])
+    last.swing_bezier = ctrl[None]
+    engine = KoBadlerEngine(Body.from_heights(np.array([1.75])))
+    frames = walk(engine, steps, dur, per_step=40)
+    swing = JOINT["l_talocrural"] if last.foot[0] == 0 else JOINT["r_talocrural"]
+    z = np.array([f.positions[0, swing, 2] for f in frames[-1]])
+    assert engine.stats["bezier_lifted"] > 0
+    assert z.max() > 0.3  # the curve's peak, far above the unplanned swing (about 0.15 m)
+    assert z[-1] - rise < 0.12  # it lands on the raised foothold, not on the curve
+
+
+def test_swing_toes_clear_the_floor_in_mid_swing(walked):
+    """The swing sole (ball, straight toes) clears level ground by Winter's 1.29 cm least
+    toe clearance in mid swing (without the lift the rigid foot dips 1.2-1.5 cm below)."""
+    engine, steps, frames, body = walked
+    phases = np.linspace(0, 1, 20)
+    tom = engine.own.tom
+    mid = (phases > tom + 0.4 * (1 - tom)) & (phases < tom + 0.7 * (1 - tom))  # toes straight
+    fwd = np.array([np.cos(0.4), np.sin(0.4)])
+    toes = body.toe_offset - body.ball_offset
+    for st, step in zip(steps[1:], frames[1:], strict=True):
+        ankle_j = np.where(st.foot == 0, JOINT["l_talocrural"], JOINT["r_talocrural"])
+        for f in (f for f, m in zip(step, mid, strict=True) if m):
+            ankle, ball = f.positions[np.arange(3), ankle_j], f.positions[np.arange(3), ankle_j + 2]
+            d = ball - ankle
+            pitch = np.arctan2(d[:, 2], d[:, :2] @ fwd) + np.arctan2(body.ankle_height,
+                                                                    body.ball_offset)
+            toe_z = ball[:, 2] + toes * np.sin(pitch)
+            assert np.all(np.minimum(ball[:, 2], toe_z) > 0.0129 - 1e-6)
+
+
+def test_crowd_run_with_gait_ko_badler(tmp_path):
+    """``gait: ko_badler`` in a scenario: crowdwalk run poses the walker with this engine."""
+    from crowdwalk.crowd.run import run_scenario
+    from crowdwalk.record import open_run
+
+    scenario = tmp_path / "lone.yaml"
+    scenario.write_text(LONE_WALKER, encoding="utf-8")
+    summary = run_scenario(scenario, tmp_path / "run")
+    assert summary["poses"] == "written"
+    run = open_run(tmp_path / "run")
+    frames = list(run.poses())
+    assert len(frames) >= 50
+    last = frames[-1]
+    assert np.isfinite(last.positions).all() and last.positions[0, 0, 0] > 2.0
+
+
+LONE_WALKER = """\
+name: lone
+terrain: {extent: [-1, -2, 21, 2], base: 0.0}
+routes:
+  nodes:
+    - {name: start, xy: [1.0, 0.0], area: [[0.5, -0.5], [1.5, -0.5], [1.5, 0.5], [0.5, 0.5]]}
+    - {name: end, xy: [18.0, 0.0]}
+  edges: [{from: start, to: end, width: 3.0}]
+groups:
+  - {name: walker, count: 1, spawn: start, destinations: [end], planner: fixed,
+     body_height: {mean: 1.75, sd: 0.0}, free_speed: {mean: 1.33, sd: 0.0}, gait: ko_badler}
+simulation: {duration: 3.0, seed: 1, dt: 0.04, fps: 20}
+outputs: {poses: true}
+"""

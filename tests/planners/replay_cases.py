@@ -19,7 +19,7 @@ _BASE = dict(n_steps=4, intervals=13, min_step_ratio=0.30, max_step_ratio=1.05,
              max_foot_slope=0.5, swing_lift=0.15, max_swing_lift=0.60, bezier_samples=20,
              max_adjustments=10, knee_max_flexion=2.2689280275926285,
              pelvis_height_ratio=0.96, turn_threshold=0.7853981633974483,
-             search_starts=8, snap=True, terminal_cost=True)
+             search_starts=8, snap=True, terminal_cost=True, step_model="paper")
 _WEIGHTS = dict(alpha=4.184, beta=0.0549, gamma=1.0, c_thigh=1.0, c_calf=0.1,
                 down_ratio=1.0 / 3.0, vertical="linear")
 

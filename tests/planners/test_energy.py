@@ -76,10 +76,12 @@ def test_uphill_steps_shorten_with_the_linear_form_and_jump_with_the_printed_one
 
     leg = Leg.from_body_height(1.75)
     ramp = GroundProfile(np.array([-2.0, -1.0, 8.0]), np.array([0.0, 0.0, 0.9]))  # 10 %
-    level = plan(GroundProfile.flat(), leg, 1.34, "optimal").step_lengths.mean()
-    linear = plan(ramp, leg, 1.34, "optimal").step_lengths.mean()
+    eqs = PlannerConfig(step_model="paper")  # Eqs. 1-4 alone (no step-frequency term)
+    level = plan(GroundProfile.flat(), leg, 1.34, "optimal", eqs).step_lengths.mean()
+    linear = plan(ramp, leg, 1.34, "optimal", eqs).step_lengths.mean()
     printed = plan(ramp, leg, 1.34, "optimal",
-                   PlannerConfig(weights=EnergyWeights(vertical="paper"))).step_lengths.mean()
+                   PlannerConfig(step_model="paper",
+                                 weights=EnergyWeights(vertical="paper"))).step_lengths.mean()
     assert linear < level < printed
     assert printed == pytest.approx(1.05 * leg.length, rel=1e-6)  # the longest grid step
 

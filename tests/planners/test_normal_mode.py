@@ -66,3 +66,33 @@ def test_validates_on_schwartz_2008_within_one_sd():
         assert abs(normal_mode.step_length(v, leg) - sl) < sl_sd
         f_pred = normal_mode.step_frequency(v, leg) / np.sqrt(9.81 / leg)
         assert abs(f_pred - f) < f_sd
+
+
+@pytest.mark.parametrize("planner", ["best_first", "fixed"])
+def test_planned_level_step_follows_speed_and_size(planner):
+    """PlannerConfig.step_model = "normal_mode": the planned level step is the normal-mode
+    step within 5 % for bodies 1.50-1.95 m at 0.8-1.8 m/s; "paper" keeps one step."""
+    from planners import GroundProfile, PlannerConfig, plan
+
+    flat = GroundProfile.flat(12.0, 0.0, -2.0)
+    for height in (1.50, 1.95):
+        leg = Leg.from_body_height(height)
+        for speed in (0.8, 1.33, 1.8):
+            want = normal_mode.step_length(speed, normal_mode.leg_length_of(leg))
+            got = plan(flat, leg, speed, planner).step_lengths
+            assert np.all(np.abs(got / want - 1) <= 0.05), (height, speed, got, want)
+    paper = PlannerConfig(step_model="paper")
+    leg = Leg.from_body_height(1.75)
+    steps = {plan(flat, leg, v, planner, paper).step_lengths[0] for v in (0.8, 1.33, 1.8)}
+    assert len(steps) == 1
+
+
+def test_planned_steps_lie_in_the_gaitrite_adult_normal_pace_range():
+    """Validation on other data: adults 18-69 walking at normal pace (GAITRite normals,
+    mean +/- 1 SD: 1.10-1.65 m/s, steps 0.589-0.852 m) - a 1.70 m body's planned steps."""
+    from planners import GroundProfile, plan
+
+    leg = Leg.from_body_height(1.70)
+    for speed in (1.10, 1.35, 1.65):
+        step = plan(GroundProfile.flat(12.0, 0.0, -2.0), leg, speed).step_lengths[0]
+        assert 0.589 <= step <= 0.852

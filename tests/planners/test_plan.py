@@ -259,7 +259,7 @@ def test_without_the_terminal_cost_the_planner_shuffles_before_a_flight(leg):
     than the unplanned walker (why PlannerConfig.terminal_cost exists)."""
     from dataclasses import replace
 
-    paper = replace(_CROWD, terminal_cost=False)
+    paper = replace(_CROWD, terminal_cost=False, step_model="paper")
     profile = _GROUNDS["stairs up"]
     planned, steps = _walk(profile, leg, "best_first_multistart", paper, 6.0)
     fixed, _ = _walk(profile, leg, "fixed", paper, 6.0)

@@ -18,8 +18,9 @@ Beyond the paper (straight level walking; docs/architecture.md, "Ko & Badler"):
 footholds and times are the crowd's; the pelvis moves between the midpoints of
 consecutive foothold pairs, timed by H's x; heading turns linearly over the step (as
 ElevWalker §4.4); the floor under each point is the line between the footholds it moves
-between (hip height follows the ground); the swing ankle is lifted to the planner's
-Bezier swing curve where that is higher; the pelvis is lowered where a leg would not
+between (hip height follows the ground); over uneven ground (rising > 1 cm above the
+foothold line) the swing ankle is lifted to the planner's Bezier swing curve where that is
+higher; the pelvis is lowered where a leg would not
 reach (``stats["lowered"]`` frames, by at most ``stats["lowered_max"]`` [m]).
 """
 
@@ -41,6 +42,7 @@ from crowdwalk.body import (
 )
 from crowdwalk.errors import invalid
 from crowdwalk.gait.elevwalker import GaitStyle
+from crowdwalk.gait.engine import PoseFrame
 from crowdwalk.gait.ko_badler.generalize import (
     body_generalization,
     hip_height_at_heel_strike,
@@ -60,6 +62,12 @@ __all__ = ["KoBadlerEngine", "foot_configuration", "two_link_knee"]
 _REACH = 0.999  # longest hip–ankle distance, fraction of thigh + shank
 _TOE_RELAX = 0.3  # step fraction after toe-off over which the swing toes straighten
 _EPS = 1e-9
+_PATH = np.linspace(0.0, 1.0, 17)  # ground samples along the swing path
+# Least toe clearance in mid swing [m]: Winter DA (1992), Foot trajectory in human gait,
+# Phys Ther 72:45-53 (1.29 ± 0.45 cm). The prototype's rigid marker foot with straight toes
+# would pass 1.2-1.5 cm below the floor in mid swing (its toe marker is 1.1 cm above the sole line).
+_TOE_CLEARANCE = 0.0129
+_UNEVEN = 0.01  # ground this far above the foothold line: the step is over uneven ground [m]
 
 
 def foot_configuration(body: BodyCondition, foot_angle, meta_angle):
@@ -134,7 +142,8 @@ class KoBadlerEngine:
     body : Body
         The n walkers' bodies.
     ground : callable, optional
-        Unused (the floor is the line between footholds; kept for the engine factory).
+        ``ground(xy (p, 2)) -> z (p,)`` [m]: where it rises more than 1 cm above the line
+        between a step's footholds the swing ankle may be lifted to the planner's Bezier.
     style : GaitStyle, optional
         Arm swing and elbow flexion of the upper body (ElevWalker's §8 parameters).
     prototype : WalkData, optional
@@ -168,9 +177,10 @@ class KoBadlerEngine:
         self._psi0 = np.zeros(n)
         self._psi1 = np.zeros(n)
         self._bezier = np.full((n, 4, 3), np.nan)
+        self._use_bezier = np.zeros(n, bool)
         self._commanded = np.zeros(n, bool)
         self.stats = {"commands": 0, "poses": 0, "lowered": 0, "lowered_max": 0.0,
-                      "bezier_lifted": 0}  # fmt: skip
+                      "bezier_lifted": 0, "toe_lifted": 0}  # fmt: skip
 
     @property
     def skeleton(self) -> tuple[tuple[str, ...], np.ndarray]:
@@ -220,19 +230,44 @@ class KoBadlerEngine:
         self._length[a] = length
         self._start[a], self._target[a], self._trail[a] = start, target, trail
         self._stance_left[a] = np.asarray(steps.foot) == 1  # the right foot swings
-        self._bezier[a] = np.asarray(steps.swing_bezier, dtype=float)
+        bezier = np.asarray(steps.swing_bezier, dtype=float)
+        self._bezier[a] = bezier
+        self._use_bezier[a] = np.isfinite(bezier).all(axis=(1, 2)) & self._uneven(trail, target)
         self._commanded[a] = True
         self.stats["commands"] += a.size
+
+    def _uneven(self, trail: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """(m,) bool: the ground under the swing path rises above the line between the
+        footholds by more than ``_UNEVEN`` (without ``ground``: the footholds differ)."""
+        line = trail[:, None] + _PATH[None, :, None] * (target - trail)[:, None]
+        if self.ground is None:
+            return np.abs(target[:, 2] - trail[:, 2]) > _UNEVEN
+        z = np.asarray(self.ground(line[..., :2].reshape(-1, 2))).reshape(line.shape[:2])
+        return np.max(z - line[..., 2], axis=1) > _UNEVEN
+
+    def _toe_clearance_lift(self, cond, ankle_y, foot, toe_pitch, swing) -> np.ndarray:
+        """Lift [m] (k,) of the swing ankle so that its sole (heel, ball, toe tip) clears
+        the floor line by ``_TOE_CLEARANCE`` in mid swing; ``swing`` (k,) is the phase in
+        [TOM, HSM⁺] as 0…1 (smooth window: 0 at toe-off and from 0.85 on, the landing)."""
+        c, s_ = np.cos(foot), np.sin(foot)
+        heel = ankle_y - cond.heel * s_ - cond.ankle_height * c
+        ball = ankle_y + cond.ball * s_ - cond.ankle_height * c
+        toe = ball + cond.toes * np.sin(toe_pitch)
+        low = np.minimum(np.minimum(heel, ball), toe)
+        x = np.clip(swing, 0.0, 1.0)
+        rise, fall = np.clip(x / 0.15, 0, 1), np.clip((0.85 - x) / 0.15, 0, 1)
+        window = rise * rise * (3 - 2 * rise) * fall * fall * (3 - 2 * fall)
+        lift = window * np.maximum(_TOE_CLEARANCE - low, 0.0)
+        self.stats["toe_lifted"] += int(np.count_nonzero(lift > 0))
+        return lift
 
     # -- poses ------------------------------------------------------------------------
     def _seq(self, name: str, a: np.ndarray, s: np.ndarray) -> np.ndarray:
         q = getattr(self.own, name)
         return interpolation(q.with_values(self._values[name][a]), s)
 
-    def pose(self, t: float, agents: np.ndarray):
-        """Poses of ``agents`` (k,) at time ``t`` [s] as a PoseFrame."""
-        from crowdwalk.gait.animator import PoseFrame
-
+    def pose(self, t: float, agents: np.ndarray) -> PoseFrame:
+        """Poses of ``agents`` (k,) at time ``t`` [s]."""
         a = np.atleast_1d(np.asarray(agents, dtype=np.intp))
         if not np.all(self._commanded[a]):
             raise invalid("KoBadlerEngine", "agents", "agents that received a step", a)
@@ -272,9 +307,11 @@ class KoBadlerEngine:
         p_ankle_st = on_print(start, self._yaw_stance[a], ankle_st)
         u = np.clip((ankle_fly[:, 0] + before) / (before + length), 0.0, 1.0)
         fly = trail + u[:, None] * (target - trail)
-        fly[:, 2] += ankle_fly[:, 1]
+        lift = self._toe_clearance_lift(cond, ankle_fly[:, 1], f_fly, toe_fly,
+                                        (s - tom) / (1 - tom))  # fmt: skip
+        fly[:, 2] += ankle_fly[:, 1] + lift
         bez = self._bezier[a]
-        has_bez = np.isfinite(bez).all(axis=(1, 2)) & ~push
+        has_bez = self._use_bezier[a] & ~push
         if has_bez.any():
             w = np.stack([(1 - u) ** 3, 3 * (1 - u) ** 2 * u, 3 * (1 - u) * u**2, u**3], 1)
             z_bez = np.einsum("kc,kc->k", w[has_bez], bez[has_bez, :, 2])
