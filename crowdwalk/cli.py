@@ -315,14 +315,39 @@ def export_bvh_command(
     agent: int = typer.Option(..., "--agent", help="Agent id to export."),
     out: Path = typer.Option(..., "--out", help="BVH file to write."),
     scale: float = typer.Option(100.0, "--scale", help="BVH units per metre (100: cm)."),
+    naming: str = typer.Option("common", "--names", help="Joint names: common (Hips, "
+                               "LeftFoot, ...: found by BVH tools) or hanim (H-Anim)."),
 ) -> None:
     """Write one agent's full-body motion as a BVH file."""
     from crowdwalk.export_bvh import export_bvh
 
     _warn_incomplete(run_dir)
-    path = export_bvh(run_dir, agent, out, scale=scale)
+    path = export_bvh(run_dir, agent, out, scale=scale, naming=naming)
     typer.echo(f"wrote agent {agent}'s motion to {path}; next: import it in Blender "
                "(File > Import > Motion Capture) or any BVH reader")
+
+
+@app.command("export-gltf")
+@friendly_errors
+def export_gltf_command(
+    run_dir: Path = typer.Argument(..., help="Run folder with poses.sqlite."),
+    out: Path = typer.Option(..., "--out", help="glTF binary (.glb) to write."),
+    agents: str = typer.Option("", "--agents", help="Comma-separated agent ids (default: all)."),
+    naming: str = typer.Option("common", "--names", help="Joint names: common or hanim."),
+) -> None:
+    """Write every walker (one animated skeleton each) as one glTF binary."""
+    from crowdwalk.export_gltf import export_gltf
+
+    _warn_incomplete(run_dir)
+    from crowdwalk.errors import invalid
+
+    try:
+        ids = [int(a) for a in agents.split(",") if a.strip()] or None
+    except ValueError:
+        raise invalid("export-gltf", "agents", "comma-separated agent ids", agents) from None
+    path = export_gltf(run_dir, out, agents=ids, naming=naming)
+    typer.echo(f"wrote {path} (one animated skeleton per walker); next: import it in Blender "
+               "(File > Import > glTF 2.0), Unity or Unreal")
 
 
 @app.command("gait-report")

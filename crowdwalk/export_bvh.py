@@ -1,6 +1,7 @@
 """Export one agent's motion as a BVH file (Biovision Hierarchy) with ``bvhio``.
 
-The skeleton is :mod:`crowdwalk.body`'s (H-Anim joint names), scaled to the agent's body
+The skeleton is :mod:`crowdwalk.body`'s (joints named as motion-capture rigs name them, or
+with ``naming="hanim"`` by their H-Anim names), scaled to the agent's body
 height; the root carries 6 channels, every other joint 3 rotation channels (Z X Y, the
 order most importers expect). BVH is y-up: world (x east, y north, z up) maps to BVH
 (X, Y, Z) = (x, z, −y), a proper rotation, so joint rotations keep their meaning.
@@ -20,7 +21,21 @@ import numpy as np
 from crowdwalk.body import END_SITES, JOINT_NAMES, PARENTS, Body
 from crowdwalk.errors import invalid
 
-__all__ = ["export_bvh", "frames_to_bvh", "write_bvh", "BVH_AXES"]
+__all__ = ["export_bvh", "frames_to_bvh", "write_bvh", "BVH_AXES", "JOINT_NAMINGS"]
+
+#: Joint names a BVH file carries: ``"common"`` (the default), the names of motion-capture
+#: rigs (Hips, Spine, Head, LeftUpLeg, LeftFoot, LeftToeBase, ...) that importers and BVH
+#: libraries (e.g. pybvh) recognise to find the up axis (root to ``Head``) and the feet
+#: (``*Foot``/``*ToeBase``) without hints; or ``"hanim"``, crowdwalk's own H-Anim names.
+JOINT_NAMINGS = {
+    "hanim": tuple(JOINT_NAMES),
+    "common": tuple({
+        "HumanoidRoot": "Hips", "sacroiliac": "Pelvis", "vl5": "Spine", "skullbase": "Head",
+    }.get(n) or ("Left" if n.startswith("l_") else "Right") + {
+        "hip": "UpLeg", "knee": "Leg", "talocrural": "Foot", "subtalar": "Subtalar",
+        "metatarsal": "ToeBase", "shoulder": "Arm", "elbow": "ForeArm", "wrist": "Hand",
+    }[n[2:]] for n in JOINT_NAMES),
+}
 
 BVH_AXES = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 """Rotation taking world vectors (z up) to BVH vectors (y up): (x, y, z) → (x, z, −y)."""
@@ -41,6 +56,7 @@ def write_bvh(
     root_position: np.ndarray,
     joints: np.ndarray,
     scale: float = 100.0,
+    naming: str = "common",
 ) -> Path:
     """Write a BVH file for one body and F frames.
 
@@ -52,6 +68,7 @@ def write_bvh(
     root_position : (F, 3) ``HumanoidRoot`` world positions [m].
     joints : (F, J, 4) local joint quaternions wxyz; joint 0 is the root's world rotation.
     scale : float, BVH units per metre (100: centimetres).
+    naming : ``"common"`` or ``"hanim"`` joint names (:data:`JOINT_NAMINGS`).
 
     Returns
     -------
@@ -73,6 +90,8 @@ def write_bvh(
         raise invalid("write_bvh", "frame_time", "finite and > 0 [s]", frame_time)
     if not (np.isfinite(scale) and scale > 0):
         raise invalid("write_bvh", "scale", "finite and > 0 [units/m]", scale)
+    if naming not in JOINT_NAMINGS:
+        raise invalid("write_bvh", "naming", f"one of {sorted(JOINT_NAMINGS)}", naming)
     if not (np.isfinite(root_position).all() and np.isfinite(joints).all()):
         raise invalid("write_bvh", "poses", "finite", "non-finite values")
     body = Body.from_heights([body_height])
@@ -83,7 +102,7 @@ def write_bvh(
 
     nodes = []
     for j, name in enumerate(JOINT_NAMES):
-        node = bvhio.BvhJoint(name, glm.vec3(*offsets[j]))
+        node = bvhio.BvhJoint(JOINT_NAMINGS[naming][j], glm.vec3(*offsets[j]))
         node.Channels = (["Xposition", "Yposition", "Zposition"] if j == 0 else []) + [
             "Zrotation", "Xrotation", "Yrotation"
         ]  # fmt: skip
@@ -102,10 +121,11 @@ def write_bvh(
 
 
 def frames_to_bvh(
-    frames: Sequence, agent: int, body_height: float, out: str | Path, scale: float = 100.0
+    frames: Sequence, agent: int, body_height: float, out: str | Path, scale: float = 100.0,
+    naming: str = "common",
 ) -> Path:
     """Write one agent's poses from a sequence of ``PoseFrame`` (uniform time steps) for a
-    body ``body_height`` [m]; ``scale`` BVH units per metre."""
+    body ``body_height`` [m]; ``scale`` BVH units per metre; ``naming`` of the joints."""
     rows = []
     for frame in frames:
         hit = np.flatnonzero(np.asarray(frame.agents) == agent)
@@ -116,12 +136,14 @@ def frames_to_bvh(
     times = np.array([r[0] for r in rows])
     root = np.array([r[1] for r in rows])
     joints = np.array([r[2] for r in rows])
-    return write_bvh(out, body_height, float(np.median(np.diff(times))), root, joints, scale)
+    return write_bvh(out, body_height, float(np.median(np.diff(times))), root, joints, scale,
+                     naming)
 
 
-def export_bvh(run_dir: str | Path, agent: int, out: str | Path, scale: float = 100.0) -> Path:
+def export_bvh(run_dir: str | Path, agent: int, out: str | Path, scale: float = 100.0,
+               naming: str = "common") -> Path:
     """Write the BVH file of one agent of a run folder (its ``poses.sqlite``); ``scale``
-    BVH units per metre.
+    BVH units per metre, ``naming`` of the joints (:data:`JOINT_NAMINGS`).
 
     Raises
     ------
@@ -157,4 +179,4 @@ def export_bvh(run_dir: str | Path, agent: int, out: str | Path, scale: float = 
     frame_time = 1.0 / fps if np.isfinite(fps) and fps > 0 else float(np.median(np.diff(times)))
     joints = track["joints"].copy()
     joints[:, 0] = track["root_quaternion"]
-    return write_bvh(out, height, frame_time, track["root_position"], joints, scale)
+    return write_bvh(out, height, frame_time, track["root_position"], joints, scale, naming)

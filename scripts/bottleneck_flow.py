@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from crowdwalk.crowd.simulation import CrowdSimulation
+from crowdwalk.crowd.simulation import CrowdParams, CrowdSimulation, build_parts
 from crowdwalk.population import Population
 from crowdwalk.scenario import Scenario
 from crowdwalk.world import build_world
@@ -41,7 +41,8 @@ def steady_flow(scenario: Scenario) -> tuple[float, int]:
     world = build_world(scenario)
     rng = np.random.default_rng(scenario.simulation.seed)
     pop = Population.from_scenario(scenario, world.routes, rng)
-    sim = CrowdSimulation(world, pop, dt=scenario.simulation.dt, fps=scenario.simulation.fps,
+    sim = CrowdSimulation(world, pop, parts=build_parts(world, pop, params=CrowdParams()),
+                          dt=scenario.simulation.dt, fps=scenario.simulation.fps,
                           duration=scenario.simulation.duration)
     while not sim.finished:
         sim.step()

@@ -89,7 +89,8 @@ def test_a_mixed_engine_poses_each_agent_as_its_own_engine_would(split):
     it: steps are routed by agent and rows come back in the order asked. All agents on
     one engine: identical. Alternating: within 5 cm (each engine's interpolator inserts
     the datasets its own requests solved, so the two histories differ; with the planner's
-    speed-dependent steps up to 2.7 cm), far below what a misrouted step or row would give (metres)."""
+    speed-dependent steps up to 2.7 cm), far below what a misrouted step or row would
+    give (metres)."""
     over = RunOverrides(duration=3.0, max_agents=6, poses=True)
     _, world, one, _, _ = prepare(QUICKSTART, over)
     _, _, two, _, _ = prepare(QUICKSTART, over)

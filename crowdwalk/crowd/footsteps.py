@@ -233,6 +233,7 @@ class FootstepPlanner:
         self,
         stance: np.ndarray,
         stance_z: np.ndarray,
+        *,
         direction: np.ndarray,
         leg: np.ndarray,
         speed: np.ndarray,

@@ -15,7 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.crowd.simulation import ARRIVED, WAITING, CrowdParams, CrowdSimulation
+from crowdwalk.crowd.simulation import (
+    ARRIVED,
+    WAITING,
+    CrowdParams,
+    CrowdSimulation,
+    build_parts,
+)
 from crowdwalk.errors import invalid
 from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
 
@@ -66,7 +72,8 @@ def check_overrides(overrides: RunOverrides) -> None:
                           value)
 
 
-def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams | None = None):
+def prepare(scenario, overrides: RunOverrides | None = None, *,
+            params: CrowdParams | None = None):
     """World, population and simulation of a scenario (a path or a loaded Scenario).
 
     Returns
@@ -105,8 +112,9 @@ def prepare(scenario, overrides: RunOverrides | None = None, params: CrowdParams
             pose_note = "written"
         except ImportError as exc:  # a build without the gait package: say so, go on
             pose_note = f"not available in this build ({exc})"
-    sim = CrowdSimulation(world, pop, dt=sc.simulation.dt, fps=fps, duration=duration,
-                          params=params, gait=gait)
+    parts = build_parts(world, pop, params=params)
+    sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
+                          duration=duration, params=params, gait=gait)
     return sc, world, sim, pose_note, text
 
 
@@ -154,7 +162,7 @@ def run_scenario(
     from crowdwalk.record import RunWriter
 
     wall0 = time.perf_counter()
-    sc, world, sim, pose_note, text = prepare(scenario, overrides, params)
+    sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params)
     skeleton = sim.gait.skeleton if sim.gait is not None else None
     writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
                        fps=sim.fps, skeleton=skeleton)
@@ -205,7 +213,7 @@ def run_scenario(
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
                       step_commands_s=sim.wall_commands)
-        summary = summarise(sim, sc, timing, max_overlap=overlap.max_overlap,
+        summary = summarise(sim, sc, timing=timing, max_overlap=overlap.max_overlap,
                             interrupted=interrupted, poses=pose_note)
         for sink in everyone:
             sink.end(summary)
@@ -220,7 +228,7 @@ def _stats(values: np.ndarray) -> dict:
             "min": float(values.min()), "max": float(values.max())}
 
 
-def summarise(sim: CrowdSimulation, scenario, timing: dict, *, max_overlap: float,
+def summarise(sim: CrowdSimulation, scenario, *, timing: dict, max_overlap: float,
               interrupted: bool, poses: str) -> dict:
     """Per-agent and per-group statistics of a simulation (units in the key names)."""
     st, pop = sim.state, sim.pop

@@ -137,6 +137,10 @@ class StepChoice:
     free_length: np.ndarray
     move: np.ndarray
 
+    def take(self, rows: np.ndarray) -> StepChoice:
+        """The choices at ``rows``."""
+        return StepChoice(self.direction[rows], self.free_length[rows], self.move[rows])
+
 
 def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
@@ -146,6 +150,7 @@ def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
 def choose_steps(
     position: np.ndarray,
     stance: np.ndarray,
+    *,
     heading: np.ndarray,
     radius: np.ndarray,
     route_direction: np.ndarray,

@@ -56,17 +56,9 @@ from crowdwalk.body import JOINT_NAMES, LEG_JOINTS, PARENTS, Body, matrix_to_qua
 from crowdwalk.errors import invalid
 from crowdwalk.gait.datasets import sample
 from crowdwalk.gait.elevinterp import ElevInterp
-from crowdwalk.gait.elevwalker import (
-    GaitStyle,
-    StanceFoot,
-    WarmStart,
-    _direction,
-    _stance_foot_pose,
-    _wrap,
-    elevwalker_pose,
-    foot_points,
-)
+from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose
 from crowdwalk.gait.engine import GroundHeight, PoseFrame
+from crowdwalk.gait.foot import StanceFoot, direction, foot_points, stance_foot_pose, wrap_angle
 from crowdwalk.steps import StepBatch
 
 __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
@@ -195,6 +187,115 @@ class StepCommand:
                 object.__setattr__(self, name, arr)
 
 
+@dataclass(eq=False)
+class _StepState:
+    """The step each of n agents is in: its dataset and timing."""
+
+    commanded: np.ndarray  # (n,) bool, has had a command
+    angles: np.ndarray  # (n, S, 4) elevation-angle dataset of the step [rad]
+    stance_fraction: np.ndarray  # (n,) of the dataset's cycle
+    t0: np.ndarray  # (n,) step start [s]
+    duration: np.ndarray  # (n,) [s]
+    stance_left: np.ndarray  # (n,) bool
+    psi0: np.ndarray  # (n,) heading at the start of the step [rad]
+    psi1: np.ndarray  # (n,) ... at its end [rad]
+
+    @classmethod
+    def zeros(cls, n: int, samples: int) -> _StepState:
+        return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.full(n, 0.6),
+                   np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n))
+
+
+@dataclass(eq=False)
+class _StanceState:
+    """The stance foot of n agents and the step's footholds."""
+
+    ball: np.ndarray  # (n, 3) contact under the ball [m]
+    yaw: np.ndarray  # (n,) [rad]
+    slope: np.ndarray  # (n,) [rad]
+    spin: np.ndarray  # (n,) spin turn on the ball [rad]
+    toe_out: np.ndarray  # (n,) toe-out the swing foot turns to [rad]
+    toe_start: np.ndarray  # (n,) ... and starts from [rad]
+    start: np.ndarray  # (n, 3) commanded stance foothold [m]
+    target: np.ndarray  # (n, 3) commanded landing foothold [m]
+
+    @classmethod
+    def zeros(cls, n: int, toe_out: float) -> _StanceState:
+        return cls(np.zeros((n, 3)), np.zeros(n), np.zeros(n), np.zeros(n),
+                   np.full(n, toe_out), np.full(n, toe_out), np.zeros((n, 3)),
+                   np.zeros((n, 3)))
+
+
+@dataclass(eq=False)
+class _SwingState:
+    """The corrections of the data-driven swing and root of n agents over their step."""
+
+    d0: np.ndarray  # (n, 3) swing-ankle offset at toe-off [m]
+    d1: np.ndarray  # (n, 3) ... at the landing [m]
+    trail_ball: np.ndarray  # (n, 3) trailing foot's ball in push-off [m]
+    trail_yaw: np.ndarray  # (n,) [rad]
+    trail_slope: np.ndarray  # (n,) [rad]
+    has_trail: np.ndarray  # (n,) bool, pinned in push-off
+    toe_off: np.ndarray  # (n,) toe-off, fraction of the step
+    bezier: np.ndarray  # (n, 4, 3) planner's swing-ankle Bezier [m]
+    use_bezier: np.ndarray  # (n,) bool
+    lift_need: np.ndarray  # (n, G) anticipated lift at the _LIFT_GRID phases [m]
+    hip_fix: np.ndarray  # (n, 3) root continuity offset [m]
+    hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
+
+    @classmethod
+    def zeros(cls, n: int) -> _SwingState:
+        return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
+                   np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros((n, 4, 3)),
+                   np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
+                   np.zeros((n, 3)))
+
+
+@dataclass(eq=False)
+class _SolverWarmth:
+    """Gauss–Newton warm starts of n agents (stance ankle, swing hip) and Jacobians."""
+
+    ankle: np.ndarray  # (n, 2) [rad]
+    hip: np.ndarray  # (n, 3) [rad]
+    ankle_jacobian: np.ndarray  # (n, 2, 2), NaN: none
+    hip_jacobian: np.ndarray  # (n, 3, 3), NaN: none
+
+    @classmethod
+    def zeros(cls, n: int) -> _SolverWarmth:
+        return cls(np.zeros((n, 2)), np.zeros((n, 3)), np.full((n, 2, 2), np.nan),
+                   np.full((n, 3, 3), np.nan))
+
+
+@dataclass(eq=False)
+class _LastPose:
+    """The last pose of n agents (kept where a solve fails)."""
+
+    has: np.ndarray  # (n,) bool
+    root: np.ndarray  # (n, 3) [m]
+    rotation: np.ndarray  # (n, 3, 3)
+    local: np.ndarray  # (n, J, 3, 3)
+    positions: np.ndarray  # (n, J, 3) [m]
+    contact: np.ndarray  # (n, 2) bool
+
+    @classmethod
+    def zeros(cls, n: int, joints: int) -> _LastPose:
+        return cls(np.zeros(n, bool), np.zeros((n, 3)),
+                   np.broadcast_to(np.eye(3), (n, 3, 3)).copy(),
+                   np.broadcast_to(np.eye(3), (n, joints, 3, 3)).copy(),
+                   np.zeros((n, joints, 3)), np.ones((n, 2), bool))
+
+
+@dataclass(frozen=True, eq=False)
+class _Landed:
+    """Where the previous step of m agents left the root (m, 3) [m] and the landed foot:
+    heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw (m,) [rad]."""
+
+    root: np.ndarray
+    heel: np.ndarray
+    yaw: np.ndarray
+    old_yaw: np.ndarray
+
+
 class Animator:
     """Full-body poses for n agents from step commands (Sun & Metaxas 2001).
 
@@ -227,44 +328,11 @@ class Animator:
         n = len(body)
         n_samples = self.interp.datasets[0].samples
         nj = len(JOINT_NAMES)
-        self._commanded = np.zeros(n, bool)
-        self._angles = np.zeros((n, n_samples, 4))
-        self._stance_fraction = np.full(n, 0.6)
-        self._t0 = np.zeros(n)
-        self._duration = np.ones(n)
-        self._stance_left = np.ones(n, bool)
-        self._psi0 = np.zeros(n)
-        self._psi1 = np.zeros(n)
-        self._ball = np.zeros((n, 3))
-        self._yaw = np.zeros(n)
-        self._slope = np.zeros(n)
-        self._spin = np.zeros(n)
-        self._toe_out = np.full(n, self.style.toe_out)
-        self._toe_start = np.full(n, self.style.toe_out)
-        self._start = np.zeros((n, 3))
-        self._target = np.zeros((n, 3))
-        self._d0 = np.zeros((n, 3))
-        self._trail_ball = np.zeros((n, 3))
-        self._trail_yaw = np.zeros(n)
-        self._trail_slope = np.zeros(n)
-        self._has_trail = np.zeros(n, bool)
-        self._toe_off = np.zeros(n)
-        self._d1 = np.zeros((n, 3))
-        self._bezier = np.zeros((n, 4, 3))
-        self._use_bezier = np.zeros(n, bool)
-        self._lift_need = np.zeros((n, _LIFT_GRID.size))
-        self._hip_fix = np.zeros((n, 3))
-        self._hip_drop = np.zeros((n, 3))
-        self._warm_ankle = np.zeros((n, 2))
-        self._warm_hip = np.zeros((n, 3))
-        self._jac_ankle = np.full((n, 2, 2), np.nan)
-        self._jac_hip = np.full((n, 3, 3), np.nan)
-        self._has_pose = np.zeros(n, bool)
-        self._prev_root = np.zeros((n, 3))
-        self._prev_rot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
-        self._prev_local = np.broadcast_to(np.eye(3), (n, nj, 3, 3)).copy()
-        self._prev_positions = np.zeros((n, nj, 3))
-        self._prev_contact = np.ones((n, 2), bool)
+        self._step = _StepState.zeros(n, n_samples)
+        self._stance = _StanceState.zeros(n, self.style.toe_out)
+        self._swing = _SwingState.zeros(n)
+        self._warm = _SolverWarmth.zeros(n)
+        self._last = _LastPose.zeros(n, nj)
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
                       "lifted": 0, "lift_steps": 0}  # fmt: skip
 
@@ -277,7 +345,15 @@ class Animator:
     def command(self, cmd: StepBatch | StepCommand) -> None:
         """Start steps for the agents in ``cmd`` (batched; call at their heel strikes):
         the crowd's :class:`~crowdwalk.steps.StepBatch` (the :class:`GaitEngine`
-        protocol) or a :class:`StepCommand`."""
+        protocol) or a :class:`StepCommand`.
+
+        Phases, in order: where the previous step left root and landed foot
+        (:meth:`_landed`); the new stance foot (:meth:`_new_stance`); the step's dataset
+        and per-step state (:meth:`_start_step`); root continuity (:meth:`_join_root`);
+        the swing's ends, push-off and reach (:meth:`_swing_ends`); the planner's swing
+        curve where the data's foot would touch the ground (:meth:`_swing_curve`); the
+        anticipated lift over uneven ground (:meth:`_anticipate_lift`).
+        """
         if isinstance(cmd, StepBatch):
             cmd = StepCommand.from_batch(cmd)
         n = len(self.body)
@@ -289,96 +365,123 @@ class Animator:
         if np.unique(a).size != a.size:
             raise invalid("StepCommand", "agent", "without repeated agents", a)
         body = self.body.take(a)
-        first = ~self._commanded[a]
-        swing_left = cmd.swing_foot == 0
-        stance_left = ~swing_left
-        side_sw = np.where(swing_left, 1.0, -1.0)
+        had = self._step.commanded[a].copy()
+        landed = self._landed(a, had)
+        st = self._stance
+        trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
+        stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
+        data = self._start_step(cmd, body, had, stance, toe_out, psi0)
+        self._join_root(a, had, landed.root)
+        self._swing_ends(cmd, body, had, data, trail)
+        swing_from = np.where(had[:, None], trail[0], cmd.start)
+        bumpy = self._uneven(cmd, body, swing_from)
+        self._swing_curve(cmd, bumpy)
+        if bumpy.any():
+            self._anticipate_lift(a[bumpy])
+        self.stats["commands"] += a.size
 
-        # Where the root and the landed foot are: the previous step at its end.
-        had = ~first
-        root_end = np.zeros((a.size, 3))
-        landed_heel = np.zeros((a.size, 3))
-        landed_yaw = np.zeros(a.size)
-        old_yaw = np.zeros(a.size)
+    def _landed(self, a: np.ndarray, had: np.ndarray) -> _Landed:
+        """Where the previous step (of the agents ``had`` a step) left the root and the
+        foot that landed, at its end."""
+        m = a.size
+        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m))
         if had.any():
             ah = a[had]
             k = ah.size
             end = self._walk(ah, np.full(k, _PHASE_END), corrected=True)
-            old_st = np.where(self._stance_left[ah], 0, 1)
-            root_end[had] = end.root_position
+            old_st = np.where(self._step.stance_left[ah], 0, 1)
+            out.root[had] = end.root_position
             feet = foot_points(self.body.take(ah), end.positions, end.rotations)
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
-            landed_heel[had] = new_st[:, 0]
+            out.heel[had] = new_st[:, 0]
             toward = new_st[:, 1] - new_st[:, 0]
-            landed_yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
-            old_yaw[had] = self._yaw[ah] + self._spin[ah]
-        trail = (self._ball[a].copy(), self._yaw[a] + self._spin[a], self._slope[a].copy())
+            out.yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
+            out.old_yaw[had] = self._stance.yaw[ah] + self._stance.spin[ah]
+        return out
 
-        # The new stance foot: exactly where and how the previous swing foot landed (its
-        # heel is the contact point, so nothing slides at the swap), or the commanded
-        # foothold with default toe-out for an agent's first step.
+    def _new_stance(self, cmd: StepCommand, body: Body, had: np.ndarray, landed: _Landed):
+        """The new stance foot: exactly where and how the previous swing foot landed (its
+        heel is the contact point, so nothing slides at the swap), or the commanded
+        foothold with default toe-out for an agent's first step; and the swing foot's
+        toe-out at its start (the yaw it had as stance foot, turning to toe-out)."""
+        a, first = cmd.agent, ~had
+        side_sw = np.where(cmd.swing_foot == 0, 1.0, -1.0)
         toe_out = cmd.toe_out if cmd.toe_out is not None else np.full(a.size, self.style.toe_out)
-        yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, landed_yaw)
+        yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, landed.yaw)
         along = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
-        heel_xy = np.where(had[:, None], landed_heel[:, :2],
+        heel_xy = np.where(had[:, None], landed.heel[:, :2],
                            cmd.start[:, :2] - body.heel_offset[:, None] * along)  # fmt: skip
         stance = self._contact(body, heel_xy, cmd.start[:, 2], yaw)
-        # The swing foot leaves with the yaw it had as stance foot, then turns to toe-out.
-        psi0 = np.where(first, cmd.heading, self._psi1[a])
-        start_toe = np.clip(side_sw * _wrap(old_yaw - psi0), -_MAX_TOE_START, _MAX_TOE_START)
-        self._toe_start[a] = np.where(had, start_toe, toe_out)
+        psi0 = np.where(first, cmd.heading, self._step.psi1[a])
+        start_toe = np.clip(side_sw * wrap_angle(landed.old_yaw - psi0), -_MAX_TOE_START,
+                            _MAX_TOE_START)
+        self._stance.toe_start[a] = np.where(had, start_toe, toe_out)
+        return stance, toe_out, psi0
 
-        # The step ElevInterp must produce is the one between the footholds the feet
-        # really use: the stance foot where it landed, the commanded target.
-        d = _direction(stance.yaw, stance.slope)
+    def _start_step(self, cmd: StepCommand, body: Body, had: np.ndarray, stance: StanceFoot,
+                    toe_out: np.ndarray, psi0: np.ndarray):
+        """The step's elevation-angle dataset and the per-step state: the step ElevInterp
+        must produce is the one between the footholds the feet really use (the stance
+        foot where it landed, the commanded target); corrections start from zero."""
+        a = cmd.agent
+        side_sw = np.where(cmd.swing_foot == 0, 1.0, -1.0)
+        d = direction(stance.yaw, stance.slope)
         stance_foothold = stance.ball - body.ball_offset[:, None] * d
         rel = cmd.target - stance_foothold
         length = rel[:, 0] * np.cos(cmd.heading) + rel[:, 1] * np.sin(cmd.heading)
         length = np.maximum(length, _MIN_STEP)
         height = rel[:, 2]
         data = self.interp.request(body, length, height)
-        self._angles[a] = data.angles
-        self._stance_fraction[a] = data.stance_fraction
-        self._psi0[a] = psi0
-        self._psi1[a] = cmd.heading
-        self._t0[a] = cmd.time
-        self._duration[a] = cmd.duration
-        self._stance_left[a] = stance_left
-        self._ball[a], self._yaw[a], self._slope[a] = stance.ball, stance.yaw, stance.slope
+        step, st, sw = self._step, self._stance, self._swing
+        step.angles[a] = data.angles
+        step.stance_fraction[a] = data.stance_fraction
+        step.psi0[a] = psi0
+        step.psi1[a] = cmd.heading
+        step.t0[a] = cmd.time
+        step.duration[a] = cmd.duration
+        step.stance_left[a] = cmd.swing_foot != 0
+        st.ball[a], st.yaw[a], st.slope[a] = stance.ball, stance.yaw, stance.slope
         # Spin turn (§6.1): the stance foot pivots on its ball when the heading would
         # otherwise twist the stance hip by more than _MAX_STANCE_TWIST.
         spin = np.zeros(a.size) if cmd.spin is None else cmd.spin.copy()
-        twist = _wrap(cmd.heading - side_sw * self.style.toe_out - (yaw + spin))
+        twist = wrap_angle(cmd.heading - side_sw * self.style.toe_out - (stance.yaw + spin))
         excess = np.sign(twist) * np.maximum(np.abs(twist) - _MAX_STANCE_TWIST, 0.0)
-        self._spin[a] = spin + excess
-        self._toe_out[a] = toe_out
-        self._start[a], self._target[a] = cmd.start, cmd.target
-        self._d0[a] = 0.0
-        self._d1[a] = 0.0
-        self._has_trail[a] = False
-        self._toe_off[a] = np.where(
+        st.spin[a] = spin + excess
+        st.toe_out[a] = toe_out
+        st.start[a], st.target[a] = cmd.start, cmd.target
+        sw.d0[a] = 0.0
+        sw.d1[a] = 0.0
+        sw.has_trail[a] = False
+        sw.toe_off[a] = np.where(
             had, np.clip(2.0 * (data.stance_fraction - 0.5), 0.0, 0.45), 0.0
         )
-        self._hip_fix[a] = 0.0
-        self._hip_drop[a] = 0.0
-        self._use_bezier[a] = False
-        self._lift_need[a] = 0.0
+        sw.hip_fix[a] = 0.0
+        sw.hip_drop[a] = 0.0
+        sw.use_bezier[a] = False
+        sw.lift_need[a] = 0.0
         self._warm_start_swap(a, had)
-        self._commanded[a] = True
+        step.commanded[a] = True
+        return data
 
-        # Root continuity: the stance hip starts where the previous step left the root
-        # and blends to the data over the first half of the step.
+    def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
+        """Root continuity: the stance hip starts where the previous step left the root
+        and blends to the data over the first half of the step."""
         if had.any():
             start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
-            self._hip_fix[a[had]] = root_end[had] - start_pose.root_position
+            self._swing.hip_fix[a[had]] = root_end[had] - start_pose.root_position
 
-        # Data-driven swing ankle at toe-off and landing (no swing corrections yet).
+    def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray, data, trail) -> None:
+        """The data-driven swing ankle at toe-off and at the landing (no swing corrections
+        yet), the offsets that pin the trailing foot in push-off and land the swing foot
+        on the target, and the pelvis drop where the landing is out of reach."""
+        a = cmd.agent
+        sw = self._swing
         ends = np.concatenate([a, a])
-        toe_off_phase = 0.5 * self._toe_off[a]
+        toe_off_phase = 0.5 * sw.toe_off[a]
         phases = np.concatenate([toe_off_phase, np.full(a.size, _PHASE_END)])
         pose = self._walk(ends, phases, corrected=True)
         m = a.size
-        sw_idx = LEG_JOINTS[np.where(swing_left, 0, 1)]
+        sw_idx = LEG_JOINTS[np.where(cmd.swing_foot == 0, 0, 1)]
         tc = sw_idx[:, 2]
         rows = np.arange(m)
         ankle0 = pose.positions[rows, tc]
@@ -391,81 +494,89 @@ class Animator:
         land = self._contact(body, land_heel, cmd.target[:, 2], land_yaw)
         land_phi = sample(data.angles, np.zeros(m))[:, 0]
         land_pitch = np.arctan(np.tan(land_phi) * np.cos(land_yaw - cmd.heading))
-        ankle_land = _stance_foot_pose(body, land, land_pitch)[1]
+        ankle_land = stance_foot_pose(body, land, land_pitch)[1]
         # Push-off: until toe-off the trailing foot (the previous stance foot) stays on
         # its ball, pitched by the data; then the ankle joins the data smoothly.
-        self._trail_ball[a], self._trail_yaw[a], self._trail_slope[a] = trail
+        sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
         pin = self._pinned_ankle(a, toe_off_phase, sample(data.angles, toe_off_phase + 0.5))[0]
-        self._d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
-        self._has_trail[a] = had
+        sw.d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
+        sw.has_trail[a] = had
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
         to_land = ankle_land - hip1
         reach = np.linalg.norm(to_land, axis=1)
         short = np.maximum(reach - _REACH * (body.thigh + body.shank), 0.0)
-        self._hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
-        self._d1[a] = ankle_land - ankle1 - self._hip_drop[a]
+        sw.hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
+        sw.d1[a] = ankle_land - ankle1 - sw.hip_drop[a]
 
-        # Swing clearance: would the corrected data-driven foot touch the ground? Only
-        # steps over uneven ground (something above the line from the trailing foot to
-        # the stance foothold, or from there to the target: the swing starts two
-        # placements back) are sampled, from toe-off to just before the landing.
-        swing_from = np.where(had[:, None], trail[0], cmd.start)
+    def _uneven(self, cmd: StepCommand, body: Body, swing_from: np.ndarray) -> np.ndarray:
+        """(m,) bool: steps over uneven ground — something above the line from the
+        trailing foot ``swing_from`` (m, 3) to the stance foothold, or from there to the
+        target (the swing starts two placements back), along the ankles or the toes."""
+        m = cmd.agent.size
         toes = (body.toe_offset[:, None]
                 * np.stack([np.cos(cmd.heading), np.sin(cmd.heading)], axis=1))
         both = self._bumpy(np.concatenate([swing_from, cmd.start]),
                            np.concatenate([cmd.start, cmd.target]), np.tile(toes, (2, 1)))
-        bumpy = both[:m] | both[m:]
-        if cmd.swing_bezier is not None:
-            has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
-            self._bezier[a[has]] = cmd.swing_bezier[has]
-            has &= bumpy
-            if has.any():
-                ab = a[has]
-                k = ab.size
-                idx = np.tile(ab, _CHECK_SPAN.size)
-                t_off = np.tile(self._toe_off[ab], _CHECK_SPAN.size)
-                ph = 0.5 * (t_off + np.repeat(_CHECK_SPAN, k) * (0.95 - t_off))
-                check = self._walk(idx, ph, corrected=True)
-                pts = foot_points(self.body.take(idx), check.positions, check.rotations)
-                side = np.where(self._stance_left[idx], 1, 0)
-                feet = pts[np.arange(idx.size), side]  # (p, 3, 3) heel, ball, toe tip
-                sole = np.concatenate([feet, 0.5 * (feet[:, :2] + feet[:, 1:])], axis=1)
-                gap = sole[:, :, 2] - self._ground_at(idx, sole)
-                clearance = gap.min(axis=1).reshape(_CHECK_SPAN.size, k).min(axis=0)
-                self._use_bezier[ab] = clearance < _CLEARANCE
-                self.stats["bezier_steps"] += int(self._use_bezier[ab].sum())
+        return both[:m] | both[m:]
 
-        # Anticipated clearance: over uneven ground, where the final swing (data, blends,
-        # Bezier) would still put the sole below the ground, the ankle is raised by a
-        # smooth envelope over the step's phase (``_lift_envelope``) that starts before
-        # the contact and ends after it — a toe reaching a riser face is otherwise lifted
-        # only once inside it, a jump of the whole depth between two frames.
-        if bumpy.any():
-            ab = a[bumpy]
-            k = ab.size
-            idx = np.tile(ab, _LIFT_GRID.size)
-            ph = np.minimum(0.5 * np.repeat(_LIFT_GRID, k), _PHASE_END)
-            check = self._walk(idx, ph, corrected=True)
-            sole = self._swing_sole(idx, check).reshape(_LIFT_GRID.size, k, -1, 3)
-            # between two samples the sole moves about linearly: its depth there too
-            # (a toe crossing a riser face between two samples), sub-sampled
-            w = _LIFT_SUB[:, None, None, None, None]
-            between = (1.0 - w) * sole[None, :-1] + w * sole[None, 1:]  # (u, g-1, k, q, 3)
-            u, gm = between.shape[:2]
-            pts = np.concatenate([sole.reshape(-1, *sole.shape[2:]),
-                                  between.reshape(-1, *sole.shape[2:])])
-            depth = self._points_depth(np.tile(ab, _LIFT_GRID.size + u * gm), pts)
-            at = depth[:_LIFT_GRID.size * k].reshape(_LIFT_GRID.size, k)
-            mid = depth[_LIFT_GRID.size * k:].reshape(u, gm, k).max(axis=0)  # (g-1, k)
-            # a sample lifts for itself and for the intervals on either side of it
-            at[:-1] = np.maximum(at[:-1], mid)
-            at[1:] = np.maximum(at[1:], mid)
-            need = np.where(at > 0.0, at + _LIFT_MARGIN, 0.0).T
-            self._lift_need[ab] = need
-            self.stats["lift_steps"] += int((need > 0).any(axis=1).sum())
-        self.stats["commands"] += m
+    def _swing_curve(self, cmd: StepCommand, bumpy: np.ndarray) -> None:
+        """Swing clearance: would the corrected data-driven foot touch the ground? Steps
+        over uneven ground with a planner's Bezier are sampled from toe-off to just before
+        the landing; where the sole comes within ``_CLEARANCE`` the ankle follows the
+        Bezier."""
+        if cmd.swing_bezier is None:
+            return
+        a, sw = cmd.agent, self._swing
+        has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
+        sw.bezier[a[has]] = cmd.swing_bezier[has]
+        has &= bumpy
+        if not has.any():
+            return
+        ab = a[has]
+        k = ab.size
+        idx = np.tile(ab, _CHECK_SPAN.size)
+        t_off = np.tile(sw.toe_off[ab], _CHECK_SPAN.size)
+        ph = 0.5 * (t_off + np.repeat(_CHECK_SPAN, k) * (0.95 - t_off))
+        check = self._walk(idx, ph, corrected=True)
+        pts = foot_points(self.body.take(idx), check.positions, check.rotations)
+        side = np.where(self._step.stance_left[idx], 1, 0)
+        feet = pts[np.arange(idx.size), side]  # (p, 3, 3) heel, ball, toe tip
+        sole = np.concatenate([feet, 0.5 * (feet[:, :2] + feet[:, 1:])], axis=1)
+        gap = sole[:, :, 2] - self._ground_at(idx, sole)
+        clearance = gap.min(axis=1).reshape(_CHECK_SPAN.size, k).min(axis=0)
+        sw.use_bezier[ab] = clearance < _CLEARANCE
+        self.stats["bezier_steps"] += int(sw.use_bezier[ab].sum())
+
+    def _anticipate_lift(self, ab: np.ndarray) -> None:
+        """Anticipated clearance of the agents ``ab`` stepping over uneven ground: where
+        the final swing (data, blends, Bezier) would still put the sole below the ground,
+        the ankle is raised by a smooth envelope over the step's phase
+        (``_lift_envelope``) that starts before the contact and ends after it — a toe
+        reaching a riser face is otherwise lifted only once inside it, a jump of the
+        whole depth between two frames."""
+        k = ab.size
+        idx = np.tile(ab, _LIFT_GRID.size)
+        ph = np.minimum(0.5 * np.repeat(_LIFT_GRID, k), _PHASE_END)
+        check = self._walk(idx, ph, corrected=True)
+        sole = self._swing_sole(idx, check).reshape(_LIFT_GRID.size, k, -1, 3)
+        # between two samples the sole moves about linearly: its depth there too
+        # (a toe crossing a riser face between two samples), sub-sampled
+        w = _LIFT_SUB[:, None, None, None, None]
+        between = (1.0 - w) * sole[None, :-1] + w * sole[None, 1:]  # (u, g-1, k, q, 3)
+        u, gm = between.shape[:2]
+        pts = np.concatenate([sole.reshape(-1, *sole.shape[2:]),
+                              between.reshape(-1, *sole.shape[2:])])
+        depth = self._points_depth(np.tile(ab, _LIFT_GRID.size + u * gm), pts)
+        at = depth[:_LIFT_GRID.size * k].reshape(_LIFT_GRID.size, k)
+        mid = depth[_LIFT_GRID.size * k:].reshape(u, gm, k).max(axis=0)  # (g-1, k)
+        # a sample lifts for itself and for the intervals on either side of it
+        at[:-1] = np.maximum(at[:-1], mid)
+        at[1:] = np.maximum(at[1:], mid)
+        need = np.where(at > 0.0, at + _LIFT_MARGIN, 0.0).T
+        self._swing.lift_need[ab] = need
+        self.stats["lift_steps"] += int((need > 0).any(axis=1).sum())
 
     def pose(self, t: float, agents: np.ndarray | None = None) -> PoseFrame:
         """Poses of ``agents`` (default: all) at time ``t`` [s], one vectorised call."""
@@ -475,29 +586,30 @@ class Animator:
             raise invalid("Animator", "agents", "an (k,) integer array", a.dtype)
         if np.any((a < 0) | (a >= n)):
             raise invalid("Animator", "agents", f"indices in [0, {n})", a[(a < 0) | (a >= n)])
-        if not np.all(self._commanded[a]):
-            missing = a[~self._commanded[a]][:5]
+        if not np.all(self._step.commanded[a]):
+            missing = a[~self._step.commanded[a]][:5]
             raise invalid("Animator", "agents", "agents that received a StepCommand", missing)
         if not np.isfinite(t):
             raise invalid("Animator", "t", "finite [s]", t)
-        phase = np.clip(0.5 * (t - self._t0[a]) / self._duration[a], 0.0, _PHASE_END)
+        phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
         walked = self._walk(a, phase, corrected=True)
         walked, lifted = self._lift_swing_foot(a, phase, walked)
         self.stats["lifted"] += int(lifted)
 
         ok = walked.converged
-        self._warm_ankle[a] = np.where(ok[:, None], walked.warm.ankle, self._warm_ankle[a])
-        self._warm_hip[a] = np.where(ok[:, None], walked.warm.hip, self._warm_hip[a])
-        self._jac_ankle[a] = np.where(ok[:, None, None], walked.warm.ankle_jacobian, np.nan)
-        self._jac_hip[a] = np.where(ok[:, None, None], walked.warm.hip_jacobian, np.nan)
-        keep = ~ok & self._has_pose[a]
+        warm = self._warm
+        warm.ankle[a] = np.where(ok[:, None], walked.warm.ankle, warm.ankle[a])
+        warm.hip[a] = np.where(ok[:, None], walked.warm.hip, warm.hip[a])
+        warm.ankle_jacobian[a] = np.where(ok[:, None, None], walked.warm.ankle_jacobian, np.nan)
+        warm.hip_jacobian[a] = np.where(ok[:, None, None], walked.warm.hip_jacobian, np.nan)
+        keep = ~ok & self._last.has[a]
         if keep.any():
-            root = np.where(keep[:, None], self._prev_root[a], walked.root_position)
-            rot = np.where(keep[:, None, None], self._prev_rot[a], walked.root_rotation)
-            local = np.where(keep[:, None, None, None], self._prev_local[a], walked.local)
-            positions = np.where(keep[:, None, None], self._prev_positions[a],
+            root = np.where(keep[:, None], self._last.root[a], walked.root_position)
+            rot = np.where(keep[:, None, None], self._last.rotation[a], walked.root_rotation)
+            local = np.where(keep[:, None, None, None], self._last.local[a], walked.local)
+            positions = np.where(keep[:, None, None], self._last.positions[a],
                                  walked.positions)  # fmt: skip
-            contact = np.where(keep[:, None], self._prev_contact[a], walked.contact)
+            contact = np.where(keep[:, None], self._last.contact[a], walked.contact)
         else:  # the walker's own arrays (fresh per call, not kept elsewhere)
             root, rot, local = walked.root_position, walked.root_rotation, walked.local
             positions, contact = walked.positions, walked.contact
@@ -510,9 +622,9 @@ class Animator:
         if bad.any():  # never reached in tests; a last guard so no NaN leaves the Animator
             root[bad], rot[bad], local[bad], positions[bad] = self._standing(a[bad])
             contact[bad] = True
-        self._prev_root[a], self._prev_rot[a], self._prev_local[a] = root, rot, local
-        self._prev_positions[a], self._prev_contact[a] = positions, contact
-        self._has_pose[a] = True
+        self._last.root[a], self._last.rotation[a], self._last.local[a] = root, rot, local
+        self._last.positions[a], self._last.contact[a] = positions, contact
+        self._last.has[a] = True
         fallback = ~ok
         self.stats["poses"] += a.size
         self.stats["fallbacks"] += int(fallback.sum())
@@ -528,7 +640,7 @@ class Animator:
             positions=positions,
             contact=contact,
             fallback=fallback,
-            stance_left=self._stance_left[a].copy(),
+            stance_left=self._step.stance_left[a].copy(),
         )
 
     def followed_angles(self, t: float, agents: np.ndarray):
@@ -536,15 +648,16 @@ class Animator:
         stance leg (k, 4) and swing leg (k, 4) [rad], stance side (k,) bool (True = left)
         and the stance phase (k,) [1] — for diagnostics and validation."""
         a = np.atleast_1d(np.asarray(agents))
-        phase = np.clip(0.5 * (t - self._t0[a]) / self._duration[a], 0.0, _PHASE_END)
-        angles = self._angles[a]
-        return (sample(angles, phase), sample(angles, phase + 0.5), self._stance_left[a].copy(),
+        step = self._step
+        phase = np.clip(0.5 * (t - step.t0[a]) / step.duration[a], 0.0, _PHASE_END)
+        angles = step.angles[a]
+        return (sample(angles, phase), sample(angles, phase + 0.5), step.stance_left[a].copy(),
                 phase)  # fmt: skip
 
     # -- internals --------------------------------------------------------------------
     def _heading(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         s = _smoothstep(2.0 * phase)
-        return self._psi0[a] + _wrap(self._psi1[a] - self._psi0[a]) * s
+        return self._step.psi0[a] + wrap_angle(self._step.psi1[a] - self._step.psi0[a]) * s
 
     def _contact(self, body: Body, heel_xy: np.ndarray, z: np.ndarray, yaw: np.ndarray):
         """How a foot with its heel at ``heel_xy`` (m, 2) [m] and ``yaw`` (m,) [rad] rests
@@ -579,7 +692,7 @@ class Animator:
         front = np.maximum(rel.max(axis=1), 0.0)
         heel_drop = (zh < z_front - 0.01) & (front < slope)
         slope = np.where(heel_drop, front, slope)
-        d = _direction(yaw, slope)
+        d = direction(yaw, slope)
         ball = np.where(heel_drop[:, None], np.column_stack([ball_xy, zb]),
                         np.column_stack([heel_xy, zh]) + hb[:, None] * d)  # fmt: skip
         return StanceFoot(ball, yaw, slope)
@@ -606,7 +719,7 @@ class Animator:
         xy = points[:, :, :2].reshape(-1, 2)
         if self.ground is not None:
             return np.asarray(self.ground(xy), dtype=float).reshape(p, q)
-        start, target = self._start[a], self._target[a]
+        start, target = self._stance.start[a], self._stance.target[a]
         d = target[:, :2] - start[:, :2]
         dd = np.maximum(np.einsum("ka,ka->k", d, d), 1e-12)
         s = np.einsum("kqa,ka->kq", points[:, :, :2] - start[:, None, :2], d) / dd[:, None]
@@ -618,18 +731,18 @@ class Animator:
         stance hip's angles (YXZ Euler); the new stance ankle from zero subtalar."""
         from scipy.spatial.transform import Rotation
 
-        self._warm_ankle[a] = 0.0
-        self._warm_hip[a] = 0.0
-        self._jac_ankle[a] = np.nan
-        self._jac_hip[a] = np.nan
-        ok = had & self._has_pose[a]
+        self._warm.ankle[a] = 0.0
+        self._warm.hip[a] = 0.0
+        self._warm.ankle_jacobian[a] = np.nan
+        self._warm.hip_jacobian[a] = np.nan
+        ok = had & self._last.has[a]
         if not ok.any():
             return
         ah = a[ok]
-        new_swing_left = ~self._stance_left[ah]
+        new_swing_left = ~self._step.stance_left[ah]
         hip = np.where(new_swing_left, LEG_JOINTS[0, 0], LEG_JOINTS[1, 0])
-        local_hip = self._prev_local[ah, hip]
-        self._warm_hip[ah] = Rotation.from_matrix(local_hip).as_euler("YXZ")
+        local_hip = self._last.local[ah, hip]
+        self._warm.hip[ah] = Rotation.from_matrix(local_hip).as_euler("YXZ")
 
     def _walk(self, a: np.ndarray, phase: np.ndarray, corrected: bool,
               lift: np.ndarray | None = None):  # fmt: skip
@@ -637,12 +750,12 @@ class Animator:
         (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal)."""
         body = self.body.take(a)
         k = a.size
-        legs = sample(self._angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
+        legs = sample(self._step.angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
         st, sw = legs[:k], legs[k:]  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
         tau = 2.0 * phase
-        spin = self._spin[a] * _smoothstep(tau / 0.3)
-        foot = StanceFoot(self._ball[a], self._yaw[a] + spin, self._slope[a])
+        spin = self._stance.spin[a] * _smoothstep(tau / 0.3)
+        foot = StanceFoot(self._stance.ball[a], self._stance.yaw[a] + spin, self._stance.slope[a])
         spinning = np.flatnonzero(spin != 0.0)
         if spinning.size and self.ground is not None:
             # The heel swings round the ball; where it would enter higher ground (a curb)
@@ -658,15 +771,15 @@ class Animator:
             foot = StanceFoot(foot.ball, foot.yaw, slope)
         offset = target = blend = goal = toes = None
         if corrected:
-            t_off = self._toe_off[a]
+            t_off = self._swing.toe_off[a]
             s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
-            offset = (1.0 - s) * self._d0[a] + s * self._d1[a]
+            offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
             ramp = _smoothstep((tau - t_off) / 0.15) * _smoothstep((1.0 - tau) / 0.15)
-            blend = np.where(self._use_bezier[a], ramp, 0.0)
-            target = _bezier(self._bezier[a], tau)
-            pinned = self._has_trail[a] & (tau < t_off)
+            blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
+            target = _bezier(self._swing.bezier[a], tau)
+            pinned = self._swing.has_trail[a] & (tau < t_off)
             goal = np.full((a.size, 3), np.nan)
-            toes = np.where(self._has_trail[a], 0.0, np.nan)  # rigid after toe-off
+            toes = np.where(self._swing.has_trail[a], 0.0, np.nan)  # rigid after toe-off
             if pinned.any():
                 goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
                                                                 sw[pinned])  # fmt: skip
@@ -679,14 +792,15 @@ class Animator:
                 goal[:, 2] += lift
         hip_fix = None
         if corrected:
-            hip_fix = self._hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
-            hip_fix += self._hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
-        warm = WarmStart(self._warm_ankle[a], self._warm_hip[a], self._jac_ankle[a],
-                         self._jac_hip[a])  # fmt: skip
-        toe_out = self._toe_start[a] + (self._toe_out[a] - self._toe_start[a]) * _smoothstep(tau)
+            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
+            hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
+        warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
+                         self._warm.hip_jacobian[a])  # fmt: skip
+        toe0, toe1 = self._stance.toe_start[a], self._stance.toe_out[a]
+        toe_out = toe0 + (toe1 - toe0) * _smoothstep(tau)
         return elevwalker_pose(
-            body, self._stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
-            self.style, self._stance_fraction[a], swing_offset=offset, swing_target=target,
+            body, self._step.stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
+            self.style, self._step.stance_fraction[a], swing_offset=offset, swing_target=target,
             swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
             swing_toe_angle=toes,
         )  # fmt: skip
@@ -696,7 +810,7 @@ class Animator:
         upper envelope of the lifts needed at the ``_LIFT_GRID`` samples, each spread over
         ±``_LIFT_WIDTH`` of the step by a smooth bump (1 at its sample, C¹ zero at the
         ends); None when no agent needs one."""
-        need = self._lift_need[a]
+        need = self._swing.lift_need[a]
         rows = np.flatnonzero(need.any(axis=1))
         if rows.size == 0:
             return None
@@ -719,17 +833,17 @@ class Animator:
         of ElevInterp's step measure, so the data's leg reaches it).
         """
         psi = self._heading(a, phase)
-        yaw = self._trail_yaw[a]
-        slope = self._trail_slope[a]
+        yaw = self._swing.trail_yaw[a]
+        slope = self._swing.trail_slope[a]
         pitch = np.arctan(np.tan(swing_angles[:, 0]) * np.cos(yaw - psi))
         body = self.body.take(a)
         ch, sh = np.cos(yaw), np.sin(yaw)
         flat = np.stack([ch, sh, np.zeros_like(yaw)], axis=1)
         up = np.array([0.0, 0.0, 1.0])
-        along = _direction(yaw, slope)
+        along = direction(yaw, slope)
         toe_len = body.toe_offset - body.ball_offset
-        tip = self._trail_ball[a] + toe_len[:, None] * along
-        w = _smoothstep(2.0 * phase / np.maximum(self._toe_off[a], 1e-9))
+        tip = self._swing.trail_ball[a] + toe_len[:, None] * along
+        w = _smoothstep(2.0 * phase / np.maximum(self._swing.toe_off[a], 1e-9))
         toe_angle = (1.0 - w) * np.minimum(pitch - slope, 0.0)
         toe_pitch = pitch - toe_angle
         c, s_ = np.cos(pitch), np.sin(pitch)
@@ -745,7 +859,7 @@ class Animator:
         step while heel, ball and toe are not)."""
         k = a.size
         body = self.body.take(a)
-        sw = LEG_JOINTS[np.where(self._stance_left[a], 1, 0)]
+        sw = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)]
         rows = np.arange(k)
         ankle = walked.positions[rows, sw[:, 2]]
         ball = walked.positions[rows, sw[:, 4]]
@@ -811,7 +925,7 @@ class Animator:
         body = self.body.take(a)
         k = a.size
         nj = len(JOINT_NAMES)
-        root = self._start[a] + np.stack(
+        root = self._stance.start[a] + np.stack(
             [np.zeros(k), np.zeros(k), body.hip_height], axis=1
         )
         rot = np.broadcast_to(np.eye(3), (k, 3, 3)).copy()

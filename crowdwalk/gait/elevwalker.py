@@ -51,6 +51,8 @@ from crowdwalk.body import (
 )
 from crowdwalk.errors import invalid
 from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
+from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
+from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.joints import assemble_joints
 
 __all__ = [
@@ -121,39 +123,6 @@ class GaitStyle:
 
 
 @dataclass(frozen=True, eq=False)
-class StanceFoot:
-    """Where the stance foot touches the ground, for k agents.
-
-    Attributes
-    ----------
-    ball : numpy.ndarray
-        (k, 3) world point under the first metatarsal head [m]; fixed during a step.
-    yaw : numpy.ndarray
-        (k,) direction the foot points, from +x [rad].
-    slope : numpy.ndarray
-        (k,) pitch of the ground along the foot, positive uphill [rad].
-    """
-
-    ball: np.ndarray
-    yaw: np.ndarray
-    slope: np.ndarray
-
-    @classmethod
-    def from_foothold(
-        cls, body: Body, foothold: np.ndarray, yaw: np.ndarray, slope: np.ndarray
-    ) -> StanceFoot:
-        """The contact of a foot placed flat with its ankle above ``foothold`` (k, 3) [m]
-        (the ``planners`` convention: a foothold is the ground point below the ankle)."""
-        d = _direction(yaw, slope)
-        return cls(np.asarray(foothold, float) + body.ball_offset[:, None] * d, yaw, slope)
-
-    def heel(self, body: Body) -> np.ndarray:
-        """(k, 3) world point under the back of the heel when the foot is flat [m]."""
-        d = _direction(self.yaw, self.slope)
-        return self.ball - (body.heel_offset + body.ball_offset)[:, None] * d
-
-
-@dataclass(frozen=True, eq=False)
 class WarmStart:
     """Gauss–Newton starting points: stance ankle (k, 2) [rad] (talocrural, subtalar) and
     swing hip (k, 3) [rad] (intrinsic Y-X-Z Euler angles of the hip's local rotation), and
@@ -200,24 +169,6 @@ class WalkerPose:
 
 
 # --- geometry helpers -------------------------------------------------------------------
-
-
-def _direction(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-    """Unit vectors (k, 3) with heading ``yaw`` and upward pitch ``pitch`` [rad]."""
-    cp = np.cos(pitch)
-    return np.stack([cp * np.cos(yaw), cp * np.sin(yaw), np.sin(pitch)], axis=-1)
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    """Angles [rad] wrapped to [-π, π)."""
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
-
-
-def _mv(m: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Batched matrix @ vector: (k,3,3) @ (k,3) or (3,) → (k,3)."""
-    if v.ndim == 1:
-        return m @ v
-    return np.einsum("kab,kb->ka", m, v)
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -311,7 +262,7 @@ def solve_single_dof(
         wc = w - axis * qw[:, None]
         ws = _cross(axis, w)
         wq = axis * qw[:, None]
-        d, e, f = _mv(parent, wc), _mv(parent, ws), _mv(parent, wq)
+        d, e, f = mat_vec(parent, wc), mat_vec(parent, ws), mat_vec(parent, wq)
     ch, sh = np.cos(heading), np.sin(heading)
     cphi, sphi = np.cos(phi), np.sin(phi)
     # horizontal (along ψ) and vertical components of d, e, f
@@ -335,20 +286,6 @@ def solve_single_dof(
 
 
 # --- the walker -------------------------------------------------------------------------
-
-
-def _stance_foot_pose(body: Body, foot: StanceFoot, pitch: np.ndarray):
-    """Foot orientation, ankle position and toe angle from the foot–floor model (§4.1)."""
-    r_foot = rotation_z(foot.yaw) @ rotation_y(-pitch)
-    on_heel = pitch >= foot.slope
-    k = len(body)
-    z = np.zeros(k)
-    heel_to_ankle = np.stack([body.heel_offset, z, body.ankle_height], axis=1)
-    ball_to_ankle = np.stack([-body.ball_offset, z, body.ankle_height], axis=1)
-    pivot = np.where(on_heel[:, None], foot.heel(body), foot.ball)
-    ankle = pivot + _mv(r_foot, np.where(on_heel[:, None], heel_to_ankle, ball_to_ankle))
-    toe = np.where(on_heel, 0.0, pitch - foot.slope)  # toes stay flat on the ground
-    return r_foot, ankle, toe
 
 
 def elevwalker_pose(
@@ -446,7 +383,7 @@ def elevwalker_pose(
     # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
     #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
     pitch = np.arctan(np.tan(phi_st[:, 0]) * np.cos(foot.yaw - heading))
-    r_foot, ankle, toe_angle = _stance_foot_pose(body, foot, pitch)
+    r_foot, ankle, toe_angle = stance_foot_pose(body, foot, pitch)
 
     if stance_hip_offset is not None:
         phi_st = phi_st.copy()
@@ -592,25 +529,6 @@ def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
 
 
 # --- measurements on poses ------------------------------------------------------------
-
-
-def foot_points(body: Body, positions: np.ndarray, rotations: np.ndarray) -> np.ndarray:
-    """Heel, ball and toe-tip world points of both feet, (k, 2, 3, 3) [m].
-
-    Axis 1 is left/right, axis 2 heel/ball/toe, from the joint positions and orientations
-    of :func:`crowdwalk.body.forward_kinematics`.
-    """
-    k = len(body)
-    out = np.empty((k, 2, 3, 3))
-    z = np.zeros(k)
-    heel_local = np.stack([-body.heel_offset, z, -body.ankle_height], axis=1)
-    tip_local = np.stack([body.toe_offset - body.ball_offset, z, z], axis=1)
-    for s in range(2):
-        tc, sub, mtp = LEG_JOINTS[s, 2], LEG_JOINTS[s, 3], LEG_JOINTS[s, 4]
-        out[:, s, 0] = positions[:, tc] + _mv(rotations[:, sub], heel_local)
-        out[:, s, 1] = positions[:, mtp]
-        out[:, s, 2] = positions[:, mtp] + _mv(rotations[:, mtp], tip_local)
-    return out
 
 
 def leg_elevations(

@@ -30,7 +30,7 @@ import numpy as np
 
 from crowdwalk.errors import invalid
 from crowdwalk.gait.animator import StepCommand
-from crowdwalk.gait.elevwalker import _wrap
+from crowdwalk.gait.foot import wrap_angle
 
 __all__ = [
     "MetaGaitConfig",
@@ -187,7 +187,7 @@ class MetaGait:
         cfg = self.config
         here = _direction(path, s0, s0 + step_length)
         later = _direction(path, s0 + step_length, s0 + 2.0 * step_length)
-        delta = _wrap(later - here)
+        delta = wrap_angle(later - here)
         excess = np.maximum(np.abs(delta) - cfg.toe_out_threshold, 0.0)
         yaw = np.sign(delta) * np.minimum(excess, cfg.toe_out_limit)
         spin = np.sign(delta) * np.maximum(excess - cfg.toe_out_limit, 0.0)
@@ -201,7 +201,7 @@ class MetaGait:
         for _ in range(int(np.ceil(sl.max() / cfg.step_reduction)) + 1):
             now = _direction(path, s0, s0 + sl)
             cycle = _direction(path, s0 + 2.0 * sl, s0 + 3.0 * sl)
-            too_sharp = (np.abs(_wrap(cycle - now)) > cfg.max_heading_change) & (
+            too_sharp = (np.abs(wrap_angle(cycle - now)) > cfg.max_heading_change) & (
                 sl > cfg.min_step_length
             )
             if not too_sharp.any():

@@ -48,19 +48,22 @@ def test_every_footstep_is_charged_eq_4_of_the_step_taken(run_of, planner):
 
 
 def test_steps_the_planner_did_not_plan_are_charged_like_planned_ones():
-    """CrowdSimulation._step_energy (shortened and positioning steps) against the
+    """crowd.stepping.fallback_energy (shortened and positioning steps) against the
     planner's own Eq. 4 for the same step, level and onto a stair."""
     from pathlib import Path
 
     from crowdwalk.crowd.run import RunOverrides, prepare
+    from crowdwalk.crowd.stepping import fallback_energy
     from planners import GroundProfile, plan
 
     scenario = Path(__file__).parents[2] / "scenarios" / "stairs_up_down.yaml"
     _, _, sim, _, _ = prepare(scenario, RunOverrides(poses=False))
     a = np.array([0])
-    leg = sim.legs[sim.leg_index[0]]
+    leg = sim.legs.legs[sim.legs.index[0]]
     speed = float(sim.pop.free_speed[0])
     for ground in (GroundProfile.flat(), GroundProfile.stairs(0.17, 0.30, 4, first_edge=0.45)):
         p = plan(ground, leg, speed, "fixed", sim.footsteps.config)
-        got = sim._step_energy(a, p.step_lengths[:1], p.step_heights[:1])
+        got = fallback_energy(np.asarray(p.step_lengths[:1]), np.asarray(p.step_heights[:1]),
+                              legs=sim.legs.of(a), speed=sim.pop.free_speed[a],
+                              config=sim.footsteps.config)
         assert got[0] == pytest.approx(p.E[0], rel=1e-9)

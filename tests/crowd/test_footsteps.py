@@ -20,8 +20,9 @@ def _planner(terrain, area=None):
 def _plan(fp, stance, stance_z, direction, leg, speed, trailing):
     m = len(stance)
     return fp.plan(np.asarray(stance, float), np.full(m, stance_z),
-                   np.tile(np.asarray(direction, float), (m, 1)), np.full(m, leg),
-                   np.full(m, speed), np.full(m, "best_first"), np.full(m, trailing))
+                   direction=np.tile(np.asarray(direction, float), (m, 1)),
+                   leg=np.full(m, leg), speed=np.full(m, speed),
+                   planner=np.full(m, "best_first"), trailing=np.full(m, trailing))
 
 
 def test_level_ground_of_any_extent_is_planned_once_per_leg_and_speed():

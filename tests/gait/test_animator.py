@@ -139,7 +139,7 @@ def test_no_nan_reaches_the_output_even_from_broken_data():
     body = Body.from_heights([1.7, 1.8])
     animator = Animator(body, ground=_flat)
     frames = _straight(animator, 2, steps=1)
-    animator._angles[1] = np.nan  # simulate a corrupted dataset for agent 1
+    animator._step.angles[1] = np.nan  # simulate a corrupted dataset for agent 1
     frame = animator.pose(frames[-1].time + 0.02)
     assert frame.fallback.tolist() == [False, True]
     for field in ("root_position", "root_quaternion", "joints", "positions"):
@@ -219,8 +219,8 @@ def test_sharp_corners_spin_on_the_stance_foot_without_fallbacks():
     seen = {"spin": 0.0, "toe_out": 0.0}
 
     def watch(frame, animator):
-        seen["spin"] = max(seen["spin"], float(np.abs(animator._spin).max()))
-        seen["toe_out"] = max(seen["toe_out"], float(np.abs(animator._toe_out).max()))
+        seen["spin"] = max(seen["spin"], float(np.abs(animator._stance.spin).max()))
+        seen["toe_out"] = max(seen["toe_out"], float(np.abs(animator._stance.toe_out).max()))
 
     frames = animate_paths(body, paths, _flat, 1.2, 5.0, 25.0, animator=animator,
                            on_frame=watch)  # fmt: skip

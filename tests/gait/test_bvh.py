@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 from crowdwalk.body import JOINT_NAMES, Body
 from crowdwalk.cli import app
 from crowdwalk.errors import InputError
-from crowdwalk.export_bvh import BVH_AXES, export_bvh, frames_to_bvh, write_bvh
+from crowdwalk.export_bvh import BVH_AXES, JOINT_NAMINGS, export_bvh, frames_to_bvh, write_bvh
 from crowdwalk.gait.animator import Animator
 from crowdwalk.gait.metagait import animate_paths
 
@@ -61,7 +61,7 @@ def _check_motion(path, frames, agent_row, scale=100.0):
     assert len(read) == len(frames)
     worst = 0.0
     for f, frame in enumerate(frames):
-        for j, name in enumerate(JOINT_NAMES):
+        for j, name in enumerate(JOINT_NAMINGS["common"]):
             ours = frame.positions[agent_row, j] @ BVH_AXES.T * scale
             worst = max(worst, float(np.abs(read[f][name] - ours).max()))
     assert worst < 1e-3 * scale  # < 1 mm
@@ -81,7 +81,7 @@ def test_the_file_is_plain_bvh(walk, tmp_path):
     text = path.read_text().splitlines()
     joints = [line.split()[1] for line in text if line.strip().split()[:1] in (["ROOT"],
                                                                                 ["JOINT"])]
-    assert joints == list(JOINT_NAMES)
+    assert joints == list(JOINT_NAMINGS["common"])
     channels = sum(int(line.split()[1]) for line in text if line.strip().startswith("CHANNELS"))
     assert channels == 6 + 3 * (len(JOINT_NAMES) - 1)
     motion = text.index("MOTION")

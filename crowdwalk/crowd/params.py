@@ -1,0 +1,74 @@
+"""The crowd model's parameters (:class:`CrowdParams`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from crowdwalk.crowd.steering import SteeringParams
+
+__all__ = ["CrowdParams"]
+
+
+@dataclass(frozen=True)
+class CrowdParams:
+    """Crowd model parameters.
+
+    Attributes
+    ----------
+    radius_ratio : float
+        Body radius over body height [-] (0.105: 0.18 m for a 1.71 m person, so that two
+        bodies standing one behind the other are 0.36 m apart, the standstill spacing
+        Seyfried et al. (2005, J. Stat. Mech. P10002) measured in single file; a disc
+        stands for a body about 0.26 H broad (Winter 2009) but only about half as deep.
+        With 0.115 H (the shoulder half-breadth less some arm compression) the 1 m
+        bottleneck passed 1.43 /s instead of Seyfried et al.'s (2009) 1.9 /s: two such
+        discs abreast plus their wall clearance barely fit, so the two lanes of the
+        "zipper" (Hoogendoorn & Daamen 2005) rarely formed).
+    foot_half_width : float
+        Lateral distance of each foot's centre from the walking line [m] (stride width
+        about 0.1 m, normative.json).
+    wait_time : float
+        How long an agent stands before deciding again when it cannot step [s].
+    target_distance : float
+        How far ahead along the route the steering target lies [m].
+    centre_pull : float
+        Fraction of the lateral offset from the route's centre line the target corrects
+        over ``target_distance`` [-].
+    arrive_distance : float
+        An agent has arrived within this distance of its route's end [m].
+    neighbours : int
+        Neighbours considered per deciding agent (nearest first).
+    neighbour_range : float
+        Search radius for neighbours [m].
+    reroute_after : float
+        Time without ``progress_step`` of progress along the route after which an agent
+        looks for another route [s].
+    progress_step : float
+        Progress along the route that counts as getting on [m].
+    stair_rise : float
+        A step with a larger height change is a stair step (Weidmann speed) [m].
+    planning_horizon : int
+        Steps the footstep planner looks ahead (Chen & Li §4.2: three or four) [-].
+    min_step_ratio : float
+        Shortest planned step as a fraction of the leg length [-].
+    replan_turn_deg : float
+        A walker that turns by more than this at a heel strike re-plans; otherwise it
+        takes the next step of its current plan [deg].
+    steering : SteeringParams
+    """
+
+    radius_ratio: float = 0.105
+    foot_half_width: float = 0.05
+    wait_time: float = 0.25
+    target_distance: float = 2.0
+    centre_pull: float = 0.25
+    arrive_distance: float = 0.6
+    neighbours: int = 32
+    neighbour_range: float = 3.0
+    reroute_after: float = 8.0
+    progress_step: float = 0.5
+    stair_rise: float = 0.05
+    planning_horizon: int = 3
+    min_step_ratio: float = 0.15
+    replan_turn_deg: float = 3.0
+    steering: SteeringParams = field(default_factory=SteeringParams)

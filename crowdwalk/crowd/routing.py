@@ -1,0 +1,194 @@
+"""The agents' routes: their polylines (:class:`Routes`, built once at set-up), progress
+along them and the steering target ahead, and re-routing around congestion.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from crowdwalk.crowd.navigation import RouteTable
+
+__all__ = ["Routes", "RouteProgress", "route_progress", "steering_targets"]
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(n > 1e-12, n, 1.0)
+
+
+class Routes:
+    """Route polylines of a population on a route graph.
+
+    One polyline per distinct (origin, destinations, start): the smoothed graph paths to
+    each destination in turn, concatenated, in one :class:`RouteTable`; with the route
+    nodes' arc lengths along each (for re-routing from the last node passed).
+
+    Parameters
+    ----------
+    graph : crowdwalk.routes.RouteGraph
+    population : crowdwalk.population.Population
+
+    Attributes
+    ----------
+    table : RouteTable
+    of_agent : (n,) int
+        Each agent's route at the start.
+    """
+
+    def __init__(self, graph, population) -> None:
+        self.graph = graph
+        self.table = RouteTable()
+        self._nodes: dict[int, tuple[list[str], np.ndarray]] = {}
+        self._edges: dict | None = None
+        keys: dict[tuple, int] = {}
+        n = len(population)
+        route = np.zeros(n, dtype=np.int64)
+        starts = population.route_start
+        for i in range(n):  # setup only: a dict lookup per agent
+            start = starts[i]
+            key = (str(population.origin[i]), tuple(population.destinations[i]),
+                   None if np.isnan(start).any() else tuple(start))
+            if key not in keys:
+                keys[key] = self._add(*key)
+            route[i] = keys[key]
+        self.of_agent = route
+
+    def _add(self, origin: str, destinations: tuple, start) -> int:
+        here, parts, nodes = origin, [], [origin]
+        for k, dest in enumerate(destinations):
+            if dest == here:
+                continue
+            kw = {"start": np.asarray(start)} if (k == 0 and start is not None) else {}
+            line = self.graph.path(here, dest, **kw)
+            parts.append(line if not parts else line[1:])
+            nodes += self.graph.route(here, dest)[1:]
+            here = dest
+        if not parts:  # already at the destination
+            p = self.graph.node_xy(origin) if start is None else np.asarray(start)
+            parts = [np.stack([p, p])]
+        rid = self.table.add(np.concatenate(parts))
+        self._remember_nodes(rid, nodes)
+        return rid
+
+    def _remember_nodes(self, rid: int, nodes: list[str]) -> None:
+        """Store a route's node names and their global arc lengths along it [m]."""
+        vs = self.table.xy[self.table.start[rid]:self.table.stop[rid] + 1]
+        ss = self.table.s[self.table.start[rid]:self.table.stop[rid] + 1]
+        at, k0 = [], 0
+        for v in nodes:  # nodes in route order; search forward only
+            d = np.linalg.norm(vs[k0:] - self.graph.node_xy(v), axis=1)
+            k0 += int(np.argmin(d))
+            at.append(ss[k0])
+        self._nodes[rid] = (nodes, np.asarray(at))
+
+    def _edge_samples(self) -> dict:
+        """Points about 1 m apart along every corridor of the route graph (k, 2) [m] and
+        its width [m], by edge (computed once: the graph does not change)."""
+        if self._edges is None:
+            self._edges = {}
+            for u, v, data in self.graph.graph.edges(data=True):
+                line = data["geometry"]
+                k = max(2, int(np.ceil(line.length)) + 1)
+                pts = np.array([line.interpolate(f, normalized=True).coords[0]
+                                for f in np.linspace(0, 1, k)])
+                self._edges[(u, v)] = (pts, data["width"])
+        return self._edges
+
+    def reroute(self, state, blocked: np.ndarray, *, t: float, walkers: np.ndarray) -> None:
+        """Agents ``blocked`` without progress for ``reroute_after`` seconds look for a
+        cheaper route from the last route node they passed, with every corridor's cost
+        raised by the time its current occupants (``walkers`` (w, 2) [m], the walking
+        agents' positions now) need to get through it (queue length over a specific flow
+        of 1.3 persons/(s·m), Weidmann 1993; converted to metres at 1.34 m/s). The agent
+        switches (``state``'s route fields) only when that route differs from its own
+        (rare: a Python loop over the blocked agents only)."""
+        import networkx as nx
+
+        st = state
+        g = self.graph.graph
+        tree = cKDTree(walkers)
+        extra = {}
+        for (u, v), (pts, width) in self._edge_samples().items():
+            near = tree.query_ball_point(pts, r=max(0.5 * width, 0.5))
+            count = len(set().union(*near)) if len(near) else 0
+            extra[(u, v)] = count / (1.3 * width) * 1.34
+
+        def weight(a, b, data):
+            return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)
+
+        for i in blocked:
+            st.progress_time[i] = t  # look again only after another ``reroute_after``
+            nodes, at = self._nodes.get(int(st.route[i]), ([], np.zeros(0)))
+            if len(nodes) < 2:
+                continue
+            passed = int(np.searchsorted(at, st.progress[i], side="right")) - 1
+            passed = min(max(passed, 0), len(nodes) - 2)
+            rest = nodes[passed:]
+            try:
+                alt = nx.shortest_path(g, rest[0], rest[-1], weight=weight)
+            except (nx.NetworkXNoPath, nx.NodeNotFound):
+                continue
+            if alt == rest or len(alt) < 2:
+                continue
+            # keep any later destinations of the route after the last node
+            line = np.vstack([st.pos1[i][None, :], self.graph.raw_path(alt)])
+            rid = self.table.add(line)
+            self._remember_nodes(rid, alt)
+            st.route[i] = rid
+            st.segment[i] = self.table.start[rid]
+            st.progress[i] = self.table.s0[rid]
+            st.best_progress[i] = -np.inf
+            st.reroutes[i] += 1
+
+
+@dataclass(frozen=True, eq=False)
+class RouteProgress:
+    """Where k deciding agents are along their routes: ``segment`` (k,) int, ``progress``
+    (k,) [m] global arc length, ``gained`` (k,) bool (a new best by ``progress_step``),
+    ``arrived`` (k,) bool."""
+
+    segment: np.ndarray
+    progress: np.ndarray
+    gained: np.ndarray
+    arrived: np.ndarray
+
+
+def route_progress(table: RouteTable, *, route: np.ndarray, segment: np.ndarray,
+                   best: np.ndarray, xy: np.ndarray, params) -> RouteProgress:
+    """Project agents at ``xy`` (k, 2) [m] onto their ``route`` (k,) from their current
+    ``segment`` (k,); progress beyond their ``best`` (k,) [m] by ``progress_step``
+    counts as getting on; within ``arrive_distance`` of the route's end (along it or
+    straight) they have arrived."""
+    seg, s, _ = table.project(route, segment, xy)
+    gained = s >= best + params.progress_step
+    end = table.xy[table.stop[route]]
+    arrived = ((table.s1[route] - s <= params.arrive_distance)
+               | (np.linalg.norm(end - xy, axis=1) <= params.arrive_distance))
+    return RouteProgress(seg, s, gained, arrived)
+
+
+def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
+                     xy: np.ndarray, heading: np.ndarray, radius: np.ndarray, clearance,
+                     params) -> tuple[np.ndarray, np.ndarray]:
+    """Steering targets (k, 2) [m] and unit route directions (k, 2) of agents at ``xy``.
+
+    Agents walk parallel to the route (a lane), pulled gently towards its centre line
+    (``centre_pull`` over ``target_distance``): steering at the centre-line point ahead
+    would funnel everybody into one file — unless that lane runs into a wall (the
+    ``clearance`` at the target or halfway is below the agent's ``radius``): then they
+    head for the centre line. An agent at its target keeps its ``heading`` [rad].
+    """
+    on_route = table.point_at(route, progress)
+    ahead = table.point_at(route, progress + params.target_distance)
+    target = xy + (ahead - on_route) + params.centre_pull * (on_route - xy)
+    blind = clearance(target) < radius
+    blind |= clearance(0.5 * (target + xy)) < radius
+    target[blind] = ahead[blind]
+    direction = _unit(target - xy)
+    still = np.linalg.norm(target - xy, axis=1) < 1e-9
+    heading_dir = np.column_stack([np.cos(heading), np.sin(heading)])
+    direction[still] = heading_dir[still]
+    return target, direction
