@@ -201,9 +201,10 @@ def test_events_and_waiting_areas_are_checked_and_not_yet_simulated():
 def test_measurement_lines_and_areas_analysed_with_pedpy(tmp_path):
     from crowdwalk.analysis import analyse_run
 
-    run_scenario(SCENARIOS / "arrivals_density.yaml", tmp_path,
-                 overrides=RunOverrides(max_agents=25, poses=False, duration=30.0))
-    result = analyse_run(tmp_path)
+    summary = run_scenario(SCENARIOS / "arrivals_density.yaml", tmp_path,
+                           overrides=RunOverrides(max_agents=25, poses=False, duration=30.0))
+    result = summary["measurement"]  # a run with measurement lines or areas analyses them
+    assert analyse_run(tmp_path, plots=False) == result
     out = tmp_path / "analysis"
     for name in ("area_middle.csv", "area_middle.png", "line_gate.csv", "line_gate.png"):
         assert (out / name).stat().st_size > 0

@@ -29,6 +29,7 @@ Ticks are aligned with output frames so frames are exact interpolations.
 from __future__ import annotations
 
 import time as _time
+from dataclasses import replace
 
 import numpy as np
 
@@ -39,7 +40,7 @@ from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import step_durations
+from crowdwalk.crowd.speed import step_durations, time_gap_speed
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
@@ -91,6 +92,7 @@ class CrowdSimulation:
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
         self.min_step_time = 1.0 / cadence_at(population.free_speed)
+        self.step_speed = population.free_speed.copy()  # speed of the step decided [m/s]
         self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
@@ -187,8 +189,9 @@ class CrowdSimulation:
                   foot_half_width=self.params.foot_half_width)
 
     def _durations(self, a: np.ndarray, plan: StepPlan) -> np.ndarray:
-        return step_durations(plan.length, plan.rise, free_speed=self.pop.free_speed[a],
-                              min_step_time=self.min_step_time[a],
+        return step_durations(plan.length, plan.rise, free_speed=self.step_speed[a],
+                              min_step_time=np.where(plan.shortened, self.min_step_time[a],
+                                                     0.0),
                               stair_rise=self.params.stair_rise)
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
@@ -227,6 +230,18 @@ class CrowdSimulation:
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te)
         self.wall_steering += _time.perf_counter() - w0
+        if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
+            v = time_gap_speed(position=pos, direction=choice.direction,
+                               radius=self.radius[idx], others=nbs.now,
+                               others_radius=nbs.radius, valid=nbs.valid,
+                               free_speed=self.pop.free_speed[idx], time_gap=prm.time_gap)
+            self.step_speed[idx] = np.maximum(v, 0.05)
+            # a slower step is a shorter one: what that speed covers in one step at the
+            # measured cadence for it (Fukuchi et al. 2018 fit)
+            reach = v / cadence_at(np.maximum(v, 0.1))
+            choice = replace(choice, free_length=np.where(
+                v < self.pop.free_speed[idx], np.minimum(choice.free_length, reach),
+                choice.free_length))
         plan = StepPlan.standing(idx.size)
         mv = np.flatnonzero(choice.move)
         if mv.size:
