@@ -13,6 +13,7 @@ LOG="$VENV/install.log"
 # administrator). Add a feature's packages here with a comment saying what needs them.
 APT_PACKAGES=(
   libegl1 libegl-mesa0 libgl1-mesa-dri  # off-screen rendering (pyvista/VTK over EGL + Mesa)
+  chromium  # headless browser of the `crowdwalk view --web` test (tests/viz/test_web.py)
 )
 
 say() { echo "install.sh: $*"; }
@@ -67,9 +68,10 @@ pip_install() {  # one line per package pip fetches; the whole pip output goes t
   say "installing crowdwalk and its dependencies into $VENV (a few minutes; log: $LOG)"
   "$VENV/bin/python" -m pip install --quiet --upgrade pip >"$LOG" 2>&1 ||
     { tail -n 20 "$LOG" >&2; exit 1; }
-  if ! "$VENV/bin/python" -m pip install --progress-bar off -e ".[dev]" 2>&1 | tee -a "$LOG" |
-       { grep -E --line-buffered '^(Collecting|Successfully installed)' | cut -c1-100 |
-         sed -u 's/^/  /' || true; }; then
+  if ! PYTHONUNBUFFERED=1 "$VENV/bin/python" -m pip install --progress-bar off -e ".[dev]" 2>&1 |
+       tee -a "$LOG" |
+       { grep -E --line-buffered '^(Collecting|Successfully installed)' |
+         sed -u 's/^\(.\{1,98\}\).*$/  \1/' || true; }; then
     say "pip failed; the end of $LOG:" >&2; tail -n 20 "$LOG" >&2; exit 1
   fi
   # embreex: faster mesh ray queries where a wheel exists; rtree (a base dependency) otherwise.

@@ -1,10 +1,11 @@
-"""Off-screen render speed of the viewer for large crowds (issue 6: >= 10 frames/s for
-1,000 agents at 640x480).
+"""Off-screen render speed of the viewer for large crowds (issues 6 and 18: >= 10 frames/s
+for 1,000 walkers at 640x480).
 
-Builds a synthetic crowd (``crowdwalk.viz.synthetic_crowd``: 20-joint stick figures and
-their footsteps), or uses a run folder given with ``--run``, and times whole frames the
-way ``crowdwalk render`` produces them: move every agent and footprint to the next time
-(``SceneView.set_time``), render, read the image back.
+Builds a synthetic crowd (``crowdwalk.viz.synthetic_crowd``: 20-joint H-Anim skeletons
+drawn as solid bodies, and their footsteps), or uses a run folder given with ``--run``,
+and times whole frames the way ``crowdwalk render`` produces them: move every body and
+footprint to the next time (``SceneView.set_time``: bodies, fading footprints, overlays),
+render, read the image back.
 
     python benchmarks/bench_render.py [--agents 100 1000 2000] [--frames 40] [--run DIR]
 """
@@ -39,7 +40,7 @@ def bench(scene, frames: int, size=(640, 480)) -> dict:
             plotter.screenshot(return_img=True)
             d = time.perf_counter()
             update, draw, read = update + b - a, draw + c - b, read + d - c
-        triangles = view.figures.mesh.n_cells if view.figures is not None else 0
+        triangles = view.bodies.mesh.n_cells if view.bodies is not None else 0
         footprints = view.footprints.mesh.n_cells if view.footprints is not None else 0
     total = update + draw + read
     return dict(update=1e3 * update / frames, render=1e3 * draw / frames,
@@ -65,7 +66,7 @@ def main() -> None:
     import shapely
 
     table = Table(title="crowdwalk render: off-screen frames at 640x480 (EGL, Mesa llvmpipe)")
-    for column in ("scene", "agents", "figure tris", "footprint tris", "update ms",
+    for column in ("scene", "walkers", "body tris", "footprint tris", "update ms",
                    "render ms", "read-back ms", "frames/s"):
         table.add_column(column, justify="right" if column != "scene" else "left")
     rows = []

@@ -70,12 +70,13 @@ def located(scenario, exc: InputError, default: tuple = ()) -> InputError:
 
 # --- memory ---------------------------------------------------------------------------
 
-# Bytes a run holds per agent (struct-of-arrays state, planner cache, steering index and the
-# pose batch; measured as peak RSS growth / agents on stadium_egress, 1,000 vs 5,000 agents,
-# rounded up) and per terrain grid node (heights, noise field and filter work arrays).
-BYTES_PER_AGENT = 200_000
+# Bytes a run holds per agent: `python benchmarks/bench_memory.py` measures ~3 kB of peak-RSS
+# growth per agent (stadium_egress, 100 -> 1,000 agents, poses on, 4 s); budgeted at 20 kB for
+# the planner cache and buffers a long run accumulates. Per terrain grid node: heights, the
+# noise field and the filter's work arrays (8 float64 arrays).
+BYTES_PER_AGENT = 20_000
 BYTES_PER_GRID_NODE = 64
-MAX_AGENTS = 1_000_000  # beyond any machine's memory for a run, whatever it reports
+MAX_AGENTS = 20_000  # 4x the largest crowd benchmarked (bench_crowd.py); setup grows beyond
 MAX_ROUTE_NODES = 10_000  # route nodes (and edges) per scenario: validation within seconds
 
 
@@ -98,39 +99,46 @@ def _gib(n: float) -> str:
     return f"{n / 2**30:.1f} GiB"
 
 
+def _grid_nodes(f) -> float:
+    """Nodes of a rough-terrain grid, from its spec (a .npy file: from its header only)."""
+    if f.amplitude is not None:
+        return (f.size[0] / f.cell + 1) * (f.size[1] / f.cell + 1)
+    if f.heights is not None:
+        return len(f.heights) * max((len(r) for r in f.heights), default=0)
+    if f.heights_file.endswith(".npy") and os.path.exists(f.heights_file):
+        import numpy as np
+
+        return math.prod(np.load(f.heights_file, mmap_mode="r").shape)
+    return 0  # a CSV file: its size bounds its array
+
+
 def check_resources(scenario, memory: int | None = None) -> None:
     """Refuse agent counts and terrain grids that would not fit in ``memory`` [bytes]
     (default: what is available now), before any of them is allocated."""
     memory = available_memory() if memory is None else memory
     budget = memory // 2
     for i, f in enumerate(scenario.terrain.features):
-        if f.type != "rough":
+        nodes = _grid_nodes(f) if f.type == "rough" else 0
+        if nodes * BYTES_PER_GRID_NODE <= budget:
             continue
-        if f.amplitude is not None:
-            nodes = (f.size[0] / f.cell + 1) * (f.size[1] / f.cell + 1)
-        elif f.heights is not None:
-            nodes = len(f.heights) * max((len(r) for r in f.heights), default=0)
-        else:
-            continue  # a heights file: its array is checked when it is read
-        need = nodes * BYTES_PER_GRID_NODE
-        if need > budget:
-            min_cell = f.cell * math.sqrt(need / budget)
-            raise InputError(
-                f"{scenario.where(('terrain', 'features', i, 'cell'))}: terrain.features[{i}]."
-                f"cell must be ≥ {min_cell:.3g} m for this {f.size[0]:g} × {f.size[1]:g} m grid "
-                f"({nodes:.3g} nodes need ~{_gib(need)}; {_gib(memory)} available); "
-                f"got {f.cell:g}." if f.amplitude is not None else
-                f"{scenario.where(('terrain', 'features', i, 'heights'))}: terrain.features[{i}]."
-                f"heights must have at most {budget // BYTES_PER_GRID_NODE:,} values here; "
-                f"got {nodes:,}.")
+        fit = f"at most {budget // BYTES_PER_GRID_NODE:,} grid nodes ({_gib(memory)} available)"
+        if f.amplitude is None:
+            key = "heights" if f.heights is not None else "heights_file"
+            raise InputError(f"{scenario.where(('terrain', 'features', i, key))}: "
+                             f"terrain.features[{i}].{key} must have {fit}; got {nodes:,.0f}.")
+        min_cell = f.cell * math.sqrt(nodes * BYTES_PER_GRID_NODE / budget)
+        raise InputError(f"{scenario.where(('terrain', 'features', i, 'cell'))}: "
+                         f"terrain.features[{i}].cell must be ≥ {min_cell:.3g} m for a "
+                         f"{f.size[0]:g} × {f.size[1]:g} m grid of {fit} [m]; got {f.cell:g}.")
     total = sum(g.count for g in scenario.groups)
     fit = min(MAX_AGENTS, budget // BYTES_PER_AGENT)
     if total > fit:
         i = max(range(len(scenario.groups)), key=lambda k: scenario.groups[k].count)
+        why = ("the largest crowd crowdwalk sets up in bounded time" if fit == MAX_AGENTS else
+               f"~{BYTES_PER_AGENT // 1000} kB each, {_gib(memory)} available")
         raise InputError(
             f"{scenario.where(('groups', i, 'count'))}: groups[{i}].count: the scenario's "
-            f"agents must number at most {fit:,} on this machine (~{BYTES_PER_AGENT // 1000} kB "
-            f"each, {_gib(memory)} available); got {total:,} in all.")
+            f"agents must number at most {fit:,} ({why}); got {total:,} in all.")
 
 
 def world_and_population(scenario):

@@ -367,7 +367,9 @@ def gait_report_command(
 
 # --- viewer (issue 6): view, render -------------------------------------------------
 
-_COLOR_HELP = "Colour footprints by: energy, planner or agent."
+_COLOR_HELP = "Colour by: energy (footprints), group, planner, style or agent."
+_TARGETS_HELP = ("Run folders (side by side, linked), a `compare` output folder, or a scenario "
+                 "YAML (world only).")
 _GL_MISSING = (
     "off-screen rendering needs an EGL/GL stack; install the Debian packages "
     "libegl1 libegl-mesa0 libgl1-mesa-dri (see install.sh)."
@@ -377,32 +379,41 @@ _GL_MISSING = (
 @app.command()
 @friendly_errors
 def view(
-    target: Path = typer.Argument(..., help="Run folder, or a scenario YAML (world only)."),
+    targets: list[Path] = typer.Argument(..., help=_TARGETS_HELP),
     follow: int | None = typer.Option(None, "--follow", help="Agent id the camera follows."),
     color: str = typer.Option("energy", "--color", help=_COLOR_HELP),
     time: float | None = typer.Option(None, "--time", help="Start at this simulated time [s]."),
     trail: float | None = typer.Option(
         None, "--trail", help="Show only footprints of the last TRAIL seconds [s]."
     ),
+    web: bool = typer.Option(False, "--web", help="Serve the viewer to a web browser."),
+    port: int = typer.Option(8080, "--port", help="--web: TCP port (0: any free one)."),
 ) -> None:
     """Open the interactive viewer (keys: space play/pause, ←/→ one frame, ↑/↓ speed,
-    c colour, f follow)."""
+    c colour, f follow); with --web, in a browser."""
     from crowdwalk.viz.headless import display_problem
 
-    problem = display_problem()
+    problem = None if web else display_problem()
     if problem:
-        _fail(f"view needs a window, but {problem}; "
-              "use `crowdwalk render` for pictures and movies off-screen.", 2)
-    _warn_incomplete(target)
-    from crowdwalk.viz import Scene
+        _fail(f"view needs a window, but {problem}; use `crowdwalk view --web` or "
+              "`crowdwalk render` for pictures and movies off-screen.", 2)
+    for target in targets:
+        _warn_incomplete(target)
+    from crowdwalk.viz import load_scenes
 
-    Scene.load(target, color=color, follow=follow, footprint_trail=trail).show(time=time)
+    scenes = load_scenes(targets, color=color, follow=follow, footprint_trail=trail)
+    if web:
+        from crowdwalk.viz.web import serve
+
+        serve(scenes, port=port, time=time, announce=typer.echo)
+    else:
+        scenes[0].show(time=time, beside=scenes[1:])
 
 
 @app.command()
 @friendly_errors
 def render(
-    target: Path = typer.Argument(..., help="Run folder, or a scenario YAML (world only)."),
+    targets: list[Path] = typer.Argument(..., help=_TARGETS_HELP),
     out: Path = typer.Option(..., "--out", help="Output file: .png, .gif or .mp4."),
     time: float | None = typer.Option(None, "--time", help="PNG: simulated time [s]."),
     start: float | None = typer.Option(None, "--start", help="Movie: first time [s]."),
@@ -429,11 +440,12 @@ def render(
     if suffix != ".png" and time is not None:
         raise invalid("render", "time", "unset for a movie (use --start/--end) [s]", time)
     from crowdwalk.cli_conventions import check_time
-    from crowdwalk.viz import Scene
+    from crowdwalk.viz import load_scenes
     from crowdwalk.viz.headless import gl_available
 
-    _warn_incomplete(target)
-    scene = Scene.load(target, color=color, follow=follow, footprint_trail=trail)
+    for target in targets:
+        _warn_incomplete(target)
+    scene, *beside = load_scenes(targets, color=color, follow=follow, footprint_trail=trail)
     if scene.poses is not None:  # a run: from its start (t = 0) to its last frame
         t_range = (min(scene.time_range[0], 0.0), scene.time_range[1])
         for name, value in (("time", time), ("start", start), ("end", end)):
@@ -441,19 +453,20 @@ def render(
     if not gl_available():
         _fail(_GL_MISSING, 2)
     if suffix == ".png":
-        scene.render_png(out, time=time, size=width_height)
+        scene.render_png(out, time=time, size=width_height, beside=beside)
     else:
         from rich.progress import Progress
 
         with Progress(transient=True) as bar:
             task = bar.add_task(f"rendering {out.name}", total=None)
             scene.render_movie(
-                out, start=start, end=end, fps=fps, size=width_height, speed=speed,
+                out, start=start, end=end, fps=fps, size=width_height, speed=speed, beside=beside,
                 progress=lambda done, total: bar.update(task, completed=done, total=total),
             )
     what = "the picture" if suffix == ".png" else "the movie"
+    shown = " ".join(str(t) for t in targets)
     typer.echo(f"wrote {what} {out}; next: open it in an image viewer"
-               + (f", or `crowdwalk view {target}` to explore" if target.is_dir() else ""))
+               + (f", or `crowdwalk view {shown}` to explore" if targets[0].is_dir() else ""))
 
 
 # --- gait engines against people (issue 13): gait-compare ---------------------------

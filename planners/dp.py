@@ -11,6 +11,7 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import NamedTuple
 
+import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables, Structure
@@ -51,20 +52,6 @@ def _depth_indices(struct: Structure):
     return out
 
 
-def dp_legal(tables: StepTables) -> list[np.ndarray]:
-    """Per depth, whether a transition (m_{k-1}, j_{k-1}) -> j_k is legal.
-
-    Shapes (A, M, P, J), bool; computed once per set of tables and cached on it.
-    """
-    cached = tables.__dict__.get("_dp_legal")
-    if cached is None:
-        cached = [valid & np.take(tables.step_legal, step, axis=1)
-                  & np.take(tables.swing_ok, swing, axis=1)
-                  for step, swing, valid, _, _ in _depth_indices(tables.struct)]
-        tables.__dict__["_dp_legal"] = cached
-    return cached
-
-
 def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | None = None):
     """The legal configuration of least total ``step_cost`` for each agent.
 
@@ -87,38 +74,72 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     J, n = st.J, st.n
     agents = np.arange(tables.neutral.size) if agents is None else agents
     B = agents.size
-    step_cost = np.round(step_cost, 10)  # ties broken alike whatever the offsets
-    value = np.zeros((B, 1, 1))  # (B, M_{k-1}, P_k) over (m_{k-1}, j_{k-1})
-    choices = []
+    step_cost = np.ascontiguousarray(np.round(step_cost, 10))  # ties broken alike
     states = transitions = 0
-    legal = dp_legal(tables)
-    every = B == tables.neutral.size and np.array_equal(agents, np.arange(B))
-    for k, (step, _, valid, m_next, j_next) in enumerate(_depth_indices(st), start=1):
+    for _, _, valid, _, _ in _depth_indices(st):
         states += int(valid[..., 0].sum())
         transitions += int(valid.sum())
-        # illegal transitions cost +inf; the step cost broadcasts over j_{k-1}
-        total = value[..., None] + np.take(
-            step_cost, step[:, :1, :].reshape(step.shape[0], -1), axis=1)[:, :, None, :]
-        total[~(legal[k - 1] if every else legal[k - 1][agents])] = np.inf
-        best_prev = np.argmin(total, axis=2)  # over j_{k-1}: (B, M, J)
-        best = total.min(axis=2)
-        M = step.shape[0]
-        new = np.full((B, M + J - 1, J), np.inf)
-        new[:, m_next, j_next] = best
-        arg = np.zeros((B, M + J - 1, J), dtype=np.int64)
-        arg[:, m_next, j_next] = best_prev
-        choices.append(arg)
-        value = new
-        if k == n:
-            break
-    flat = value.reshape(B, -1)
-    last = np.argmin(flat, axis=1)
-    found = np.isfinite(flat[np.arange(B), last])
-    m_end, j_end = np.divmod(last, J)
     configs = np.zeros((B, n), dtype=np.int64)
-    m_cur, j_cur = m_end, j_end
-    for k in range(n, 0, -1):
-        configs[:, k - 1] = j_cur
-        jp = choices[k - 1][np.arange(B), m_cur, j_cur]
-        m_cur, j_cur = m_cur - j_cur, jp
+    found = np.zeros(B, dtype=np.bool_)
+    _cheapest(tables.step_legal, tables.swing_ok, step_cost, agents.astype(np.int64), J,
+              np.asarray(st.step_offset, dtype=np.int64),
+              np.asarray(st.swing_offset, dtype=np.int64),
+              np.asarray(st.swing_strides, dtype=np.int64), configs, found)
     return configs, found, DPWork(states, transitions)
+
+
+@nb.njit(cache=True, nogil=True)
+def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
+              configs, found):
+    """The DP of :func:`cheapest`, one agent at a time: per depth k, the value of each
+    state (m_{k-1}, j_{k-1}) plus each step j_k, the least over j_{k-1} (the first on
+    ties), then the way back from the least final state."""
+    B, n = configs.shape
+    M_last = (J - 1) * n + 1
+    value = np.empty((M_last, J))
+    new = np.empty((M_last, J))
+    choice = np.zeros((n, M_last, J), dtype=np.int64)
+    for b in range(B):
+        a = agents[b]
+        value[0, 0] = 0.0
+        for k in range(1, n + 1):
+            M = (J - 1) * (k - 1) + 1
+            P = 1 if k == 1 else J
+            new[:M + J - 1, :] = np.inf
+            choice[k - 1, :M + J - 1, :] = 0
+            for m in range(M):
+                for j in range(J):
+                    step = step_off[k - 1] + m * J + j
+                    cost = step_cost[b, step]
+                    step_ok = step_legal[a, step]
+                    best = np.inf
+                    arg = 0
+                    for jp in range(P):
+                        if k == 1:
+                            ok = step_ok and swing_ok[a, swing_off[0] + j]
+                        else:
+                            m2 = m - jp
+                            ok = (step_ok and 0 <= m2 <= (J - 1) * (k - 2)
+                                  and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
+                                               + jp + j])
+                        total = value[m, jp] + cost if ok else np.inf
+                        if total < best:
+                            best = total
+                            arg = jp
+                    new[m + j, j] = best
+                    choice[k - 1, m + j, j] = arg
+            M_next = M + J - 1
+            value[:M_next, :] = new[:M_next, :]
+        best = np.inf
+        last_m, last_j = 0, 0
+        for m in range(M_last):
+            for j in range(J):
+                if value[m, j] < best:
+                    best = value[m, j]
+                    last_m, last_j = m, j
+        found[b] = best < np.inf
+        m_cur, j_cur = last_m, last_j
+        for k in range(n, 0, -1):
+            configs[b, k - 1] = j_cur
+            jp = choice[k - 1, m_cur, j_cur]
+            m_cur, j_cur = m_cur - j_cur, jp

@@ -48,6 +48,12 @@ BASSETT = (8.6, 2.9, 70.0)
 MINETTI = {-0.45: 3.46, -0.10: 0.81, 0.0: 1.64, 0.45: 17.33}
 
 
+def _config(weights: EnergyWeights) -> PlannerConfig:
+    """Eqs. 1-4 alone (``step_model="paper"``): the constants fitted here are theirs,
+    without the step-frequency term of the normal-mode step model."""
+    return PlannerConfig(weights=weights, step_model="paper")
+
+
 def per_step(config: PlannerConfig, leg: Leg, length: float, rise: float, rate: float):
     """Eq. 4 terms of one step [J/kg]: (alpha En + gamma Ej, beta Ev) at ``rate`` steps/min."""
     z = np.zeros(1)
@@ -61,7 +67,7 @@ def per_step(config: PlannerConfig, leg: Leg, length: float, rise: float, rate: 
 
 def fit_stairs(leg: Leg) -> tuple[float, float]:
     """beta and down_ratio from Teh & Aziz 2002."""
-    base = PlannerConfig(weights=EnergyWeights(beta=1.0, down_ratio=1.0))
+    base = _config(weights=EnergyWeights(beta=1.0, down_ratio=1.0))
     up_meas = TEH_UP[0] / TEH_UP[1] * J_PER_ML
     down_meas = TEH_DOWN[0] / TEH_DOWN[1] * J_PER_ML
     rest_up, ev_up, _ = per_step(base, leg, GOING, TEH_RISE, TEH_UP[1])
@@ -83,7 +89,7 @@ def validate_stairs(leg: Leg, weights: EnergyWeights) -> None:
     print("Validation, Bassett et al. 1997 (70 steps/min, gross): step down / step up")
     for rise in (0.17, 0.20):
         for name, w in (("hand-set", EnergyWeights()), ("fitted", weights)):
-            cfg = PlannerConfig(weights=w)
+            cfg = _config(weights=w)
             up = per_step(cfg, leg, GOING, rise, rate)[2]
             down = per_step(cfg, leg, GOING, -rise, rate)[2]
             print(f"  riser {rise:.2f} m, {name:<8}: model {down / up:.3f} (up {up:.2f}, down "
@@ -95,7 +101,7 @@ def validate_stairs(leg: Leg, weights: EnergyWeights) -> None:
 def validate_slopes(leg: Leg, weights: EnergyWeights) -> None:
     print("Validation, Minetti et al. 2002 (cost per metre on slopes; 0.4 m steps, 100 /min):")
     for name, w in (("hand-set", EnergyWeights()), ("fitted", weights)):
-        cfg = PlannerConfig(weights=w)
+        cfg = _config(weights=w)
         cost = {g: per_step(cfg, leg, 0.4, g * 0.4, 100.0)[2] / 0.4 for g in MINETTI}
         print(f"  {name:<8}: +45 % / -45 % model {cost[0.45] / cost[-0.45]:.2f}, measured "
               f"{MINETTI[0.45] / MINETTI[-0.45]:.2f}; -10 % / level model "
@@ -109,7 +115,7 @@ def preferred_step(leg: Leg, weights: EnergyWeights) -> float:
     from planners import flat_efficiency
 
     lengths = np.linspace(0.35, 0.95, 601)
-    cfg = PlannerConfig(weights=weights)
+    cfg = _config(weights=weights)
     return float(lengths[np.argmax(flat_efficiency(leg, 1.34, lengths, cfg))])
 
 

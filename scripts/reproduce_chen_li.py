@@ -24,9 +24,10 @@ import numpy as np
 from crowdwalk.plots import plot_efficiency_curve, plot_plan
 from planners import EnergyWeights, GroundProfile, Leg, PlannerConfig, flat_efficiency, plan
 
-#: Chen & Li's criterion throughout: Eq. 5 over the n planned steps, the rigid grid of
-#: §6.2 and Eq. 2 as printed.
-PAPER = PlannerConfig(terminal_cost=False, snap=False, weights=EnergyWeights(vertical="paper"))
+#: Chen & Li's model throughout: Eq. 5 over the n planned steps, the rigid grid of
+#: §6.2, Eqs. 1-4 alone (no step-frequency term) and Eq. 2 as printed.
+PAPER = PlannerConfig(terminal_cost=False, snap=False, step_model="paper",
+                      weights=EnergyWeights(vertical="paper"))
 
 
 def figure_2(out: Path) -> None:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["project_to_pixels", "oblique_view", "follow"]
+__all__ = ["project_to_pixels", "oblique_view", "follow", "frame"]
 
 
-def project_to_pixels(plotter, points: np.ndarray) -> np.ndarray:
+def project_to_pixels(plotter, points: np.ndarray, renderer=None) -> np.ndarray:
     """Pixel coordinates of world points in the plotter's current image.
 
     Parameters
@@ -15,6 +15,9 @@ def project_to_pixels(plotter, points: np.ndarray) -> np.ndarray:
     plotter : pyvista.Plotter
     points : (n, 3) float
         World points [m].
+    renderer : vtkRenderer, optional
+        The renderer (and viewport) that draws them; the plotter's current one when
+        omitted.
 
     Returns
     -------
@@ -22,8 +25,11 @@ def project_to_pixels(plotter, points: np.ndarray) -> np.ndarray:
         Column and row [px] (row 0 at the top, as in ``screenshot()`` images); points
         behind the camera get NaN.
     """
-    width, height = plotter.window_size
-    camera = plotter.renderer.GetActiveCamera()
+    renderer = plotter.renderer if renderer is None else renderer
+    window_w, window_h = plotter.window_size
+    vx0, vy0, vx1, vy1 = renderer.GetViewport()
+    width, height = (vx1 - vx0) * window_w, (vy1 - vy0) * window_h
+    camera = renderer.GetActiveCamera()
     matrix = camera.GetCompositeProjectionTransformMatrix(width / height, -1.0, 1.0)
     m = np.array([[matrix.GetElement(i, j) for j in range(4)] for i in range(4)])
     pts = np.column_stack([np.asarray(points, dtype=float).reshape(-1, 3), np.ones(len(points))])
@@ -31,8 +37,8 @@ def project_to_pixels(plotter, points: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         ndc = clip[:, :2] / clip[:, 3:4]
     ndc[clip[:, 3] <= 0] = np.nan
-    col = (ndc[:, 0] + 1.0) * 0.5 * width
-    row = height - (ndc[:, 1] + 1.0) * 0.5 * height
+    col = vx0 * window_w + (ndc[:, 0] + 1.0) * 0.5 * width
+    row = window_h - vy0 * window_h - (ndc[:, 1] + 1.0) * 0.5 * height
     return np.column_stack([col, row])
 
 
@@ -57,10 +63,20 @@ def oblique_view(bounds, elevation: float = 0.6, azimuth: float = -2.2):
     return [tuple(centre + distance * direction), tuple(centre), (0.0, 0.0, 1.0)]
 
 
-def follow(plotter, target: np.ndarray) -> None:
-    """Move the camera with ``target`` (3,) [m], keeping its current offset (so a user can
-    still orbit around the followed agent)."""
-    camera = plotter.camera
+def follow(renderer, target: np.ndarray) -> None:
+    """Move the camera of ``renderer`` (or a plotter) with ``target`` (3,) [m], keeping its
+    current offset (so a user can still orbit around the followed agent)."""
+    camera = renderer.camera
     shift = np.asarray(target, dtype=float) - np.asarray(camera.focal_point)
     camera.position = tuple(np.asarray(camera.position) + shift)
     camera.focal_point = tuple(np.asarray(target, dtype=float))
+
+
+def frame(renderer, bounds, elevation: float = 0.6, azimuth: float = -2.2,
+          zoom: float = 1.5) -> None:
+    """Look at the box ``bounds`` (6,) [m] obliquely (see :func:`oblique_view`) from as
+    close as its bounding sphere fits the renderer's viewport, then ``zoom`` in (the
+    sphere is a loose fit for a flat scene)."""
+    renderer.camera_position = oblique_view(bounds, elevation=elevation, azimuth=azimuth)
+    renderer.ResetCamera(*np.asarray(bounds, dtype=float))
+    renderer.GetActiveCamera().Zoom(zoom)

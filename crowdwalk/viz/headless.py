@@ -97,13 +97,15 @@ def gl_available(timeout: float = 60.0) -> bool:
 
 
 @contextlib.contextmanager
-def offscreen_plotter(size: tuple[int, int] = (1280, 800)):
-    """An off-screen :class:`pyvista.Plotter` of ``size`` (width, height) [px], closed on
-    exit; configures EGL first when there is no display."""
+def offscreen_plotter(size: tuple[int, int] = (1280, 800), columns: int = 1):
+    """An off-screen :class:`pyvista.Plotter` of ``size`` (width, height) [px] with
+    ``columns`` side-by-side subplots, closed on exit; configures EGL first when there is
+    no display."""
     import pyvista as pv
 
     configure_offscreen()
-    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    plotter = pv.Plotter(off_screen=True, window_size=list(size), shape=(1, columns),
+                         border=False)
     try:
         yield plotter
     finally:

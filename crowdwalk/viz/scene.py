@@ -1,14 +1,16 @@
 """The viewer's scene: one code path for the interactive window, the CLI and notebooks.
 
-:class:`Scene` holds what is shown (world, poses, footsteps) and builds a
-:class:`~crowdwalk.viz.view.SceneView` on any pyvista plotter — an interactive window
-(:meth:`Scene.show`) or an off-screen one (:meth:`Scene.render_png`,
-:meth:`Scene.render_movie`).
+:class:`Scene` holds what is shown (world, poses, footsteps, who the walkers are) and
+builds a :class:`~crowdwalk.viz.view.SceneView` on any pyvista plotter — an interactive
+window (:meth:`Scene.show`) or an off-screen one (:meth:`Scene.render_png`,
+:meth:`Scene.render_movie`). Every one of them takes ``beside=[other scenes]`` to show
+runs side by side, linked in time and camera (:func:`load_scenes` opens several run
+folders, or a ``crowdwalk compare`` output folder, that way).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,9 +21,11 @@ from crowdwalk.errors import invalid
 from crowdwalk.viz.footprints import COLOR_FIELDS, Footsteps
 from crowdwalk.viz.headless import offscreen_plotter
 from crowdwalk.viz.sources import PoseSource, RunPoses, TrajectoryPoses
-from crowdwalk.viz.view import SceneView
+from crowdwalk.viz.view import SceneView, attach_views
+from crowdwalk.viz.walkers import Walkers
 
-__all__ = ["Scene", "SceneView", "COLOR_FIELDS", "MOVIE_SUFFIXES", "parse_size"]
+__all__ = ["Scene", "SceneView", "COLOR_FIELDS", "MOVIE_SUFFIXES", "load_scenes", "parse_size",
+           "run_folders"]
 
 MOVIE_SUFFIXES = (".gif", ".mp4")
 
@@ -54,8 +58,11 @@ class Scene:
         Agents' joint positions per output frame.
     footsteps : Footsteps, optional
         Every foot placement of the run.
-    color : {"energy", "planner", "agent"}
-        What colours the footprints.
+    walkers : Walkers, optional
+        Group, planner and style of each walker (from the footsteps when omitted).
+    color : {"energy", "group", "planner", "style", "agent"}
+        What colours footprints (energy, or the walker's category) and bodies (the
+        category; group in energy mode).
     follow : int, optional
         Agent id the camera follows.
     footprint_trail : float, optional
@@ -71,6 +78,7 @@ class Scene:
     walkable_area: object | None = None
     poses: PoseSource | None = None
     footsteps: Footsteps = field(default_factory=Footsteps.empty)
+    walkers: Walkers | None = None
     color: str = "energy"
     follow: int | None = None
     footprint_trail: float | None = None
@@ -90,6 +98,8 @@ class Scene:
                               self.follow)
         if self.walkable_area is None and self.routes is not None:
             self.walkable_area = getattr(self.routes, "walkable_area", None)
+        if self.walkers is None:
+            self.walkers = Walkers.from_footsteps(self.footsteps)
 
     # --- construction ---------------------------------------------------------------
 
@@ -126,10 +136,10 @@ class Scene:
             Footsteps.from_table(run.footsteps()) if run.footsteps_path.exists()
             else Footsteps.empty()
         )
-        options.setdefault("title", Path(path).name)
+        options.setdefault("title", _run_title(run))
         return cls(
             terrain=terrain, routes=routes, walkable_area=run.walkable_area(), poses=poses,
-            footsteps=footsteps, **options,
+            footsteps=footsteps, walkers=Walkers.from_run(run, footsteps), **options,
         )
 
     @classmethod
@@ -162,21 +172,27 @@ class Scene:
 
     # --- views ----------------------------------------------------------------------
 
-    def attach(self, plotter: pv.Plotter) -> SceneView:
-        """Add this scene's actors to ``plotter``; returns the view that animates them."""
-        return SceneView(self, plotter)
+    def attach(self, plotter: pv.Plotter, beside: Sequence[Scene] = ()) -> SceneView:
+        """Add this scene's actors (and those of ``beside``, each in its own column of a
+        plotter with ``shape=(1, 1 + len(beside))``) to ``plotter``; returns the lead view
+        that animates them all."""
+        return attach_views([self, *beside], plotter)
 
-    def show(self, time: float | None = None, size: tuple[int, int] = (1280, 800)) -> None:
+    def show(self, time: float | None = None, size: tuple[int, int] = (1280, 800),
+             beside: Sequence[Scene] = ()) -> None:
         """Open an interactive window of ``size`` [px] at ``time`` [s] (default: the start;
-        needs a display). Keys: space play/pause, Right/Left one frame, Up/Down speed,
-        c colour, f follow on/off."""
-        plotter = pv.Plotter(off_screen=False, window_size=size, title=f"crowdwalk — {self.title}")
-        view = self.attach(plotter)
-        view.set_time(self.time_range[0] if time is None else time)
+        needs a display), with ``beside`` scenes linked side by side. Keys: space
+        play/pause, Right/Left one frame, Up/Down speed, c colour, f follow on/off."""
+        titles = " | ".join(s.title for s in (self, *beside))
+        plotter = pv.Plotter(off_screen=False, window_size=size, shape=(1, 1 + len(beside)),
+                             border=False, title=f"crowdwalk — {titles}")
+        view = self.attach(plotter, beside)
+        view.set_time(view.playback.start if time is None else time)
         view.install_controls()
         plotter.show()
 
-    def image(self, time: float | None = None, size: tuple[int, int] = (1280, 800)):
+    def image(self, time: float | None = None, size: tuple[int, int] = (1280, 800),
+              beside: Sequence[Scene] = ()):
         """Render one instant off-screen and return it (e.g. to show in a notebook).
 
         Parameters
@@ -185,27 +201,30 @@ class Scene:
             Simulated time [s]; the end of the run when omitted.
         size : (int, int)
             Image width and height [px].
+        beside : sequence of Scene
+            Scenes shown side by side with this one, at the same time and camera.
 
         Returns
         -------
         (height, width, 3) uint8
             RGB image.
         """
-        t = self.time_range[1] if time is None else float(time)
-        with offscreen_plotter(size) as plotter:
-            self.attach(plotter).set_time(t)
+        with offscreen_plotter(size, columns=1 + len(beside)) as plotter:
+            view = self.attach(plotter, beside)
+            view.set_time(view.playback.end if time is None else float(time))
             plotter.render()
             return plotter.screenshot(return_img=True)
 
     def render_png(
-        self, out: str | Path, time: float | None = None, size: tuple[int, int] = (1280, 800)
+        self, out: str | Path, time: float | None = None, size: tuple[int, int] = (1280, 800),
+        beside: Sequence[Scene] = (),
     ) -> Path:
         """Render ``time`` [s] off-screen at ``size`` [px] to a PNG file (see :meth:`image`);
         returns its path."""
         import imageio.v3 as iio
 
         out = Path(out)
-        image = self.image(time, size)
+        image = self.image(time, size, beside)
         out.parent.mkdir(parents=True, exist_ok=True)
         iio.imwrite(out, image)
         return out
@@ -219,6 +238,7 @@ class Scene:
         size: tuple[int, int] = (960, 600),
         speed: float = 1.0,
         progress: Callable[[int, int], None] | None = None,
+        beside: Sequence[Scene] = (),
     ) -> Path:
         """Render a time range off-screen to a GIF or MP4 file.
 
@@ -236,17 +256,19 @@ class Scene:
             Simulated seconds per movie second.
         progress : callable(done, total), optional
             Called after every written frame.
+        beside : sequence of Scene
+            Scenes shown side by side with this one.
         """
         out = Path(out)
         suffix = out.suffix.lower()
         if suffix not in MOVIE_SUFFIXES:
             raise invalid("render", "out", f"a file ending in {' or '.join(MOVIE_SUFFIXES)}", out)
-        t0, t1 = self.time_range
-        start = t0 if start is None else float(start)
-        end = t1 if end is None else float(end)
+        scenes = (self, *beside)
+        start = min(s.time_range[0] for s in scenes) if start is None else float(start)
+        end = max(s.time_range[1] for s in scenes) if end is None else float(end)
         if not end >= start:
             raise invalid("render", "end", f">= start = {start} [s]", end)
-        fps = 1.0 / self.frame_dt if fps is None else float(fps)
+        fps = 1.0 / min(s.frame_dt for s in scenes) if fps is None else float(fps)
         if not 0 < fps <= 120:
             raise invalid("render", "fps", "in (0, 120] [1/s]", fps)
         if not speed > 0:
@@ -254,8 +276,8 @@ class Scene:
         n_frames = int(np.floor((end - start) / speed * fps + 1e-9)) + 1
         times = start + speed * np.arange(n_frames) / fps
         out.parent.mkdir(parents=True, exist_ok=True)
-        with offscreen_plotter(size) as plotter:
-            view = self.attach(plotter)
+        with offscreen_plotter(size, columns=len(scenes)) as plotter:
+            view = self.attach(plotter, beside)
             if suffix == ".gif":
                 plotter.open_gif(str(out), fps=fps)
             else:
@@ -267,3 +289,28 @@ class Scene:
                 if progress is not None:
                     progress(i + 1, len(times))
         return out
+
+
+def _run_title(run) -> str:
+    """A run's title: its scenario name and the planners its walkers used."""
+    summary = run.summary
+    planners = sorted({g.get("planner", "") for g in summary.get("groups", {}).values()} - {""})
+    name = summary.get("scenario") or run.path.name
+    return f"{name} ({', '.join(planners)})" if planners else str(name)
+
+
+def run_folders(path: str | Path) -> list[Path]:
+    """The run folders ``path`` stands for: itself when it is one (it holds
+    ``trajectories.sqlite``), else its sub-folders that are (a ``crowdwalk compare``
+    output folder, one run per planner), sorted by name."""
+    path = Path(path)
+    if (path / "trajectories.sqlite").exists() or not path.is_dir():
+        return [path]
+    runs = sorted(p for p in path.iterdir() if (p / "trajectories.sqlite").exists())
+    return runs or [path]
+
+
+def load_scenes(paths: Sequence[str | Path], **options) -> list[Scene]:
+    """Scenes of run folders, ``crowdwalk compare`` output folders (each of their runs)
+    or scenario files, in order, for viewing side by side."""
+    return [Scene.load(run, **options) for path in paths for run in run_folders(path)]

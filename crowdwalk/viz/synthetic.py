@@ -1,7 +1,7 @@
 """A synthetic walking crowd for benchmarks, tests and demos of the viewer.
 
 Agents walk straight lines at constant speed with a sinusoidal leg and arm swing on a
-20-joint stick skeleton (the joint count of ``crowdwalk.body``). This is not a gait
+the 20-joint H-Anim skeleton of ``crowdwalk.body``. This is not a gait
 model — real runs carry MetaGait/ElevWalker poses — it only produces poses and
 footsteps whose positions are known exactly, so render tests can check where agents and
 footprints appear and the benchmark can time a 1,000-agent frame without running a
@@ -12,31 +12,25 @@ from __future__ import annotations
 
 import numpy as np
 
+from crowdwalk.body import JOINT_NAMES, PARENTS
 from crowdwalk.errors import invalid
 from crowdwalk.viz.footprints import Footsteps
 from crowdwalk.viz.sources import ArrayPoses
 
 __all__ = ["SKELETON_NAMES", "SKELETON_PARENTS", "synthetic_crowd", "walking_pose"]
 
-SKELETON_NAMES = (
-    "root", "pelvis",
-    "l_hip", "l_knee", "l_ankle", "l_heel", "l_toe",
-    "r_hip", "r_knee", "r_ankle", "r_heel", "r_toe",
-    "spine", "skullbase",
-    "l_shoulder", "l_elbow", "l_wrist",
-    "r_shoulder", "r_elbow", "r_wrist",
-)  # fmt: skip
-SKELETON_PARENTS = np.array([-1, 0, 1, 2, 3, 4, 4, 1, 7, 8, 9, 9, 0, 12, 12, 14, 15, 12, 17, 18])
+SKELETON_NAMES = JOINT_NAMES
+SKELETON_PARENTS = PARENTS
 
 # Body-frame joint positions at rest [m] for a 1.75 m person: x forward, y left, z up,
 # origin on the ground below the pelvis.
 _REST = np.array([
     [0.0, 0.0, 0.95], [0.0, 0.0, 0.95],
-    [0.0, 0.09, 0.92], [0.0, 0.09, 0.50], [0.0, 0.09, 0.08], [-0.05, 0.09, 0.02],
-    [0.17, 0.09, 0.02],
-    [0.0, -0.09, 0.92], [0.0, -0.09, 0.50], [0.0, -0.09, 0.08], [-0.05, -0.09, 0.02],
-    [0.17, -0.09, 0.02],
-    [0.0, 0.0, 1.25], [0.0, 0.0, 1.55],
+    [0.0, 0.09, 0.92], [0.0, 0.09, 0.50], [0.0, 0.09, 0.08], [0.0, 0.09, 0.08],
+    [0.128, 0.09, 0.012],
+    [0.0, -0.09, 0.92], [0.0, -0.09, 0.50], [0.0, -0.09, 0.08], [0.0, -0.09, 0.08],
+    [0.128, -0.09, 0.012],
+    [0.0, 0.0, 1.04], [0.0, 0.0, 1.55],
     [0.0, 0.19, 1.45], [0.0, 0.21, 1.16], [0.0, 0.22, 0.90],
     [0.0, -0.19, 1.45], [0.0, -0.21, 1.16], [0.0, -0.22, 0.90],
 ])  # fmt: skip

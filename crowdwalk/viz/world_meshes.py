@@ -143,7 +143,9 @@ def node_positions(graph) -> dict:
 
 
 def route_lines(graph, terrain=None, lift: float = 0.05, spacing: float = 0.25):
-    """Route-graph edges draped on the terrain (lines) and its nodes (points).
+    """Route-graph edges along their corridors' centre lines (the edge attribute
+    ``geometry``, a shapely line through the corridor's ``via`` points; a straight chord
+    when absent), once per corridor, draped on the terrain, and the nodes as points.
 
     Returns
     -------
@@ -151,9 +153,14 @@ def route_lines(graph, terrain=None, lift: float = 0.05, spacing: float = 0.25):
         Edge lines and node points [m].
     """
     pos = node_positions(graph)
-    edges = [
-        _drape(_densify(np.stack([pos[a], pos[b]]), spacing), terrain, lift)
-        for a, b in graph.edges()
-    ]
+    edges, seen = [], set()
+    for a, b, data in graph.edges(data=True):
+        if frozenset((a, b)) in seen:
+            continue  # the way back of a two-way corridor is the same line
+        seen.add(frozenset((a, b)))
+        line = data.get("geometry")
+        xy = (np.asarray(line.coords, dtype=float)[:, :2] if line is not None
+              else np.stack([pos[a], pos[b]]))
+        edges.append(_drape(_densify(xy, spacing), terrain, lift))
     nodes = np.array([pos[n] for n in graph.nodes()]).reshape(-1, 2)
     return polylines(edges), pv.PolyData(_drape(nodes, terrain, lift)) if len(nodes) else None

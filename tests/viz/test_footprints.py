@@ -1,4 +1,5 @@
-"""Footprints: walking directions, outlines at the footholds, time windows."""
+"""Footprints: walking directions, outlines at the footholds, lift along the ground
+normal, stacking, time windows and fading."""
 
 import numpy as np
 import pytest
@@ -51,7 +52,7 @@ def _steps(n=6, heading=0.3):
 
 def test_outlines_point_along_the_heading_at_the_foothold():
     steps = _steps(heading=0.3)
-    mesh = FootprintMesh(steps, lift=0.01).mesh
+    mesh = FootprintMesh(steps, lift=0.01, stack=0.0).mesh
     outline = foot_outline()
     v = len(outline)
     pts = np.asarray(mesh.points).reshape(len(steps), v, 3)
@@ -63,8 +64,40 @@ def test_outlines_point_along_the_heading_at_the_foothold():
     # the ankle foothold lies on the heel–toe line, heel_offset from the heel
     along = np.linalg.norm(steps.position[:, :2] - heel, axis=1)
     np.testing.assert_allclose(along, -outline[0, 0], atol=1e-6)
-    np.testing.assert_allclose(mesh.point_data["energy"].reshape(len(steps), v)[:, 0],
-                               steps.energy, rtol=1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.0, 0.6), st.floats(-np.pi, np.pi))
+def test_outlines_lie_in_the_tangent_plane_lifted_along_the_normal(tilt, azimuth):
+    steps = _steps(n=4)
+    normal = np.array([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth),
+                       np.cos(tilt)])
+    fp = FootprintMesh(steps, normals=np.tile(normal, (4, 1)), lift=0.01, stack=0.004)
+    pts = np.asarray(fp.mesh.points, dtype=float).reshape(4, fp.vertices_per_step, 3)
+    height = np.einsum("svc,c->sv", pts - steps.position[:, None], normal)
+    # every vertex at its footprint's lift above the ground plane, later ones higher
+    np.testing.assert_allclose(height - height[:, :1], 0.0, atol=1e-5)
+    np.testing.assert_allclose(height[:, 0], 0.01 + 0.004 * np.arange(4) / 3, atol=1e-5)
+
+
+def test_footprints_fade_with_age_towards_the_faded_colour():
+    from crowdwalk.viz.footprints import FADED
+
+    steps = _steps(n=10)  # placed every 0.5 s from 0 to 4.5 s
+    fp = FootprintMesh(steps)
+    red = np.tile([220, 20, 20], (10, 1))
+    fp.set_colors(red)
+    fp.show_window(-np.inf, 4.5, fade=2.0)
+    rgb = fp.mesh.point_data["rgb"].reshape(10, -1, 3)[:, 0].astype(float)
+    distance = np.linalg.norm(rgb - FADED, axis=1)
+    assert np.all(np.diff(distance) >= -1.0)  # older is closer to the faded colour
+    np.testing.assert_allclose(rgb[-1], red[-1], atol=1)  # just placed: full colour
+    np.testing.assert_allclose(rgb[:6] - rgb[0], 0.0, atol=1)  # 2 s and older: all alike
+    # stepping back in time restores the colours of what is young again
+    fp.show_window(-np.inf, 1.0, fade=2.0)
+    rgb = fp.mesh.point_data["rgb"].reshape(10, -1, 3)[:, 0].astype(float)
+    np.testing.assert_allclose(rgb[2], red[2], atol=1)
+    assert np.linalg.norm(rgb[0] - FADED) < np.linalg.norm(rgb[1] - FADED)
 
 
 def test_time_window_keeps_only_footprints_placed_in_it():
@@ -76,13 +109,6 @@ def test_time_window_keeps_only_footprints_placed_in_it():
     assert fp.show_window(-np.inf, 0.2) == 1
     assert fp.show_window(10.0, 20.0) == 0 and fp.mesh.n_cells == 0
     assert fp.show_window(-np.inf, np.inf) == 10 and fp.mesh.n_cells == 10 * per_step
-
-
-def test_planner_codes_follow_sorted_names():
-    fp = FootprintMesh(_steps(n=4))
-    assert fp.planners == ["best_first", "fixed"]
-    codes = fp.mesh.point_data["planner"].reshape(4, -1)[:, 0]
-    assert codes.tolist() == [0.0, 1.0, 0.0, 1.0]
 
 
 def test_missing_columns_and_ragged_arrays_are_rejected():

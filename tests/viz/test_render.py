@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 import shapely
@@ -13,7 +10,6 @@ from crowdwalk.viz.camera import project_to_pixels
 from crowdwalk.viz.headless import offscreen_plotter
 from crowdwalk.viz.scene import Scene
 
-REFERENCE = Path(__file__).parent / "reference" / "synthetic_scene.png"
 AREA = shapely.box(-2.0, -2.0, 12.0, 9.0)
 
 
@@ -36,21 +32,21 @@ def _pixels(image, points_px):
     return image[c[inside, 1], c[inside, 0]].astype(int), inside
 
 
-def _red(colours):
-    """Set1's first colour (planner "best_first") under any shading."""
-    return (colours[:, 0] > colours[:, 1] + 60) & (colours[:, 0] > colours[:, 2] + 60)
+def _orange(colours):
+    """The palette's first colour (planner "best_first", 230/159/0) under any shading."""
+    return (colours[:, 0] > colours[:, 2] + 60) & (colours[:, 1] > colours[:, 2] + 30)
 
 
-def _grey(colours):
-    """Set1's last colour (planner "fixed") under any shading."""
-    return np.ptp(colours, axis=1) < 25
+def _blue(colours):
+    """The palette's second colour (planner "fixed", 0/114/178) under any shading."""
+    return (colours[:, 2] > colours[:, 0] + 25) & (colours[:, 2] > colours[:, 1] + 10)
 
 
 @pytest.fixture
 def planner_view(offscreen, crowd):
     poses, steps = crowd
     scene = Scene(poses=poses, footsteps=steps, walkable_area=AREA, color="planner")
-    image, view, ctx = _render(scene, 1.2)
+    image, view, ctx = _render(scene, 1.2, size=(800, 500))
     yield image, view
     ctx.__exit__(None, None, None)
 
@@ -59,7 +55,7 @@ def test_projection_matches_vtk_world_to_display(planner_view):
     _, view = planner_view
     renderer = view.plotter.renderer
     points = np.array([[0.0, 0.0, 0.0], [5.0, 3.0, 1.0], [9.0, -1.0, 0.2]])
-    got = project_to_pixels(view.plotter, points)
+    got = project_to_pixels(view.plotter, points, view.renderer)
     h = view.plotter.window_size[1]
     for p, (col, row) in zip(points, got, strict=True):
         renderer.SetWorldPoint(*p, 1.0)
@@ -79,14 +75,17 @@ def test_agents_appear_where_the_run_puts_them(planner_view, crowd):
     poses, steps = crowd
     ids, positions = poses.at(12)  # t = 1.2 s at 10 fps
     assert np.array_equal(view.agent_ids, ids)
-    heads = positions[:, 13] + [0.0, 0.0, view.figures.head_radius]
-    colours, inside = _pixels(image, project_to_pixels(view.plotter, heads))
-    assert inside.sum() >= 10
-    # coloured by planner like their footprints: even ids plan (red), odd ids do not (grey)
-    best = (ids[inside] % 2 == 0)
-    assert best.sum() >= 4 and (~best).sum() >= 4
-    assert np.mean(_red(colours[best])) >= 0.9
-    assert np.mean(_grey(colours[~best]) & (colours[~best].mean(axis=1) < 170)) >= 0.9
+    *_, centres, _, _ = view.bodies.parts(positions)  # pelvis, chest, head
+    hits = []
+    for volume in range(3):
+        colours, inside = _pixels(image, project_to_pixels(view.plotter, centres[:, volume],
+                                                           view.renderer))
+        assert inside.sum() >= 10
+        # coloured by planner like their footprints: even ids plan (orange), odd do not (blue)
+        best = (ids[inside] % 2 == 0)
+        assert best.sum() >= 4 and (~best).sum() >= 4
+        hits += [*_orange(colours[best]), *_blue(colours[~best])]
+    assert np.mean(hits) >= 0.85  # a walker in front may hide a volume now and then
     # ground far from every agent and footprint stays light: the test can fail
     rng = np.random.default_rng(3)
     probe = np.column_stack([rng.uniform(-1.5, 11.5, 400), rng.uniform(-1.5, 8.5, 400)])
@@ -95,44 +94,47 @@ def test_agents_appear_where_the_run_puts_them(planner_view, crowd):
         np.min(np.linalg.norm(probe[:, None] - steps.position[None, :, :2], axis=2), axis=1) > 0.5
     )
     ground = np.column_stack([probe[far], np.zeros(far.sum())])
-    colours, inside = _pixels(image, project_to_pixels(view.plotter, ground))
+    colours, inside = _pixels(image, project_to_pixels(view.plotter, ground, view.renderer))
     assert inside.sum() >= 20
-    assert np.mean(colours.mean(axis=1) > 170) >= 0.9
+    assert np.mean((np.ptp(colours, axis=1) < 40) & (colours.mean(axis=1) > 150)) >= 0.9  # ground
 
 
 def test_footprints_appear_in_planner_colours_until_now(planner_view, crowd):
     _, view = planner_view
     poses, steps = crowd
-    view.plotter.actors["agents"].visibility = False  # nothing may hide a footprint
+    view.actors["agents"].visibility = False  # nothing may hide a footprint
     view.plotter.render()
     image = view.plotter.screenshot(return_img=True)
-    view.plotter.actors["agents"].visibility = True
+    view.actors["agents"].visibility = True
     centre = steps.position[:, :2] + 0.07 * np.column_stack(
         [np.cos(steps.heading), np.sin(steps.heading)]
     )
-    points = np.column_stack([centre, steps.position[:, 2] + 0.006])
+    points = np.column_stack([centre, steps.position[:, 2] + 0.01])
     colours = np.full((len(steps), 3), -1)
-    got, inside = _pixels(image, project_to_pixels(view.plotter, points))
+    got, inside = _pixels(image, project_to_pixels(view.plotter, points, view.renderer))
     colours[inside] = got
-    red = _red(colours)
-    grey = _grey(colours) & (colours.mean(axis=1) < 200)
+    orange, blue = _orange(colours), _blue(colours)
     placed = inside & (steps.time <= 1.2)
     best, fixed = placed & (steps.planner == "best_first"), placed & (steps.planner == "fixed")
     assert best.sum() >= 10 and fixed.sum() >= 10
-    assert np.mean(red[best]) >= 0.9
-    assert np.mean(grey[fixed]) >= 0.9
+    # (a few pixels each from afar, and a later footprint may cover an earlier one)
+    assert np.mean(orange[best]) >= 0.85
+    assert np.mean(blue[fixed]) >= 0.85
     future = inside & (steps.time > 1.25)
     assert future.sum() >= 10
-    assert np.mean(red[future] | grey[future]) <= 0.1  # not placed yet, so not drawn
+    assert np.mean(orange[future] | blue[future]) <= 0.1  # not placed yet, so not drawn
 
 
 def test_key_bindings_drive_playback_colour_and_follow(planner_view, crowd):
     _, view = planner_view
     keys = view.key_bindings()
-    legend = {name: view.plotter.actors[name] for name in view._legend_names}
-    assert {"legend planner best_first", "legend planner fixed"} <= set(legend)
-    red = legend["legend planner best_first"].GetTextProperty().GetColor()
-    assert red[0] > 0.8 and red[1] < 0.3  # the colour of best_first figures and footprints
+    legend = {name: view.overlay.actor(name) for name in view.overlay.names()
+              if name.startswith("legend ")}
+    labels = {name.split(" ", 2)[2]: actor for name, actor in legend.items()
+              if name != "legend heading"}
+    assert {"best_first", "fixed"} <= set(labels)
+    orange = labels["best_first"].GetTextProperty().GetColor()
+    assert orange[0] > 0.8 and orange[2] < 0.1  # the colour of best_first bodies and footprints
     t0 = view.playback.time
     keys["space"]()
     assert view.playback.playing
@@ -144,23 +146,58 @@ def test_key_bindings_drive_playback_colour_and_follow(planner_view, crowd):
     assert view.frame == 18
     keys["Up"]()
     assert view.playback.speed == 2.0
+    before = np.array(view.bodies.mesh.point_data["rgb"])
+    keys["c"]()
+    assert view.color == "style"  # the synthetic run has no styles: one grey for all
+    rgb = np.array(view.bodies.mesh.point_data["rgb"])
+    assert not np.array_equal(rgb, before) and len(np.unique(rgb, axis=0)) == 1
     keys["c"]()
     assert view.color == "agent"
-    assert not any("planner" in name for name in view._legend_names)
-    assert not any("planner" in name for name in view.plotter.actors if "legend" in name)
-    assert view.plotter.actors["footprints"].mapper.array_name == "agent"
-    assert view.plotter.actors["agents"].mapper.array_name == "value"
+    assert len(np.unique(view.bodies.mesh.point_data["rgb"], axis=0)) >= 8
+    assert not any(n.startswith("legend heading") for n in view.overlay.names())
     keys["c"]()
-    assert view.plotter.actors["footprints"].mapper.array_name == "energy"
+    assert view.color == "energy"
+    assert "bar energy" in view.overlay.names()
     keys["f"]()
     assert view.follow == view.agent_ids[0]
     root = view.agent_root(view.follow)
-    np.testing.assert_allclose(view.plotter.camera.focal_point, root, atol=1e-6)
+    np.testing.assert_allclose(view.renderer.camera.focal_point, root, atol=1e-6)
+    assert view.actors["highlight"].visibility
+    assert "walker " in view.overlay.actor("info").GetInput()
     keys["Right"]()  # the camera moves with the agent
-    np.testing.assert_allclose(view.plotter.camera.focal_point, view.agent_root(view.follow),
+    np.testing.assert_allclose(view.renderer.camera.focal_point, view.agent_root(view.follow),
                                atol=1e-6)
     keys["f"]()
-    assert view.follow is None
+    assert view.follow is None and not view.actors["highlight"].visibility
+
+
+def _intersects(a, b, margin=0.0):
+    return a[0] < b[2] - margin and b[0] < a[2] - margin and a[1] < b[3] - margin \
+        and b[1] < a[3] - margin
+
+
+def test_overlays_cover_neither_the_scene_nor_each_other(offscreen, crowd):
+    poses, steps = crowd
+    for size in ((640, 480), (1280, 800), (1000, 400)):
+        scene = Scene(poses=poses, footsteps=steps, walkable_area=AREA, follow=3,
+                      title="a title long enough to need room", color="energy")
+        image, view, ctx = _render(scene, 1.5, size=size)
+        try:
+            w, h = size
+            x0, y0, x1, y1 = view.renderer.GetViewport()
+            scene_px = np.array([x0 * w, y0 * h, x1 * w, y1 * h])
+            boxes = view.overlay.boxes_px()
+            assert {"title", "time", "info", "bar energy"} <= set(boxes)
+            names = list(boxes)
+            for i, name in enumerate(names):
+                box = boxes[name]
+                assert box[2] > box[0] and box[3] > box[1]
+                assert 0 <= box[0] and box[2] <= w + 1 and 0 <= box[1] and box[3] <= h + 1, name
+                assert not _intersects(box, scene_px), name
+                for other in names[i + 1:]:
+                    assert not _intersects(box, boxes[other], margin=1.0), (name, other)
+        finally:
+            ctx.__exit__(None, None, None)
 
 
 def test_interactive_controls_install_on_a_plotter(planner_view):
@@ -169,6 +206,9 @@ def test_interactive_controls_install_on_a_plotter(planner_view):
     view._slider.GetRepresentation().SetValue(1.0)
     view._slider.InvokeEvent("InteractionEvent")
     assert view.playback.time == pytest.approx(1.0)
+    x0, y0, x1, y1 = view.renderer.GetViewport()
+    point = view._slider.GetRepresentation().GetPoint1Coordinate().GetValue()
+    assert point[1] > y1  # the slider sits in the header band, above the scene
 
 
 def test_followed_agent_is_centred(offscreen, crowd):
@@ -176,31 +216,12 @@ def test_followed_agent_is_centred(offscreen, crowd):
     scene = Scene(poses=poses, footsteps=steps, walkable_area=AREA, follow=5)
     image, view, ctx = _render(scene, 1.0, size=(320, 240))
     try:
-        col, row = project_to_pixels(view.plotter, view.agent_root(5)[None])[0]
-        assert col == pytest.approx(160, abs=2) and row == pytest.approx(120, abs=2)
+        col, row = project_to_pixels(view.plotter, view.agent_root(5)[None], view.renderer)[0]
+        x0, y0, x1, y1 = view.renderer.GetViewport()
+        assert col == pytest.approx(320 * (x0 + x1) / 2, abs=2)
+        assert row == pytest.approx(240 * (1 - (y0 + y1) / 2), abs=2)
     finally:
         ctx.__exit__(None, None, None)
-
-
-def test_image_matches_the_committed_reference(offscreen, crowd, tmp_path):
-    poses, steps = crowd
-    scene = Scene(poses=poses, footsteps=steps, walkable_area=AREA, title="reference")
-    out = scene.render_png(tmp_path / "now.png", time=1.5, size=(320, 200))
-    import imageio.v3 as iio
-
-    image = iio.imread(out)[..., :3].astype(float)
-    if os.environ.get("CROWDWALK_UPDATE_REFERENCE"):
-        REFERENCE.parent.mkdir(exist_ok=True)
-        REFERENCE.write_bytes(out.read_bytes())
-        pytest.skip("reference image rewritten")
-    reference = iio.imread(REFERENCE)[..., :3].astype(float)
-    assert image.shape == reference.shape
-    diff = np.abs(image - reference).max(axis=2)
-    assert diff.mean() < 2.0
-    assert np.mean(diff > 60) < 0.01
-    # the comparison is sensitive: a later instant differs clearly
-    later = iio.imread(scene.render_png(tmp_path / "later.png", time=2.5, size=(320, 200)))
-    assert np.mean(np.abs(later[..., :3] - reference).max(axis=2) > 60) > 0.01
 
 
 def test_movies_have_one_frame_per_tick_and_show_motion(offscreen, crowd, tmp_path):

@@ -9,8 +9,9 @@ Per frame, at the step phase s ∈ [0, 1]:
 - **stance foot** from F1/F2/M on its foothold (heel pivot until FGM, ball pivot until
   MOM, toe-tip pivot after), **hip** from H, the **stance leg** by two-link IK from the
   hip to the stance ankle (Ko & Badler's Cartesian hip and foot);
-- **swing foot**: until TOM it pushes off on its own foothold (F2/M one step on); after,
-  its ankle follows A and its angle F3; the swing leg by two-link IK to the ankle;
+- **swing foot**: until TOM it pushes off on its own foothold (the F2/M of the step in which
+  it stood, one step on); after, its ankle follows A and its angle F3 (offset at TOM to
+  where the push-off left them, fading over the swing); the swing leg by two-link IK;
 - **upper body** as ElevWalker (§8 of Sun & Metaxas): trunk upright along the heading,
   arms swinging with the opposite thigh.
 
@@ -67,6 +68,7 @@ _PATH = np.linspace(0.0, 1.0, 17)  # ground samples along the swing path
 # Phys Ther 72:45-53 (1.29 ± 0.45 cm). The prototype's rigid marker foot with straight toes
 # would pass 1.2-1.5 cm below the floor in mid swing (its toe marker is 1.1 cm above the sole line).
 _TOE_CLEARANCE = 0.0129
+_BEZIER_RAMP = 0.25  # fraction of the swing over which the Bezier lift is eased in
 _UNEVEN = 0.01  # ground this far above the foothold line: the step is over uneven ground [m]
 
 
@@ -162,6 +164,8 @@ class KoBadlerEngine:
         self.own = body_generalization(proto, self.condition)  # ψ, once per walker
         n = len(body)
         self._values = {k: getattr(self.own, k).v.copy() for k in SEQUENCES}
+        # the swing foot's push-off: F2 and M of the step in which it was the stance foot
+        self._push = {k: self._values[k].copy() for k in ("foot2", "meta")}
         self._t0 = np.zeros(n)
         self._duration = np.ones(n)
         self._length = self.own.step_length.copy()
@@ -221,6 +225,8 @@ class KoBadlerEngine:
         own = self.own.take(a)
         w = step_length_generalization(own, length / own.step_length,
                                        start=StepStart(before, hip_now))  # fmt: skip
+        for k in ("foot2", "meta"):
+            self._push[k][a] = np.where(first[:, None], getattr(w, k).v, self._values[k][a])
         for k in SEQUENCES:
             self._values[k][a] = getattr(w, k).v
         self._hip_end[a] = w.hip.y[:, -1]
@@ -262,9 +268,17 @@ class KoBadlerEngine:
         return lift
 
     # -- poses ------------------------------------------------------------------------
-    def _seq(self, name: str, a: np.ndarray, s: np.ndarray) -> np.ndarray:
+    def _seq(self, name: str, a: np.ndarray, s: np.ndarray, values=None) -> np.ndarray:
         q = getattr(self.own, name)
-        return interpolation(q.with_values(self._values[name][a]), s)
+        v = (self._values if values is None else values)[name][a]
+        return interpolation(q.with_values(v), s)
+
+    def _push_off(self, cond, a, s1, mom):
+        """Foot angle, sagittal ankle and toe pitch of the swing foot pushing off (k,)."""
+        f = self._seq("foot2", a, s1, self._push)
+        m = np.where(s1 >= mom, self._seq("meta", a, s1, self._push), 0.0)
+        ankle, toe = foot_configuration(cond, f, m)
+        return f, ankle, toe
 
     def pose(self, t: float, agents: np.ndarray) -> PoseFrame:
         """Poses of ``agents`` (k,) at time ``t`` [s]."""
@@ -286,38 +300,44 @@ class KoBadlerEngine:
         f_st = np.where(s < fgm, self._seq("foot1", a, s), self._seq("foot2", a, s))
         m_st = np.where(s >= mom, self._seq("meta", a, s), 0.0)
         ankle_st, toe_st = foot_configuration(cond, f_st, m_st)
-        # Swing foot: push-off on its footprint until TOM (F2, M one step on), then A, F3.
+        # Swing foot: until TOM it pushes off its footprint as the stance foot of the last
+        # step did (that step's F2, M one step on); then the ankle follows A and the foot
+        # F3, offset at TOM to where the push-off left them, the offset fading linearly
+        # over the swing (as Eq. 30's d1; consecutive steps' μ3, μ4 differ).
         push = s < tom
-        s1 = s + 1.0
-        f_push = self._seq("foot2", a, s1)
-        m_push = np.where(s1 >= mom, self._seq("meta", a, s1), 0.0)
-        ankle_push, toe_push = foot_configuration(cond, f_push, m_push)
-        f_fly = self._seq("foot3", a, s)
-        ankle_fly = self._seq("ankle", a, s)
-        f_sw = np.where(push, f_push, f_fly)
-        toe_at_off = -self._values["meta"][a, -1]  # the toes at the meta angle at TOM
-        relax = np.clip((s - tom) / _TOE_RELAX, 0.0, 1.0)
-        toe_fly = f_fly + (1 - relax) * (toe_at_off - self._values["foot3"][a, 0])
-        toe_sw = np.where(push, toe_push, toe_fly)
+        f_push, ankle_push, toe_push = self._push_off(cond, a, s + 1.0, mom)
+        f_end, ankle_end, toe_end = self._push_off(cond, a, np.full(k, 1.0 + tom), mom)
 
         def on_print(origin, yaw, xy):  # footprint frame → world
             c, si = np.cos(yaw), np.sin(yaw)
             return origin + np.stack([c * xy[:, 0], si * xy[:, 0], xy[:, 1]], axis=1)
 
+        def flight(ankle_xy):  # A's (x, y) → world point and the floor below it
+            u = np.clip((ankle_xy[:, 0] + before) / (before + length), 0.0, 1.0)
+            floor = trail + u[:, None] * (target - trail)
+            return floor + np.stack([0 * u, 0 * u, ankle_xy[:, 1]], axis=1), floor, u
+
+        fade = 1.0 - np.clip((s - tom) / (1 - tom), 0.0, 1.0)
+        fly0, _, _ = flight(self._seq("ankle", a, np.full(k, tom)))
+        fly, floor, u = flight(self._seq("ankle", a, s))
+        fly += fade[:, None] * (on_print(trail, self._yaw_trail[a], ankle_end) - fly0)
+        f_fly = self._seq("foot3", a, s) + fade * (f_end - self._values["foot3"][a, 0])
+        relax = np.clip((s - tom) / _TOE_RELAX, 0.0, 1.0)
+        toe_fly = f_fly + (1 - relax) * (toe_end - f_end)
+        f_sw = np.where(push, f_push, f_fly)
+        toe_sw = np.where(push, toe_push, toe_fly)
         p_ankle_st = on_print(start, self._yaw_stance[a], ankle_st)
-        u = np.clip((ankle_fly[:, 0] + before) / (before + length), 0.0, 1.0)
-        fly = trail + u[:, None] * (target - trail)
-        lift = self._toe_clearance_lift(cond, ankle_fly[:, 1], f_fly, toe_fly,
-                                        (s - tom) / (1 - tom))  # fmt: skip
-        fly[:, 2] += ankle_fly[:, 1] + lift
+        fly[:, 2] += self._toe_clearance_lift(cond, fly[:, 2] - floor[:, 2], f_fly, toe_fly,
+                                              (s - tom) / (1 - tom))  # fmt: skip
         bez = self._bezier[a]
         has_bez = self._use_bezier[a] & ~push
         if has_bez.any():
             w = np.stack([(1 - u) ** 3, 3 * (1 - u) ** 2 * u, 3 * (1 - u) * u**2, u**3], 1)
             z_bez = np.einsum("kc,kc->k", w[has_bez], bez[has_bez, :, 2])
-            lift = z_bez > fly[has_bez, 2]
-            fly[np.flatnonzero(has_bez)[lift], 2] = z_bez[lift]
-            self.stats["bezier_lifted"] += int(lift.sum())
+            up = np.maximum(z_bez - fly[has_bez, 2], 0.0)
+            ramp = np.clip((s[has_bez] - tom) / (_BEZIER_RAMP * (1 - tom)), 0.0, 1.0)
+            fly[has_bez, 2] += ramp * ramp * (3 - 2 * ramp) * up  # eased in after TOM
+            self.stats["bezier_lifted"] += int(np.count_nonzero(up > 0))
         p_ankle_sw = np.where(push[:, None], on_print(trail, self._yaw_trail[a], ankle_push), fly)
         yaw_fly = self._yaw_trail[a] + _wrap(self._psi1[a] - self._yaw_trail[a]) * np.clip(
             (s - tom) / (1 - tom), 0.0, 1.0)  # fmt: skip
