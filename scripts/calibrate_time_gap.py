@@ -36,7 +36,7 @@ def main() -> None:
     rms = {}
     with tempfile.TemporaryDirectory() as tmp:
         for gap in args.gaps:
-            params = replace(CrowdParams(), time_gap=gap)
+            params = replace(CrowdParams(), speed_model="time_gap", time_gap=gap)
             err = []
             for rho in args.densities:
                 d, v = ring_corridor_speed(rho, Path(tmp) / f"T{gap}_{rho}", params=params)
