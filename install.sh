@@ -80,9 +80,16 @@ pip_install() {  # one line per package pip fetches; the whole pip output goes t
     say "optional embreex unavailable here; mesh terrain uses rtree"
 }
 
+warm_kernels() {  # compile the numba kernels now: the first run loads them (crowdwalk.warm)
+  say "compiling the numba kernels once (about a minute)"
+  if "$VENV/bin/python" -m crowdwalk.warm >>"$LOG" 2>&1; then say "kernels compiled"
+  else say "kernel warm-up failed (log: $LOG); the first run compiles them instead" >&2; fi
+}
+
 find_python
 need_venv_module
 apt_packages
 make_venv
 pip_install
+warm_kernels
 say "done: $("$VENV/bin/crowdwalk" --version). Activate the environment with: . .venv/bin/activate"

@@ -194,6 +194,7 @@ def run(
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     planner: str = typer.Option(None, "--planner", help="Override every group's planner."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
+    seed: int = typer.Option(None, "--seed", help="Override the scenario's random seed."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
     """Simulate a scenario and write trajectories, footsteps, poses and a summary."""
@@ -202,7 +203,7 @@ def run(
 
     _term_as_interrupt()
     check_out_folder(out, overwrite, "run")
-    overrides = RunOverrides(planner=planner, duration=duration)
+    overrides = RunOverrides(planner=planner, duration=duration, seed=seed)
     _check_before_running(scenario, overrides)
     with _sim_progress(quiet, scenario.stem) as bar:
         update = None
@@ -237,6 +238,8 @@ def compare(
     out: Path = typer.Option(..., "--out", help="Folder for the runs and report.md."),
     quiet: bool = typer.Option(False, "--quiet", help="No progress bar."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
+    seeds: str = typer.Option(None, "--seeds", help="Seeds A..B: every planner with every "
+                              "seed on Dask (resumable); intervals across seeds."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
     """Run the same scenario, seed and agents with each planner; write report.md."""
@@ -245,6 +248,17 @@ def compare(
     from crowdwalk.crowd.run import RunOverrides
 
     _term_as_interrupt()
+    if seeds is not None:
+        from crowdwalk.sweep import SweepSpec, parse_seeds, run_sweep
+
+        names = [p.strip() for p in planners.split(",") if p.strip()]
+        check_planners(names)
+        spec = SweepSpec(scenario=scenario.resolve(), seeds=tuple(parse_seeds(seeds)),
+                         planners=tuple(names), duration=duration)
+        _check_before_running(scenario, RunOverrides(duration=duration))
+        report = run_sweep(spec, out, progress=None if quiet else _sweep_echo)
+        typer.echo(f"wrote the report {report} and one run folder per trial in {out}/trials")
+        return
     check_out_folder(out, overwrite, "compare")
     names = [p.strip() for p in planners.split(",") if p.strip()]
     check_planners(names)
@@ -261,6 +275,32 @@ def compare(
         report = compare_planners(scenario, names, out, duration=duration, progress=update)
     typer.echo(f"wrote the report {report} and one run folder per planner in {out}; "
                + next_hint(f"crowdwalk view {out}/{names[0]}"))
+
+
+def _sweep_echo(done: int, total: int, trial: str) -> None:
+    typer.echo(f"[{done}/{total}] {trial}")
+
+
+@app.command()
+@friendly_errors
+def sweep(
+    sweep_file: Path = typer.Argument(..., help="Sweep YAML (scenario, seeds, planners, axes)."),
+    out: Path = typer.Option(..., "--out", help="Sweep folder (finished trials are kept)."),
+    scheduler: str = typer.Option(None, "--scheduler",
+                                  help="Address of a running Dask scheduler (default: a "
+                                  "LocalCluster, one worker process per core)."),
+    workers: int = typer.Option(None, "--workers", help="LocalCluster worker processes."),
+    quiet: bool = typer.Option(False, "--quiet", help="No line per finished trial."),
+) -> None:
+    """Run a study: one run folder per trial, manifest.csv, report.md (Dask distributed)."""
+    from crowdwalk.sweep import load_sweep, run_sweep
+
+    if workers is not None and workers < 1:
+        _fail(f"sweep --workers must be >= 1; got {workers}.", 2)
+    spec = load_sweep(sweep_file)
+    report = run_sweep(spec, out, scheduler=scheduler, workers=workers,
+                       progress=None if quiet else _sweep_echo)
+    typer.echo(f"wrote {out}/manifest.csv and the report {report}")
 
 
 # --- measurement and verification (issue 14): analyse, verify ---------------------

@@ -586,7 +586,11 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     flat_Ej, flat_reach = flat_joint_energy(legs, config)
     Ej = np.take_along_axis(flat_Ej, np.broadcast_to(st.step_j, rise.shape), axis=1)
     reachable = np.take_along_axis(flat_reach, np.broadcast_to(st.step_j, rise.shape), axis=1)
-    other = np.nonzero(~level)
+    # Key frames are solved for the non-level steps that can be legal: a landing across
+    # an edge or a rise beyond the limit is illegal whatever the knee does, and its
+    # energy is never used (it is set to +inf below).
+    hopeless = (support[:, st.step_front] != 0) | (np.abs(rise) > config.max_step_rise)
+    other = np.nonzero(~level & ~hopeless)
     key_frames = np.bincount(other[0], minlength=A)
     if other[0].size:
         sub = legs_col.take(other[0])
@@ -600,6 +604,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     E = total_energy(En, Ev, Ej, w)
     if config.step_model == "normal_mode":
         E = E + frequency_energy(En, length, normal_step(legs_col, speeds[:, None]), w)
+    E = np.where(hopeless & ~level, np.inf, E)
     per_metre = neutral_energy_per_metre(legs, speeds, config)
     last = slice(st.node_offset[st.n], None)  # the nodes of depth n
     far = node_s[:, last].max(axis=1)  # (A,) every plan's common end

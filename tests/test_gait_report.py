@@ -45,11 +45,11 @@ def test_lone_walker_at_natural_speed(natural):
     assert "agent 0" in report_table([f])
 
 
-@pytest.mark.parametrize("speed", [1.0, 1.7])
-def test_lone_walker_steps_follow_speed(tmp_path, speed):
-    """Issue 11 targets met at slow and fast free speeds (1.75 m body): speed within 5 %,
-    step length and cadence within 2 SD of WBDS at the achieved speed."""
-    f = lone_walker(tmp_path, speed)
+@pytest.mark.parametrize(("speed", "height"), [(1.0, 1.75), (1.7, 1.75), (1.33, 1.50)])
+def test_lone_walker_steps_follow_speed_and_size(tmp_path, speed, height):
+    """Issue 11 targets met at slow and fast free speeds and for a short body: speed within
+    5 %, step length and cadence within 2 SD of WBDS at the achieved speed."""
+    f = lone_walker(tmp_path, speed, height)
     assert abs(f.speed / f.free_speed - 1) <= 0.05
     assert abs(f.step_length_z) <= 2 and abs(f.cadence_z) <= 2
     assert f.heel_slide_max <= 0.010 and f.pelvis_d2_max <= 0.02

@@ -44,6 +44,8 @@ class RunOverrides:
         Write poses or not.
     fps : float or None
         Output frame rate [1/s].
+    seed : int or None
+        The scenario's random seed (``simulation.seed``) [-].
     """
 
     planner: str | None = None
@@ -51,6 +53,7 @@ class RunOverrides:
     duration: float | None = None
     poses: bool | None = None
     fps: float | None = None
+    seed: int | None = None
 
 
 ProgressCallback = Callable[[float, float, int], None]
@@ -63,6 +66,8 @@ def check_overrides(overrides: RunOverrides) -> None:
     o = overrides
     if o.planner is not None and o.planner not in PLANNERS:
         raise invalid("RunOverrides", "planner", f"one of {sorted(PLANNERS)}", o.planner)
+    if o.seed is not None and not (isinstance(o.seed, int) and o.seed >= 0):
+        raise invalid("RunOverrides", "seed", "an integer >= 0", o.seed)
     if o.max_agents is not None and o.max_agents < 1:
         raise invalid("RunOverrides", "max_agents", ">= 1", o.max_agents)
     for name in ("duration", "fps"):
@@ -96,6 +101,10 @@ def prepare(scenario, overrides: RunOverrides | None = None, *,
         path = Path(scenario)
         sc = load_scenario(path)
         text = path.read_text()
+    if overrides.seed is not None and overrides.seed != sc.simulation.seed:
+        sc = sc.model_copy(update={"simulation": sc.simulation.model_copy(
+            update={"seed": overrides.seed})})
+        text = yaml.safe_dump(sc.model_dump(mode="json", by_alias=True), sort_keys=False)
     world, pop = world_and_population(sc)
     if overrides.planner is not None:
         pop = pop.with_planner(overrides.planner)

@@ -46,9 +46,10 @@ from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
-from crowdwalk.population import Population, cadence_at, step_length_at
+from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
+from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
            "ACTIVE", "ARRIVED"]
@@ -91,9 +92,11 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
-        self.min_step_time = 1.0 / cadence_at(population.free_speed)
+        # the normal-mode step and cadence of each body at its free speed (WBDS relation)
+        self.leg_length = leg = normal_mode.leg_length_from_height(population.body_height)
+        self.min_step_time = 1.0 / normal_mode.step_frequency(population.free_speed, leg)
+        self.nominal_step = normal_mode.step_length(population.free_speed, leg)
         self.step_speed = population.free_speed.copy()  # speed of the step decided [m/s]
-        self.nominal_step = step_length_at(population.free_speed) * population.body_height / 1.71
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
         self.state = AgentState(n)
@@ -237,8 +240,8 @@ class CrowdSimulation:
                                free_speed=self.pop.free_speed[idx], time_gap=prm.time_gap)
             self.step_speed[idx] = np.maximum(v, 0.05)
             # a slower step is a shorter one: what that speed covers in one step at the
-            # measured cadence for it (Fukuchi et al. 2018 fit)
-            reach = v / cadence_at(np.maximum(v, 0.1))
+            # normal-mode step frequency for it (WBDS relation)
+            reach = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[idx])
             choice = replace(choice, free_length=np.where(
                 v < self.pop.free_speed[idx], np.minimum(choice.free_length, reach),
                 choice.free_length))

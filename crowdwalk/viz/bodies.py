@@ -139,16 +139,16 @@ class SolidBodies:
         self.n_volumes = 3 if self.hanim else 1
         self._capsule_template()
         sphere = pv.Icosphere(radius=1.0, nsub=d.sphere)
-        self._sphere = np.asarray(sphere.points, dtype=np.float64)
+        self._sphere32 = np.asarray(sphere.points, dtype=np.float32)
         sphere_faces = sphere.regular_faces
         self.capsule_points = len(self._ring_axial) * d.sides
         n_caps = self.n_capsules * self.capsule_points
         tris = [self._capsule_tris[None] + (self.capsule_points * np.arange(self.n_capsules))
                 [:, None, None]]
-        tris.append(sphere_faces[None] + n_caps + len(self._sphere) * np.arange(self.n_volumes)
+        tris.append(sphere_faces[None] + n_caps + len(self._sphere32) * np.arange(self.n_volumes)
                     [:, None, None])
         self._agent_tris = np.concatenate([t.reshape(-1, 3) for t in tris])
-        self.points_per_agent = n_caps + self.n_volumes * len(self._sphere)
+        self.points_per_agent = n_caps + self.n_volumes * len(self._sphere32)
         self.triangles_per_agent = len(self._agent_tris)
         self.mesh = pv.PolyData()
         self._colors: np.ndarray | None = None
@@ -163,7 +163,8 @@ class SolidBodies:
         self._ring_axial = np.r_[np.sin(phi), -np.sin(phi[::-1])]
         self._ring_radial = np.r_[np.cos(phi), np.cos(phi[::-1])]
         angles = np.linspace(0.0, 2 * np.pi, s, endpoint=False)
-        self._cos, self._sin = np.cos(angles), np.sin(angles)
+        self._cos32, self._sin32 = np.cos(angles).astype(np.float32), np.sin(angles).astype(
+            np.float32)
         k = np.arange(s)
         kn = (k + 1) % s
         band = np.concatenate([np.column_stack([k, kn, s + k]),
@@ -314,29 +315,35 @@ class SolidBodies:
         self.mesh.point_data["rgb"] = np.full((n, 3), 90, np.uint8)
 
     def _write(self, positions: np.ndarray) -> None:
-        """Write points and normals of all walkers straight into the mesh buffers."""
+        """Write points and normals of all walkers straight into the mesh buffers
+        (float32 arithmetic: the buffers' precision)."""
         k = len(positions)
-        a, b, ra, rb, centre, rotation, axes = self.parts(positions)
+        a, b, ra, rb, centre, rotation, axes = (
+            np.asarray(x, dtype=np.float32) for x in self.parts(positions))
         points = np.asarray(self.mesh.points).reshape(k, self.points_per_agent, 3)
         normals = np.asarray(self.mesh.point_data["Normals"]).reshape(k, self.points_per_agent, 3)
         n_caps = self.n_capsules * self.capsule_points
+        rings, sides = len(self._ring_end), self.detail.sides
         # capsules: rings around the axis, each at its end's centre and radius
-        axis = _unit(b - a)  # (k, C, 3)
+        axis = _unit(b - a).astype(np.float32)  # (k, C, 3)
         u, v = _perpendicular(axis)
-        radial = (u[..., None, :] * self._cos[:, None] + v[..., None, :] * self._sin[:, None])
-        end = self._ring_end
-        radius = np.where(end == 0, ra[..., None], rb[..., None])  # (k, C, R)
-        base = np.where(end[:, None] == 0, a[..., None, :], b[..., None, :])  # (k, C, R, 3)
-        ring_centre = base + (radius * self._ring_axial)[..., None] * axis[..., None, :]
-        ring_radius = radius * self._ring_radial  # (k, C, R)
-        cap_pts = ring_centre[..., None, :] + ring_radius[..., None, None] * radial[..., None, :, :]
-        points[:, :n_caps] = cap_pts.reshape(k, n_caps, 3)
-        cap_n = (self._ring_axial[:, None, None] * axis[..., None, None, :]
-                 + self._ring_radial[:, None, None] * radial[..., None, :, :])
-        normals[:, :n_caps] = cap_n.reshape(k, n_caps, 3)
+        radial = (u[..., None, :] * self._cos32[:, None] + v[..., None, :] * self._sin32[:, None])
+        cap_pts = points[:, :n_caps].reshape(k, self.n_capsules, rings, sides, 3)
+        cap_n = normals[:, :n_caps].reshape(k, self.n_capsules, rings, sides, 3)
+        for r, (end, axial, rad) in enumerate(zip(self._ring_end, self._ring_axial,
+                                                  self._ring_radial, strict=True)):
+            radius = (ra if end == 0 else rb)[..., None]  # (k, C, 1)
+            centre_r = (a if end == 0 else b) + (axial * radius) * axis  # (k, C, 3)
+            np.multiply(radial, (rad * radius)[..., None], out=cap_pts[:, :, r])
+            cap_pts[:, :, r] += centre_r[:, :, None, :]
+            np.multiply(radial, np.float32(rad), out=cap_n[:, :, r])
+            cap_n[:, :, r] += (np.float32(axial) * axis)[:, :, None, :]
         # volumes: unit sphere scaled by the semi-axes and turned by the rotation
-        sphere = self._sphere  # (V, 3)
-        vol = np.einsum("keij,kevj->kevi", rotation, sphere[None, None] * axes[:, :, None, :])
-        points[:, n_caps:] = (vol + centre[:, :, None, :]).reshape(k, -1, 3)
-        vol_n = np.einsum("keij,kevj->kevi", rotation, sphere[None, None] / axes[:, :, None, :])
-        normals[:, n_caps:] = _unit(vol_n).reshape(k, -1, 3)
+        sphere = self._sphere32[None, None]  # (1, 1, V, 3)
+        turn = rotation.swapaxes(-1, -2)  # row vectors times R^T
+        vol = np.matmul(sphere * axes[:, :, None, :], turn)
+        vol += centre[:, :, None, :]
+        points[:, n_caps:] = vol.reshape(k, -1, 3)
+        vol_n = np.matmul(sphere / axes[:, :, None, :], turn)
+        vol_n /= np.linalg.norm(vol_n, axis=-1, keepdims=True)
+        normals[:, n_caps:] = vol_n.reshape(k, -1, 3)

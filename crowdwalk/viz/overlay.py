@@ -82,7 +82,7 @@ class Overlay:
         x0, y0, x1, y1 = self.layout.region
         return max(1, round(w * (x1 - x0))), max(1, round(h * (y1 - y0)))
 
-    def font(self, lines_per_height: float = 44.0, chars_per_panel: float = 24.0) -> int:
+    def font(self, lines_per_height: float = 44.0, chars_per_panel: float = 28.0) -> int:
         """A font size [px] that fits ``lines_per_height`` lines in the region and
         ``chars_per_panel`` characters across the panel."""
         w, h = self.pixels

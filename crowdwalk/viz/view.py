@@ -147,7 +147,7 @@ class SceneView:
         # a resized window (by the user, or by a web page) gets fonts of its new size
         self.overlay.renderer.AddObserver("StartEvent", lambda *_: self._lay_out(redraw=True))
         cam.frame(self.renderer, self.bounds)
-        self.renderer.reset_camera_clipping_range()
+        self._clip()
 
     # --- building -------------------------------------------------------------------
 
@@ -373,8 +373,14 @@ class SceneView:
                     self._framed = self.follow
                 cam.follow(self.renderer, root)
         for view in (self, *self.linked):
-            view.renderer.reset_camera_clipping_range()
+            view._clip()
         return t
+
+    def _clip(self) -> None:
+        """Camera clipping range from the world's box raised by a body height (not from
+        every actor's bounds, which would be recomputed for the moving meshes)."""
+        b = np.asarray(self.bounds, dtype=float) + [-1.0, 1.0, -1.0, 1.0, -0.5, 2.5]
+        self.renderer.ResetCameraClippingRange(*b)
 
     def _update(self, t: float) -> None:
         """Move this view's walkers, footprints, highlight and texts to time ``t``."""

@@ -131,7 +131,7 @@ def walker_status(steps: Footsteps, agent: int, t: float) -> WalkerStatus:
 
     Speed is the distance between the last two placements of the same foot over their time
     apart (one stride; one step after the first two placements), zero when the last
-    placement is longer ago than that.
+    placement is more than two such intervals ago (the walker stopped).
     """
     mine = np.flatnonzero((steps.agent == agent) & (steps.time <= t + 1e-9))
     if not mine.size:
@@ -143,6 +143,6 @@ def walker_status(steps: Footsteps, agent: int, t: float) -> WalkerStatus:
     if mine.size >= 2:
         a, b = mine[-min(3, mine.size)], mine[-1]
         stride = steps.time[b] - steps.time[a]
-        if stride > 0 and t - steps.time[b] <= stride:
+        if stride > 0 and t - steps.time[b] <= 2 * stride:
             speed = float(np.hypot(*(steps.position[b, :2] - steps.position[a, :2])) / stride)
     return WalkerStatus(speed, length, energy, int(mine.size))

@@ -1,0 +1,53 @@
+"""Compile (or load) every numba kernel a run uses, ahead of the first run.
+
+The kernels are compiled with ``cache=True`` next to their modules; ``install.sh`` runs
+this once, so the first ``crowdwalk run`` loads them instead of compiling (about 25 s of
+CPU otherwise), and every sweep worker runs it before it takes work. It walks two
+walkers (``best_first`` and ``fixed``) for two simulated seconds up a short stair flight,
+with poses: the planners, the crowd and the gait kernels all run once.
+
+Usage: ``python -m crowdwalk.warm`` (prints the seconds it took).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+
+__all__ = ["WARM_SCENARIO", "warm_kernels"]
+
+WARM_SCENARIO = {
+    "name": "warm",
+    "description": "Two walkers up two stair steps and down a curb (kernel warm-up).",
+    "terrain": {"extent": [0, -1, 8, 3], "base": 0.0,
+                "features": [{"type": "stairs", "start": [2.0, 1.0], "heading": 0,
+                              "width": 2.0, "going": 0.30, "rise": 0.17, "steps": 2}]},
+    "routes": {"nodes": [{"name": "start", "xy": [1.0, 1.0],
+                          "area": [[0.2, 0.2], [1.8, 0.2], [1.8, 1.8], [0.2, 1.8]]},
+                         {"name": "end", "xy": [7.0, 1.0]}],
+               "edges": [{"from": "start", "to": "end", "width": 2.0}]},
+    "groups": [{"name": "planned", "count": 1, "spawn": "start", "destinations": ["end"],
+                "planner": "best_first"},
+               {"name": "unplanned", "count": 1, "spawn": "start", "destinations": ["end"],
+                "planner": "fixed", "spawn_times": {"start": 0.5}}],
+    "simulation": {"duration": 2.0, "seed": 0, "dt": 0.05, "fps": 10},
+    "outputs": {"poses": True},
+}
+
+
+def warm_kernels() -> float:
+    """Run :data:`WARM_SCENARIO` once (into a temporary folder); the seconds it took."""
+    import yaml
+
+    from crowdwalk.crowd.run import run_scenario
+    from crowdwalk.scenario import parse_scenario
+
+    t0 = time.perf_counter()
+    scenario = parse_scenario(yaml.safe_dump(WARM_SCENARIO), source="<warm>")
+    with tempfile.TemporaryDirectory() as tmp:
+        run_scenario(scenario, tmp)
+    return time.perf_counter() - t0
+
+
+if __name__ == "__main__":
+    print(f"crowdwalk kernels ready ({warm_kernels():.1f} s)")
