@@ -60,7 +60,10 @@ class CrowdParams:
         :func:`crowdwalk.crowd.speed.time_gap_speed`).
     time_gap : float
         T of the time-gap model [s]: 0.8, calibrated on the SFPE handbook's corridor
-        speeds (``scripts/calibrate_time_gap.py``); validated on Weidmann (1993).
+        speeds (``scripts/calibrate_time_gap.py``; single-seed runs are noisy: RMS
+        against SFPE 0.083 m/s at 0.8 s against 0.093-0.096 at 0.6-0.7 s in the first
+        runs, 0.135 against 0.099 at 0.7 s on the final version); validated on Weidmann
+        (1993).
     steering : SteeringParams
     """
 
