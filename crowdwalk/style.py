@@ -75,7 +75,7 @@ class Attribute:
         return math.pi / 180.0 if self.unit == "deg" else 1.0
 
 
-#: The 15 attributes (Fig. 8). ``stride_width`` defaults to 0.05 body heights (NaN here).
+#: The 15 attributes (Fig. 8).
 ATTRIBUTES: tuple[Attribute, ...] = (
     Attribute("shoulder_rotation", "deg", 5.0, 0.0, 20.0,
               "amplitude of the shoulder line's rotation about the vertical, against the "
@@ -109,13 +109,11 @@ ATTRIBUTES: tuple[Attribute, ...] = (
               "least height of the swing foot above the ground (planner and gait engine)"),
     Attribute("foot_angle", "deg", 7.0, -15.0, 30.0,
               "toe-out of the feet from the walking direction"),
-    Attribute("stride_width", "m", math.nan, 0.0, 0.4,
-              "lateral distance between the left and right ankle lines; default 0.05 body "
-              "heights"),
+    Attribute("stride_width", "m", 0.1, 0.0, 0.4,
+              "lateral distance between the left and right ankle lines (adult 8-10 cm)"),
 )
 ATTRIBUTE_NAMES: tuple[str, ...] = tuple(a.name for a in ATTRIBUTES)
 _ATTR = {a.name: a for a in ATTRIBUTES}
-STRIDE_WIDTH_RATIO = 0.05  # default stride width / body height (adult 8-10 cm)
 
 #: Fig. 11's walks as attribute sets (file units), with ``lock`` and ``velocity`` [m/s]
 #: where the walk sets them. proud and tired follow §4's description ("almost maximum" =
@@ -210,7 +208,6 @@ class Style:
         """The normal walk (defaults, normal mode) for bodies (n,) [m] at speeds (n,) [m/s]."""
         h = np.asarray(body_height, dtype=float)
         cols = {a.name: np.full(h.shape, a.default * a.to_si) for a in ATTRIBUTES}
-        cols["stride_width"] = STRIDE_WIDTH_RATIO * h
         nan = np.full(h.shape, np.nan)
         return cls(**cols, velocity=np.broadcast_to(np.asarray(velocity, float), h.shape).copy(),
                    step_length=nan, step_frequency=nan.copy(),
@@ -309,7 +306,7 @@ class LockSpec(_Model):
 
 
 def _attribute_field(a: Attribute):
-    default = "0.05 body heights" if a.name == "stride_width" else f"{a.default:g}"
+    default = f"{a.default:g}"
     return (float | Spread | None,
             Field(None, description=f"{a.doc} [{a.unit}], range [{a.lo:g}, {a.hi:g}], "
                                     f"default {default}; a value or {{mean, sd}}"))

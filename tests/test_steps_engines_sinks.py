@@ -95,8 +95,8 @@ def test_a_mixed_engine_poses_each_agent_as_its_own_engine_would(split):
     _, world, one, _, _ = prepare(QUICKSTART, over)
     _, _, two, _, _ = prepare(QUICKSTART, over)
     body = Body.from_heights(two.pop.body_height)
-    engines = [make_engine("elevation_angles", body=body, ground=world.terrain.height)
-               for _ in range(2)]
+    engines = [make_engine("elevation_angles", body=body, ground=world.terrain.height,
+                           attributes=two.pop.style) for _ in range(2)]
     choice = np.arange(two.n) % 2 if split else np.zeros(two.n, int)
     two.gait = MixedEngine(engines, choice)
     assert isinstance(two.gait, GaitEngine)

@@ -46,8 +46,6 @@ def test_presets_round_trip_through_the_scenario_file():
         for a in ATTRIBUTES:
             expected = PRESETS[name].get(a.name, a.default)
             got = getattr(s, a.name) / a.to_si
-            if a.name == "stride_width" and "stride_width" not in PRESETS[name]:
-                expected = 0.05 * pop.body_height[pop.group == gi]
             np.testing.assert_allclose(got, expected, atol=1e-12, err_msg=f"{name}.{a.name}")
         lock = PRESETS[name].get("lock")
         assert set(LOCKS[c] for c in s.lock) == {next(iter(lock)) if lock else "none"}

@@ -39,7 +39,7 @@ def swing_bezier(swing: np.ndarray, *, stance: np.ndarray, stance_z: np.ndarray,
 
 def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
                direction: np.ndarray, plan, duration: np.ndarray, terrain, legs, population,
-               foot_half_width: float) -> StepBatch:
+               foot_half_width) -> StepBatch:
     """Start the steps ``plan`` (a :class:`~crowdwalk.crowd.stepping.StepPlan` of k rows)
     of ``agents`` (k,) at ``start_time`` (k,) [s] along unit ``direction`` (k, 2), lasting
     ``duration`` (k,) [s]: ``state`` moves on (in place; the plan queue's anchor is the

@@ -215,6 +215,7 @@ class FootstepPlanner:
         self.legs = list(legs)
         self.lookahead = float(lookahead)
         self.config = config
+        self.configs = [config]  # per-walker variants (add_config), index = setting
         self.horizon = int(horizon)
         self._cache: dict[bytes, int] = {}  # key -> row of ``_store``
         self._store = _PlanStore(self.horizon)
@@ -222,6 +223,12 @@ class FootstepPlanner:
         self.calls = 0
         self.hits = 0
         self.retries = 0
+
+    def add_config(self, config) -> int:
+        """The setting index of planner configuration ``config`` (added if new)."""
+        if config not in self.configs:
+            self.configs.append(config)
+        return self.configs.index(config)
 
     def _codes(self, names: list[str]) -> np.ndarray:
         """Stable integer codes (m,) of planner names (for the cache keys)."""
@@ -239,6 +246,7 @@ class FootstepPlanner:
         speed: np.ndarray,
         planner: np.ndarray,
         trailing: np.ndarray | None = None,
+        setting: np.ndarray | None = None,
     ) -> PlannedSteps:
         """Plan the first step of m agents.
 
@@ -258,6 +266,8 @@ class FootstepPlanner:
             Planner name per agent (``planners.PLANNERS``).
         trailing : (m,) float, optional
             Arc length of the trailing (swing) foot behind the stance foot [m], < 0.
+        setting : (m,) int, optional
+            Index into ``configs`` per agent (default 0, ``config``).
         """
         from planners import plan_batch
 
@@ -292,7 +302,9 @@ class FootstepPlanner:
             arrays = [self.terrain.profile_arrays(line) for line in lines]
         s_all, z_all, bounds = _relative_profiles(arrays, np.asarray(stance_z, float))
         names = [str(p) for p in planner]
-        keys = _cache_keys(s_all, z_all, bounds, self._codes(names), np.asarray(leg),
+        setting = np.zeros(m, np.int64) if setting is None else np.asarray(setting, np.int64)
+        codes = self._codes([f"{n}#{c}" for n, c in zip(names, setting.tolist(), strict=True)])
+        keys = _cache_keys(s_all, z_all, bounds, codes, np.asarray(leg),
                            speed_class, np.round(trailing * 1000).astype(np.int64))
         rows = np.array([self._cache.get(k, -1) for k in keys], dtype=np.int64)
         todo = np.flatnonzero(rows < 0)
@@ -301,17 +313,18 @@ class FootstepPlanner:
         if todo.size:
             from planners import GroundProfile
 
-            by_planner: dict[str, dict[bytes, int]] = {}
+            by_planner: dict[tuple[str, int], dict[bytes, int]] = {}
             for i in todo.tolist():  # the first agent of each new problem plans it
-                by_planner.setdefault(names[i], {}).setdefault(keys[i], i)
-            for name, unique in by_planner.items():
+                by_planner.setdefault((names[i], int(setting[i])), {}).setdefault(keys[i], i)
+            for (name, c), unique in by_planner.items():
+                config = self.configs[c]
                 first = list(unique.values())
                 grounds = [GroundProfile(s_all[bounds[i]:bounds[i + 1]],
                                          z_all[bounds[i]:bounds[i + 1]]) for i in first]
                 legs = [self.legs[leg[i]] for i in first]
                 speeds = [float(speed[i]) for i in first]
                 behind = [float(trailing[i]) for i in first]
-                plans = plan_batch(grounds, legs, speeds, planner=name, config=self.config,
+                plans = plan_batch(grounds, legs, speeds, planner=name, config=config,
                                    trailing=behind)
                 # a long stride's first swing curve (the trailing foot more than half a leg
                 # behind) can fail the planner's clearance test even on near-level
@@ -323,7 +336,7 @@ class FootstepPlanner:
                     self.retries += len(retry)
                     again = plan_batch([grounds[k] for k in retry], [legs[k] for k in retry],
                                        [speeds[k] for k in retry], planner=name,
-                                       config=self.config,
+                                       config=config,
                                        trailing=[-0.5 * legs[k].length for k in retry])
                     for k, p in zip(retry, again, strict=True):
                         plans[k] = p

@@ -24,9 +24,6 @@ class CrowdParams:
         validation, not calibration: the value is not changed to fit them. (A disc
         stands for a body about 0.26 H broad (Winter 2009) but only about half as deep;
         with 0.115 H the 1 m bottleneck passed 1.43 /s.)
-    foot_half_width : float
-        Lateral distance of each foot's centre from the walking line [m] (stride width
-        about 0.1 m, normative.json).
     wait_time : float
         How long an agent stands before deciding again when it cannot step [s].
     target_distance : float
@@ -68,7 +65,6 @@ class CrowdParams:
     """
 
     radius_ratio: float = 0.105
-    foot_half_width: float = 0.05
     wait_time: float = 0.25
     target_distance: float = 2.0
     centre_pull: float = 0.25

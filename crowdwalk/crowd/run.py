@@ -24,6 +24,7 @@ from crowdwalk.crowd.simulation import (
 )
 from crowdwalk.errors import invalid
 from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
+from crowdwalk.style import summary_by_style
 
 __all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
@@ -135,7 +136,8 @@ def _make_gait(pop, terrain):
 
     body = Body.from_heights(pop.body_height)
     names, choice = np.unique(pop.gait.astype(str), return_inverse=True)
-    engines = [make_engine(str(name), body=body, ground=terrain.height) for name in names]
+    engines = [make_engine(str(name), body=body, ground=terrain.height, attributes=pop.style)
+               for name in names]
     return engines[0] if len(engines) == 1 else MixedEngine(engines, choice)
 
 
@@ -259,6 +261,7 @@ def summarise(sim: CrowdSimulation, scenario, *, timing: dict, max_overlap: floa
     def opt(x: float):
         return None if not np.isfinite(x) else float(x)
 
+    gaits, styles = pop.gait, pop.style.preset_name
     agents = [
         {
             "id": i, "group": str(groups[i]), "planner": str(planner[i]),
@@ -271,6 +274,7 @@ def summarise(sim: CrowdSimulation, scenario, *, timing: dict, max_overlap: floa
             "mean_step_length_m": opt(mean_sl[i]), "cadence_steps_per_s": opt(cadence[i]),
             "plans": int(st.plans[i]), "plan_failures": int(st.plan_failures[i]),
             "shortened_steps": int(st.shortened[i]), "reroutes": int(st.reroutes[i]),
+            "gait": str(gaits[i]), "style": str(styles[i]),  # "" without a preset
         }
         for i in range(sim.n)
     ]
@@ -314,5 +318,6 @@ def summarise(sim: CrowdSimulation, scenario, *, timing: dict, max_overlap: floa
         "timing": {**{k: float(v) for k, v in timing.items()},
                    "simulated_s_per_wall_s": float(sim.time / wall) if wall > 0 else None},
         "groups": by_group,
+        "styles": summary_by_style(agents),
         "agents": agents,
     }

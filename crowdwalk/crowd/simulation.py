@@ -49,6 +49,7 @@ from crowdwalk.errors import invalid
 from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
+from crowdwalk.style import LOCKS
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -92,13 +93,27 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         self.radius = params.radius_ratio * population.body_height
-        # the normal-mode step and cadence of each body at its free speed (WBDS relation)
+        # KLAW locomotion parameters (crowdwalk.style) at the free speed: normal mode is
+        # the body's normal-mode step and cadence (planners.normal_mode, WBDS relation); a
+        # lock holds its step length (the step aimed at) or frequency (the step time), and
+        # a held step length is planned at the speed it is the normal-mode step of (the
+        # planners' neutral step and step-frequency term then centre on it)
+        style, v = population.style, population.free_speed
         self.leg_length = leg = normal_mode.leg_length_from_height(population.body_height)
-        self.min_step_time = 1.0 / normal_mode.step_frequency(population.free_speed, leg)
-        self.nominal_step = normal_mode.step_length(population.free_speed, leg)
+        self.nominal_step, frequency = style.locomotion(v, population.body_height)
+        normal = normal_mode.step_frequency(v, leg)
+        self.min_step_time = 1.0 / np.where(style.lock == LOCKS.index("step_frequency"),
+                                            frequency, np.maximum(frequency, normal))
+        self.plan_speed = np.where(style.lock > 0, normal_mode.speed_from_step_length(
+            self.nominal_step, leg), v)
+        self.half_width = 0.5 * style.stride_width  # ankle line from the centre [m]
         self.step_speed = population.free_speed.copy()  # speed of the step decided [m/s]
+        # the cadence floor holds for steps the planner did not plan, and for every step
+        # of a walker whose style locks its step frequency
+        self.hold_frequency = style.lock == LOCKS.index("step_frequency")
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
+        self.setting = self._style_settings()
         self.state = AgentState(n)
         self.queue = PlanQueue(n, self.footsteps.horizon)
         table = self.routes.table
@@ -189,12 +204,23 @@ class CrowdSimulation:
         if idx.size:
             p = self.pop.spawn_xy[idx]
             place(st, idx, t=t, xy=p, z=self.terrain.height(p), table=self.routes.table,
-                  foot_half_width=self.params.foot_half_width)
+                  foot_half_width=self.half_width[idx])
+
+    def _style_settings(self) -> np.ndarray:
+        """Planner configuration per walker (n,) (index into ``footsteps.configs``): the
+        crowd's, with the style's toe clearance as swing clearance [m] (to 5 mm)."""
+        from dataclasses import replace
+
+        clearance = np.round(self.pop.style.toe_clearance / 0.005) * 0.005
+        values, index = np.unique(clearance, return_inverse=True)
+        base = self.footsteps.config
+        return np.array([self.footsteps.add_config(replace(base, clearance=float(c)))
+                         for c in values], dtype=np.int64)[index]
 
     def _durations(self, a: np.ndarray, plan: StepPlan) -> np.ndarray:
         return step_durations(plan.length, plan.rise, free_speed=self.step_speed[a],
-                              min_step_time=np.where(plan.shortened, self.min_step_time[a],
-                                                     0.0),
+                              min_step_time=np.where(plan.shortened | self.hold_frequency[a],
+                                                     self.min_step_time[a], 0.0),
                               stair_rise=self.params.stair_rise)
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
@@ -252,7 +278,8 @@ class CrowdSimulation:
             plan = plan.put(mv, next_steps(
                 st, self.queue, agents=idx[mv], choice=choice.take(mv),
                 footsteps=self.footsteps, legs=self.legs, population=self.pop,
-                terrain=self.terrain, params=prm))
+                terrain=self.terrain, params=prm, plan_speed=self.plan_speed,
+                setting=self.setting))
             self.wall_planning += _time.perf_counter() - w0
             # the exact step taken, in time, against each neighbour's committed step
             go = np.flatnonzero(plan.move)
@@ -299,7 +326,7 @@ class CrowdSimulation:
         batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
                            plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
-                           foot_half_width=prm.foot_half_width)
+                           foot_half_width=self.half_width[a])
         self._decided.append(batch)
         if self.gait is not None:
             if self._pending and np.isin(a, np.concatenate([b.agent for b in self._pending])).any():

@@ -48,7 +48,7 @@ def free_to_spawn(state, due: np.ndarray, *, t: float, walkers: np.ndarray, xy: 
 
 
 def place(state, agents: np.ndarray, *, t: float, xy: np.ndarray, z: np.ndarray, table,
-          foot_half_width: float) -> None:
+          foot_half_width) -> None:
     """Start ``agents`` (k,) walking at time ``t`` [s], feet together at ``xy`` (k, 2),
     ground height ``z`` (k,) [m], facing 1 m ahead along their route (``table``); the
     left foot swings first."""
@@ -68,4 +68,5 @@ def place(state, agents: np.ndarray, *, t: float, xy: np.ndarray, z: np.ndarray,
     d = ahead - p
     st.heading[idx] = np.arctan2(d[:, 1], d[:, 0])
     right = -_left(np.column_stack([np.cos(st.heading[idx]), np.sin(st.heading[idx])]))
-    st.stance_foot[idx] = np.column_stack([p + foot_half_width * right, z])
+    st.stance_foot[idx] = np.column_stack([p + np.asarray(foot_half_width)[..., None] * right,
+                                           z])

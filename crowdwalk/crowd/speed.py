@@ -4,8 +4,9 @@ Deviation from Chen & Li, whose Table 1 shortens the phases equally for up- and 
 the step duration is step length / speed with the agent's free speed scaled on stairs by
 Weidmann's (1993) measured horizontal stair speeds (0.610 m/s up, 0.694 m/s down against
 1.34 m/s level) and on slopes by Tobler's (1993) hiking function; a level step never
-takes less than 1/cadence at the free speed (the body's normal-mode cadence,
-``planners.normal_mode``, fitted to Fukuchi et al. 2018), so short
+takes less than the walker's step time at its free speed (the body's normal-mode cadence,
+``planners.normal_mode``, fitted to Fukuchi et al. 2018; or a locked step frequency,
+``crowdwalk.style``), so short
 steps in a queue are slow steps, not a shuffle at high cadence.
 
 That floor holds for steps the planner did not plan (shortened in a queue, positioning)

@@ -318,12 +318,14 @@ class Animator:
         ground: GroundHeight | None = None,
         style: GaitStyle | None = None,
         interp: ElevInterp | None = None,
+        attributes=None,
     ) -> None:
         if not isinstance(body, Body):
             raise invalid("Animator", "body", "a crowdwalk.body.Body", type(body).__name__)
         self.body = body
         self.ground = ground
         self.style = style or GaitStyle()
+        self.attributes = attributes  # crowdwalk.style.Style (n) or None
         self.interp = interp or ElevInterp()
         n = len(body)
         n_samples = self.interp.datasets[0].samples
@@ -399,6 +401,12 @@ class Animator:
             out.old_yaw[had] = self._stance.yaw[ah] + self._stance.spin[ah]
         return out
 
+    def _own_toe(self, a: np.ndarray) -> np.ndarray:
+        """The walkers' own toe-out (k,) [rad]: the style's foot angle, else GaitStyle's."""
+        if self.attributes is None:
+            return np.full(a.size, self.style.toe_out)
+        return self.attributes.foot_angle[a]
+
     def _new_stance(self, cmd: StepCommand, body: Body, had: np.ndarray, landed: _Landed):
         """The new stance foot: exactly where and how the previous swing foot landed (its
         heel is the contact point, so nothing slides at the swap), or the commanded
@@ -406,8 +414,9 @@ class Animator:
         toe-out at its start (the yaw it had as stance foot, turning to toe-out)."""
         a, first = cmd.agent, ~had
         side_sw = np.where(cmd.swing_foot == 0, 1.0, -1.0)
-        toe_out = cmd.toe_out if cmd.toe_out is not None else np.full(a.size, self.style.toe_out)
-        yaw = np.where(first, cmd.heading - side_sw * self.style.toe_out, landed.yaw)
+        own_toe = self._own_toe(a)
+        toe_out = cmd.toe_out if cmd.toe_out is not None else own_toe
+        yaw = np.where(first, cmd.heading - side_sw * own_toe, landed.yaw)
         along = np.stack([np.cos(yaw), np.sin(yaw)], axis=1)
         heel_xy = np.where(had[:, None], landed.heel[:, :2],
                            cmd.start[:, :2] - body.heel_offset[:, None] * along)  # fmt: skip
@@ -444,7 +453,7 @@ class Animator:
         # Spin turn (§6.1): the stance foot pivots on its ball when the heading would
         # otherwise twist the stance hip by more than _MAX_STANCE_TWIST.
         spin = np.zeros(a.size) if cmd.spin is None else cmd.spin.copy()
-        twist = wrap_angle(cmd.heading - side_sw * self.style.toe_out - (stance.yaw + spin))
+        twist = wrap_angle(cmd.heading - side_sw * self._own_toe(a) - (stance.yaw + spin))
         excess = np.sign(twist) * np.maximum(np.abs(twist) - _MAX_STANCE_TWIST, 0.0)
         st.spin[a] = spin + excess
         st.toe_out[a] = toe_out
@@ -803,6 +812,7 @@ class Animator:
             self.style, self._step.stance_fraction[a], swing_offset=offset, swing_target=target,
             swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
             swing_toe_angle=toes,
+            attributes=None if self.attributes is None else self.attributes.take(a),
         )  # fmt: skip
 
     def _lift_envelope(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray | None:
