@@ -465,6 +465,48 @@ class RouteGraph:
         shapely.prepare(geom)
         return geom
 
+    def sees(self, a, b) -> bool:
+        """True when the straight segment from ``a`` to ``b`` (2,) [m] lies inside the
+        walkable area."""
+        return bool(self._walkable_tolerant.covers(LineString([tuple(a), tuple(b)])))
+
+    @functools.cached_property
+    def _inner(self):
+        """The walkable area shrunk by 0.25 m (simplified to 2 cm, grown by 1 µm,
+        prepared) and its corners (k, 2) [m]: where shortest walks keep a body off the
+        walls, and their turning points."""
+        inner = self.walkable_area.buffer(-0.25, quad_segs=2).simplify(0.02)
+        rings = shapely.get_rings(shapely.get_parts(inner))
+        corners = np.unique(np.round(shapely.get_coordinates(rings), 9), axis=0)
+        inner = inner.buffer(1e-6)
+        shapely.prepare(inner)
+        return inner, corners
+
+    def shortest_walk(self, a, b) -> np.ndarray:
+        """Shortest polyline (k, 2) [m] from ``a`` to ``b`` (2,) [m] inside the walkable
+        area: the straight segment if it lies inside, else Dijkstra on the visibility
+        graph of the two points and the corners of the area shrunk by 0.25 m, its legs
+        0.25 m off the walls (Lozano-Pérez & Wesley 1979); the straight segment if no
+        such path exists."""
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        if self.sees(a, b):
+            return np.stack([a, b])
+        inner, corners = self._inner
+        pts = np.vstack([a, b, corners])
+        i, j = np.triu_indices(len(pts), 1)
+        seg = shapely.linestrings(np.stack([pts[i], pts[j]], axis=1))
+        # legs between corners stay in the shrunk area; legs from a or b (which may stand
+        # nearer a wall) in the walkable area
+        ok = shapely.covers(inner, seg) | ((i < 2) & shapely.covers(self._walkable_tolerant,
+                                                                     seg))
+        g = nx.Graph()
+        length = np.linalg.norm(pts[i] - pts[j], axis=1)
+        g.add_weighted_edges_from(zip(i[ok], j[ok], length[ok], strict=True))
+        try:
+            return pts[nx.shortest_path(g, 0, 1, weight="weight")]
+        except (nx.NetworkXNoPath, nx.NodeNotFound):
+            return np.stack([a, b])
+
     # -- routing --
 
     def _check_node(self, name, field_name: str) -> None:

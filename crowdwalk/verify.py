@@ -41,7 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Check", "CASES", "FAST", "run_verification", "weidmann_speed", "seyfried_band"]
+__all__ = ["Check", "CASES", "FAST", "run_verification", "weidmann_speed", "sfpe_speed",
+           "seyfried_band", "ring_corridor_speed", "ring_scenario"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,13 @@ def weidmann_speed(density: np.ndarray) -> np.ndarray:
     """Weidmann's (1993) walking speed [m/s] at density [1/m²]."""
     rho = np.asarray(density, float)
     return 1.34 * (1.0 - np.exp(-1.913 * (1.0 / rho - 1.0 / 5.4)))
+
+
+def sfpe_speed(density: np.ndarray) -> np.ndarray:
+    """The SFPE handbook's corridor speed [m/s] at density [1/m²] (Nelson & Mowrer 2002,
+    after Fruin, Pauls and Predtechenskii & Milinskii): v = k (1 − 0.266 D), k = 1.40 m/s,
+    for 0.54 ≤ D ≤ 3.8 /m²."""
+    return 1.40 * (1.0 - 0.266 * np.asarray(density, float))
 
 
 _SEYFRIED = {0.8: (1.3, 1.6), 1.0: (1.7, 1.9), 1.2: (2.0, 2.3)}
@@ -104,13 +112,13 @@ class _Run:
     traj: object  # crowdwalk.record.Trajectories
 
 
-def _run(data: dict, folder: Path) -> _Run:
+def _run(data: dict, folder: Path, params=None) -> _Run:
     from crowdwalk.crowd.run import RunOverrides, run_scenario
     from crowdwalk.record import open_run
     from crowdwalk.scenario import Scenario
 
     sc = Scenario.model_validate(data)
-    summary = run_scenario(sc, folder, overrides=RunOverrides(poses=False))
+    summary = run_scenario(sc, folder, overrides=RunOverrides(poses=False), params=params)
     return _Run(folder, summary, open_run(folder).trajectories())
 
 
@@ -214,7 +222,7 @@ def rimea_3(fast: bool, tmp: Path) -> list[Check]:
     return _stairs("down", fast, tmp)
 
 
-def _ring(density: float, width: float, radius: float, duration: float, seed: int) -> dict:
+def ring_scenario(density: float, width: float, radius: float, duration: float, seed: int) -> dict:
     """A closed ring corridor (``sectors`` chords) filled at ``density`` [1/m²]; every
     sector's walkers go round and round (RiMEA 4's closed boundary)."""
     sectors = 12
@@ -226,11 +234,14 @@ def _ring(density: float, width: float, radius: float, duration: float, seed: in
              for k in range(sectors)]
     laps = int(np.ceil(duration * 1.6 / (2 * np.pi * radius))) + 1
     groups = []
-    r0, r1 = radius * np.cos(np.pi / sectors) - width / 2 + 0.05, radius + width / 2 - 0.05
+    xy = np.array([n["xy"] for n in nodes])
     for k in range(sectors):
-        a = np.linspace(ang[k] + 0.02, ang[k] + 2 * np.pi / sectors - 0.02, 6)
-        poly = np.vstack([np.column_stack([r0 * np.cos(a), r0 * np.sin(a)]),
-                          np.column_stack([r1 * np.cos(a[::-1]), r1 * np.sin(a[::-1])])])
+        # the chord's corridor, 0.05 m inside its sides and 0.2 m short of its ends
+        p, q = xy[k], xy[(k + 1) % sectors]
+        along = (q - p) / np.linalg.norm(q - p)
+        side = np.array([-along[1], along[0]]) * (width / 2 - 0.05)
+        p, q = p + 0.2 * along, q - 0.2 * along
+        poly = np.array([p - side, q - side, q + side, p + side])
         from shapely import Polygon
 
         # the sector's share of the ring at ``density``, packed into the spawn area
@@ -252,23 +263,29 @@ def _ring(density: float, width: float, radius: float, duration: float, seed: in
                      measurement={"areas": [{"name": "main", "polygon": meas.round(4).tolist()}]})
 
 
+def ring_corridor_speed(density: float, folder: Path, *, fast: bool = True, params=None,
+                        seed: int = 3) -> tuple[float, float]:
+    """Run the ring at ``density`` [1/m²] and return the measured (density [1/m²],
+    speed [m/s]) in its measurement area, PedPy, after the first 10 s."""
+    from crowdwalk.analysis import analyse_run
+
+    width, radius = (2.0, 5.0) if fast else (3.0, 7.0)
+    duration = 25.0 if fast else 60.0
+    run = _run(ring_scenario(density, width, radius, duration, seed=seed), folder, params)
+    analyse_run(run.folder, plots=False)
+    rows = np.genfromtxt(folder / "analysis" / "area_main.csv", delimiter=",", names=True)
+    keep = (rows["time_s"] >= 10.0) & np.isfinite(rows["speed_m_s"])
+    return (float(np.mean(rows["density_per_m2"][keep])),
+            float(np.mean(rows["speed_m_s"][keep])))
+
+
 def rimea_4(fast: bool, tmp: Path) -> list[Check]:
     """Fundamental diagram in a closed ring corridor: speed at density against
     Weidmann within ±0.15 m/s from 0.5 to 3.5 /m² (the issue's target)."""
-    from crowdwalk.analysis import analyse_run
-
     densities = (0.5, 1.0, 2.0) if fast else (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5)
-    width, radius = (2.0, 5.0) if fast else (3.0, 7.0)
-    duration, skip = (25.0, 10.0) if fast else (60.0, 10.0)
     checks = []
     for rho in densities:
-        folder = tmp / f"fd_{rho:g}"
-        run = _run(_ring(rho, width, radius, duration, seed=3), folder)
-        analyse_run(run.folder, plots=False)
-        rows = np.genfromtxt(folder / "analysis" / "area_main.csv", delimiter=",", names=True)
-        keep = (rows["time_s"] >= skip) & np.isfinite(rows["speed_m_s"])
-        d = float(np.mean(rows["density_per_m2"][keep]))
-        v = float(np.mean(rows["speed_m_s"][keep]))
+        d, v = ring_corridor_speed(rho, tmp / f"fd_{rho:g}", fast=fast)
         ref = float(weidmann_speed(d))
         checks.append(Check("fundamental diagram (RiMEA 4)",
                             f"ρ {d:.2f} /m² (set {rho:g}): v {v:.2f} m/s, J {d * v:.2f} /(m s)",

@@ -44,6 +44,18 @@ def test_obstacles_are_holes_and_routes_go_round_them():
     assert area.buffer(1e-6).covers(path)
 
 
+def test_shortest_walk_inside_the_walkable_area():
+    routes = build_world(load_scenario(SCENARIOS / "obstacles.yaml")).routes
+    straight = routes.shortest_walk((7.0, 2.0), (7.0, 6.0))
+    assert straight.shape == (2, 2)  # in sight: one straight leg
+    walk = shapely.LineString(routes.shortest_walk((7.0, 4.0), (13.0, 4.0)))
+    assert routes.walkable_area.buffer(1e-6).covers(walk)
+    # legs from the two ends may cut a corner of the 0.25 m offset a little
+    assert walk.distance(shapely.box(9, 3, 11, 5)) >= 0.2
+    # round the 2 m pillar's corners, 0.25 m off: 2 (sqrt(2^2 + 1.25^2)) = 4.72 m + 2 m
+    assert 6.0 < walk.length < 7.0
+
+
 def test_obstacle_run_keeps_bodies_out(tmp_path):
     summary = run_scenario(SCENARIOS / "obstacles.yaml", tmp_path,
                            overrides=RunOverrides(max_agents=10, poses=False))
@@ -189,9 +201,10 @@ def test_events_and_waiting_areas_are_checked_and_not_yet_simulated():
 def test_measurement_lines_and_areas_analysed_with_pedpy(tmp_path):
     from crowdwalk.analysis import analyse_run
 
-    run_scenario(SCENARIOS / "arrivals_density.yaml", tmp_path,
-                 overrides=RunOverrides(max_agents=25, poses=False, duration=30.0))
-    result = analyse_run(tmp_path)
+    summary = run_scenario(SCENARIOS / "arrivals_density.yaml", tmp_path,
+                           overrides=RunOverrides(max_agents=25, poses=False, duration=30.0))
+    result = summary["measurement"]  # a run with measurement lines or areas analyses them
+    assert analyse_run(tmp_path, plots=False) == result
     out = tmp_path / "analysis"
     for name in ("area_middle.csv", "area_middle.png", "line_gate.csv", "line_gate.png"):
         assert (out / name).stat().st_size > 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Literal
 
 from crowdwalk.crowd.steering import SteeringParams
 
@@ -16,14 +17,13 @@ class CrowdParams:
     Attributes
     ----------
     radius_ratio : float
-        Body radius over body height [-] (0.105: 0.18 m for a 1.71 m person, so that two
-        bodies standing one behind the other are 0.36 m apart, the standstill spacing
-        Seyfried et al. (2005, J. Stat. Mech. P10002) measured in single file; a disc
-        stands for a body about 0.26 H broad (Winter 2009) but only about half as deep.
-        With 0.115 H (the shoulder half-breadth less some arm compression) the 1 m
-        bottleneck passed 1.43 /s instead of Seyfried et al.'s (2009) 1.9 /s: two such
-        discs abreast plus their wall clearance barely fit, so the two lanes of the
-        "zipper" (Hoogendoorn & Daamen 2005) rarely formed).
+        Body radius over body height [-]. Calibrated on one data set only: 0.105 gives
+        0.18 m for a 1.71 m person, so that two bodies standing one behind the other are
+        0.36 m apart, the standstill spacing Seyfried et al. (2005, J. Stat. Mech.
+        P10002) measured in single file. The bottleneck flows (Seyfried et al. 2009) are
+        validation, not calibration: the value is not changed to fit them. (A disc
+        stands for a body about 0.26 H broad (Winter 2009) but only about half as deep;
+        with 0.115 H the 1 m bottleneck passed 1.43 /s.)
     wait_time : float
         How long an agent stands before deciding again when it cannot step [s].
     target_distance : float
@@ -51,6 +51,16 @@ class CrowdParams:
     replan_turn_deg : float
         A walker that turns by more than this at a heel strike re-plans; otherwise it
         takes the next step of its current plan [deg].
+    speed_model : "free" or "time_gap"
+        ``free``: a step goes at the walker's free speed (stairs and slopes scaled);
+        ``time_gap``: limited by the gap to the walker ahead (Tordeux et al. 2016,
+        :func:`crowdwalk.crowd.speed.time_gap_speed`).
+    time_gap : float
+        T of the time-gap model [s]: 0.8, calibrated on the SFPE handbook's corridor
+        speeds (``scripts/calibrate_time_gap.py``; single-seed runs are noisy: RMS
+        against SFPE 0.083 m/s at 0.8 s against 0.093-0.096 at 0.6-0.7 s in the first
+        runs, 0.135 against 0.099 at 0.7 s on the final version); validated on Weidmann
+        (1993).
     steering : SteeringParams
     """
 
@@ -67,4 +77,6 @@ class CrowdParams:
     planning_horizon: int = 3
     min_step_ratio: float = 0.15
     replan_turn_deg: float = 3.0
+    speed_model: Literal["free", "time_gap"] = "free"
+    time_gap: float = 0.8
     steering: SteeringParams = field(default_factory=SteeringParams)

@@ -14,6 +14,11 @@ from crowdwalk.crowd.navigation import RouteTable
 __all__ = ["Routes", "RouteProgress", "route_progress", "steering_targets"]
 
 
+def _length(line: np.ndarray) -> float:
+    """Length [m] of a polyline (k, 2) [m]."""
+    return float(np.sum(np.linalg.norm(np.diff(line, axis=0), axis=1)))
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     return v / np.where(n > 1e-12, n, 1.0)
@@ -99,12 +104,17 @@ class Routes:
 
     def reroute(self, state, blocked: np.ndarray, *, t: float, walkers: np.ndarray) -> None:
         """Agents ``blocked`` without progress for ``reroute_after`` seconds look for a
-        cheaper route from the last route node they passed, with every corridor's cost
-        raised by the time its current occupants (``walkers`` (w, 2) [m], the walking
-        agents' positions now) need to get through it (queue length over a specific flow
-        of 1.3 persons/(s·m), Weidmann 1993; converted to metres at 1.34 m/s). The agent
-        switches (``state``'s route fields) only when that route differs from its own
-        (rare: a Python loop over the blocked agents only)."""
+        cheaper way on **from where they stand**: to the next node of their route or one
+        of the other nodes joined to the node they passed last (not to nodes behind them),
+        each by the shortest walk inside the walkable area
+        (:meth:`crowdwalk.routes.RouteGraph.shortest_walk`) plus the queue on the
+        corridor from the node passed to it, then along the route graph to
+        the route's last node, every corridor's cost raised by the time its current
+        occupants (``walkers`` (w, 2) [m]) need to get through it (queue length over a
+        specific flow of 1.3 persons/(s·m), Weidmann 1993; converted to metres at 1.34
+        m/s). Back to the node passed last only when there is no other way. The agent
+        switches (``state``'s route fields) only when that differs from its way on (rare:
+        a Python loop over the blocked agents only)."""
         import networkx as nx
 
         st = state
@@ -116,9 +126,10 @@ class Routes:
             count = len(set().union(*near)) if len(near) else 0
             extra[(u, v)] = count / (1.3 * width) * 1.34
 
-        def weight(a, b, data):
+        def against(b, a, data):  # the reversed graph's edge b <- a is a -> b
             return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)
 
+        fields: dict[str, tuple[dict, dict]] = {}  # per last node: cost and path to it
         for i in blocked:
             st.progress_time[i] = t  # look again only after another ``reroute_after``
             nodes, at = self._nodes.get(int(st.route[i]), ([], np.zeros(0)))
@@ -126,15 +137,28 @@ class Routes:
                 continue
             passed = int(np.searchsorted(at, st.progress[i], side="right")) - 1
             passed = min(max(passed, 0), len(nodes) - 2)
-            rest = nodes[passed:]
-            try:
-                alt = nx.shortest_path(g, rest[0], rest[-1], weight=weight)
-            except (nx.NetworkXNoPath, nx.NodeNotFound):
+            last, ahead = nodes[-1], nodes[passed + 1:]
+            if last not in fields:
+                fields[last] = nx.single_source_dijkstra(g.reverse(copy=False), last,
+                                                         weight=against)
+            cost, paths = fields[last]
+            here = st.pos1[i]
+            behind = set(nodes[:passed + 1])
+            near = [v for v in dict.fromkeys([ahead[0], *g.successors(nodes[passed])])
+                    if v not in behind and v in cost]
+            walks = {v: self.graph.shortest_walk(here, self.graph.node_xy(v)) for v in near}
+            if not walks and nodes[passed] in cost:  # no way on but back
+                walks = {nodes[passed]: self.graph.shortest_walk(
+                    here, self.graph.node_xy(nodes[passed]))}
+            if not walks:
                 continue
-            if alt == rest or len(alt) < 2:
+            # the walk to v runs along the corridor from the node passed: its queue counts
+            best = min(walks, key=lambda v: _length(walks[v])
+                       + extra.get((nodes[passed], v), 0.0) + cost[v])
+            alt = list(reversed(paths[best]))
+            if alt == ahead:
                 continue
-            # keep any later destinations of the route after the last node
-            line = np.vstack([st.pos1[i][None, :], self.graph.raw_path(alt)])
+            line = np.vstack([walks[best], self.graph.raw_path(alt)[1:]])
             rid = self.table.add(line)
             self._remember_nodes(rid, alt)
             st.route[i] = rid

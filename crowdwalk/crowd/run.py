@@ -228,6 +228,10 @@ def run_scenario(
                             interrupted=interrupted, poses=pose_note)
         for sink in everyone:
             sink.end(summary)
+    if not interrupted and (sc.measurement.lines or sc.measurement.areas):
+        from crowdwalk.analysis import analyse_run
+
+        summary["measurement"] = analyse_run(out, sc.measurement)
     return summary
 
 

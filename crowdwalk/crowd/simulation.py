@@ -29,6 +29,7 @@ Ticks are aligned with output frames so frames are exact interpolations.
 from __future__ import annotations
 
 import time as _time
+from dataclasses import replace
 
 import numpy as np
 
@@ -39,7 +40,7 @@ from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import step_durations
+from crowdwalk.crowd.speed import step_durations, time_gap_speed
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
@@ -98,7 +99,7 @@ class CrowdSimulation:
         # a held step length is planned at the speed it is the normal-mode step of (the
         # planners' neutral step and step-frequency term then centre on it)
         style, v = population.style, population.free_speed
-        leg = normal_mode.leg_length_from_height(population.body_height)
+        self.leg_length = leg = normal_mode.leg_length_from_height(population.body_height)
         self.nominal_step, frequency = style.locomotion(v, population.body_height)
         normal = normal_mode.step_frequency(v, leg)
         self.min_step_time = 1.0 / np.where(style.lock == LOCKS.index("step_frequency"),
@@ -106,6 +107,10 @@ class CrowdSimulation:
         self.plan_speed = np.where(style.lock > 0, normal_mode.speed_from_step_length(
             self.nominal_step, leg), v)
         self.half_width = 0.5 * style.stride_width  # ankle line from the centre [m]
+        self.step_speed = population.free_speed.copy()  # speed of the step decided [m/s]
+        # the cadence floor holds for steps the planner did not plan, and for every step
+        # of a walker whose style locks its step frequency
+        self.hold_frequency = style.lock == LOCKS.index("step_frequency")
         self.legs, self.clearance = parts.legs, parts.clearance
         self.footsteps, self.routes = parts.footsteps, parts.routes
         self.setting = self._style_settings()
@@ -213,8 +218,9 @@ class CrowdSimulation:
                          for c in values], dtype=np.int64)[index]
 
     def _durations(self, a: np.ndarray, plan: StepPlan) -> np.ndarray:
-        return step_durations(plan.length, plan.rise, free_speed=self.pop.free_speed[a],
-                              min_step_time=self.min_step_time[a],
+        return step_durations(plan.length, plan.rise, free_speed=self.step_speed[a],
+                              min_step_time=np.where(plan.shortened | self.hold_frequency[a],
+                                                     self.min_step_time[a], 0.0),
                               stair_rise=self.params.stair_rise)
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
@@ -253,6 +259,18 @@ class CrowdSimulation:
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te)
         self.wall_steering += _time.perf_counter() - w0
+        if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
+            v = time_gap_speed(position=pos, direction=choice.direction,
+                               radius=self.radius[idx], others=nbs.now,
+                               others_radius=nbs.radius, valid=nbs.valid,
+                               free_speed=self.pop.free_speed[idx], time_gap=prm.time_gap)
+            self.step_speed[idx] = np.maximum(v, 0.05)
+            # a slower step is a shorter one: what that speed covers in one step at the
+            # normal-mode step frequency for it (WBDS relation)
+            reach = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[idx])
+            choice = replace(choice, free_length=np.where(
+                v < self.pop.free_speed[idx], np.minimum(choice.free_length, reach),
+                choice.free_length))
         plan = StepPlan.standing(idx.size)
         mv = np.flatnonzero(choice.move)
         if mv.size:

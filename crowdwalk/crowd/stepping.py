@@ -35,6 +35,9 @@ class StepPlan:
     swing : (k, 4, 2) float
         Swing-ankle Bezier control points (s, z) relative to the stance ankle [m]; NaN
         where the planner gave none.
+    shortened : (k,) bool
+        Not the planner's step: shortened in a queue, or a positioning step (its cadence
+        is at most the free-walking cadence, :func:`crowdwalk.crowd.speed.step_durations`).
     """
 
     move: np.ndarray
@@ -42,17 +45,18 @@ class StepPlan:
     rise: np.ndarray
     energy: np.ndarray
     swing: np.ndarray
+    shortened: np.ndarray
 
     @classmethod
     def standing(cls, k: int) -> StepPlan:
         """k agents that do not step."""
         return cls(np.zeros(k, bool), np.zeros(k), np.zeros(k), np.zeros(k),
-                   np.full((k, 4, 2), np.nan))
+                   np.full((k, 4, 2), np.nan), np.zeros(k, bool))
 
     def put(self, rows: np.ndarray, other: StepPlan) -> StepPlan:
         """This plan with ``rows`` replaced by ``other`` (len(rows) steps)."""
         out = {}
-        for name in ("move", "length", "rise", "energy", "swing"):
+        for name in ("move", "length", "rise", "energy", "swing", "shortened"):
             arr = getattr(self, name).copy()
             arr[rows] = getattr(other, name)
             out[name] = arr
@@ -61,11 +65,12 @@ class StepPlan:
     def take(self, rows: np.ndarray) -> StepPlan:
         """The steps at ``rows``."""
         return StepPlan(self.move[rows], self.length[rows], self.rise[rows],
-                        self.energy[rows], self.swing[rows])
+                        self.energy[rows], self.swing[rows], self.shortened[rows])
 
     def with_move(self, move: np.ndarray) -> StepPlan:
         """This plan with another ``move`` (k,) mask."""
-        return StepPlan(move, self.length, self.rise, self.energy, self.swing)
+        return StepPlan(move, self.length, self.rise, self.energy, self.swing,
+                        self.shortened)
 
 
 class PlanQueue:
@@ -106,7 +111,7 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
     a = agents
     k = a.size
     plan = StepPlan(np.ones(k, bool), np.zeros(k), np.zeros(k), np.zeros(k),
-                    np.full((k, 4, 2), np.nan))
+                    np.full((k, 4, 2), np.nan), np.zeros(k, bool))
     q = queue.next[a]
     along = (np.einsum("ij,ij->i", queue.direction[a], direction)
              > np.cos(np.radians(replan_turn_deg)))
@@ -166,7 +171,7 @@ def even_steps(terrain, *, stance: np.ndarray, stance_z: np.ndarray, direction: 
     energy = np.where(even, fallback_energy(length, rise, legs=legs, speed=speed,
                                             config=config), 0.0)
     return StepPlan(even, np.where(even, length, 0.0), rise, energy,
-                    np.full((length.size, 4, 2), np.nan))
+                    np.full((length.size, 4, 2), np.nan), even.copy())
 
 
 def next_steps(state, queue: PlanQueue, *, agents: np.ndarray, choice, footsteps, legs,

@@ -1,0 +1,39 @@
+"""The speed model: lone walkers at their free speed; the time-gap model (Tordeux et al.
+2016) at density, calibrated on the SFPE handbook's corridor speeds and validated here on
+Weidmann's (1993) fundamental diagram."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.speed import time_gap_speed
+from crowdwalk.verify import free_speed, ring_corridor_speed, weidmann_speed
+
+
+def test_time_gap_speed_from_the_nearest_walker_ahead():
+    me = np.zeros((4, 2))
+    ahead = np.array([[1.0, 0.0]] * 4)
+    others = np.array([[[1.2, 0.0], [0.8, 0.5]],    # 1.2 m ahead; 0.8 m off the line
+                       [[1.2, 0.3], [-0.5, 0.0]],   # 0.3 m off the line; one behind
+                       [[-0.5, 0.0], [0.5, 0.0]],   # behind; 0.5 m ahead but not valid
+                       [[0.3, 0.0], [3.0, 0.0]]])   # closer than two radii: 0
+    valid = np.array([[True, True], [True, True], [True, False], [True, True]])
+    v = time_gap_speed(position=me, direction=ahead, radius=np.full(4, 0.18),
+                       others=others, others_radius=np.full((4, 2), 0.18), valid=valid,
+                       free_speed=np.full(4, 1.34), time_gap=0.8)
+    gap = np.hypot(1.2, 0.3) - 0.36
+    np.testing.assert_allclose(v, [(1.2 - 0.36) / 0.8, min(1.34, gap / 0.8), 1.34, 0.0])
+
+
+def test_lone_walkers_reach_their_free_speed(tmp_path):
+    (check,) = free_speed(True, tmp_path)  # 6 walkers, 5 s apart, measured on 10 m
+    assert check.passed, check.figure
+
+
+def test_time_gap_model_follows_weidmann_at_1_5_per_m2(tmp_path):
+    params = replace(CrowdParams(), speed_model="time_gap")
+    density, speed = ring_corridor_speed(1.5, tmp_path, params=params)
+    assert 1.0 < density < 2.2
+    assert speed == pytest.approx(float(weidmann_speed(density)), abs=0.15)
