@@ -482,6 +482,18 @@ class RouteGraph:
         shapely.prepare(inner)
         return inner, corners
 
+    @functools.cached_property
+    def _corner_legs(self) -> list[tuple[int, int, float]]:
+        """Visibility legs (i, j, length [m]) between the corners of :attr:`_inner` that stay
+        inside it, indexed from 2 as in :meth:`shortest_walk` (computed once)."""
+        inner, corners = self._inner
+        i, j = np.triu_indices(len(corners), 1)
+        seg = shapely.linestrings(np.stack([corners[i], corners[j]], axis=1))
+        ok = shapely.covers(inner, seg)
+        length = np.linalg.norm(corners[i] - corners[j], axis=1)
+        return list(zip((i[ok] + 2).tolist(), (j[ok] + 2).tolist(), length[ok].tolist(),
+                        strict=True))
+
     def shortest_walk(self, a, b) -> np.ndarray:
         """Shortest polyline (k, 2) [m] from ``a`` to ``b`` (2,) [m] inside the walkable
         area: the straight segment if it lies inside, else Dijkstra on the visibility
@@ -493,15 +505,16 @@ class RouteGraph:
             return np.stack([a, b])
         inner, corners = self._inner
         pts = np.vstack([a, b, corners])
-        i, j = np.triu_indices(len(pts), 1)
+        # legs from a or b (which may stand nearer a wall) may run in the walkable area;
+        # the legs between corners (in the shrunk area) are the same for every walk
+        i = np.repeat([0, 1], [len(pts) - 1, len(pts) - 2])
+        j = np.concatenate([np.arange(1, len(pts)), np.arange(2, len(pts))])
         seg = shapely.linestrings(np.stack([pts[i], pts[j]], axis=1))
-        # legs between corners stay in the shrunk area; legs from a or b (which may stand
-        # nearer a wall) in the walkable area
-        ok = shapely.covers(inner, seg) | ((i < 2) & shapely.covers(self._walkable_tolerant,
-                                                                     seg))
+        ok = shapely.covers(inner, seg) | shapely.covers(self._walkable_tolerant, seg)
         g = nx.Graph()
         length = np.linalg.norm(pts[i] - pts[j], axis=1)
         g.add_weighted_edges_from(zip(i[ok], j[ok], length[ok], strict=True))
+        g.add_weighted_edges_from(self._corner_legs)
         try:
             return pts[nx.shortest_path(g, 0, 1, weight="weight")]
         except (nx.NetworkXNoPath, nx.NodeNotFound):
