@@ -110,8 +110,7 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
     """
     a = agents
     k = a.size
-    plan = StepPlan(np.ones(k, bool), np.zeros(k), np.zeros(k), np.zeros(k),
-                    np.full((k, 4, 2), np.nan), np.zeros(k, bool))
+    plan = StepPlan.standing(k).with_move(np.ones(k, bool))
     q = queue.next[a]
     along = (np.einsum("ij,ij->i", queue.direction[a], direction)
              > np.cos(np.radians(replan_turn_deg)))
