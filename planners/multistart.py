@@ -159,7 +159,7 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
         seeds.append(budget(tables))
     if starts >= 3:
         seeds.append(greedy(tables))
-    configs, eff, found, expanded, checks, spread_out = _climb_all(tables, seeds, None)
+    configs, eff, found, expanded, checks, spread_out = _climb_all(tables, seeds)
     extra = np.linspace(0, J - 1, max(starts - 3, 0) + 2)[1:-1].round().astype(np.int64)
     # Where the first starts disagree the terrain is hard: climb from the extra starts too.
     hard = np.flatnonzero(spread_out & found) if extra.size else np.zeros(0, dtype=int)
@@ -182,21 +182,20 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     return SearchResult(configs, found, expanded, checks)
 
 
-def _climb_all(tables: StepTables, seeds: list[SearchResult], only: np.ndarray | None):
-    """Hill-climb every found seed (of the agents ``only``); keep each agent's best.
+def _climb_all(tables: StepTables, seeds: list[SearchResult]):
+    """Hill-climb every found seed; keep each agent's best.
 
     Returns configs (A, n), efficiency (A,), found (A,), expanded (A,), checks (A,) and
     whether an agent's local optima differ (A,).
     """
     A = tables.neutral.size
-    keep = np.ones(A, dtype=bool) if only is None else np.isin(np.arange(A), only)
-    rows = np.concatenate([np.flatnonzero(r.found & keep) for r in seeds])
-    start_configs = np.concatenate([r.configs[r.found & keep] for r in seeds])
-    expanded = sum(np.where(keep, r.expanded, 0) for r in seeds)
-    checks = sum(np.where(keep, r.checks, 0) for r in seeds)
+    rows = np.concatenate([np.flatnonzero(r.found) for r in seeds])
+    start_configs = np.concatenate([r.configs[r.found] for r in seeds])
+    expanded = sum(r.expanded for r in seeds)
+    checks = sum(r.checks for r in seeds)
     found = np.zeros(A, dtype=bool)
     for r in seeds:
-        found |= r.found & keep
+        found |= r.found
     configs = seeds[0].configs.copy()
     best_eff = np.full(A, -np.inf)
     differ = np.zeros(A, dtype=bool)
