@@ -248,10 +248,10 @@ def compare(
     from crowdwalk.crowd.run import RunOverrides
 
     _term_as_interrupt()
+    names = [p.strip() for p in planners.split(",") if p.strip()]
     if seeds is not None:
         from crowdwalk.sweep import SweepSpec, parse_seeds, run_sweep
 
-        names = [p.strip() for p in planners.split(",") if p.strip()]
         check_planners(names)
         spec = SweepSpec(scenario=scenario.resolve(), seeds=tuple(parse_seeds(seeds)),
                          planners=tuple(names), duration=duration)
@@ -260,7 +260,6 @@ def compare(
         typer.echo(f"wrote the report {report} and one run folder per trial in {out}/trials")
         return
     check_out_folder(out, overwrite, "compare")
-    names = [p.strip() for p in planners.split(",") if p.strip()]
     check_planners(names)
     _check_before_running(scenario, RunOverrides(duration=duration))
     with _sim_progress(quiet, scenario.stem) as bar:

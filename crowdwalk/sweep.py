@@ -201,7 +201,14 @@ def run_trial(spec: SweepSpec, trial: Trial, out: str | Path) -> dict:
             os.replace(tmp, final)
         except OSError:  # finished by another worker meanwhile (a retried task)
             shutil.rmtree(tmp, ignore_errors=True)
-    return manifest_row(trial, json.loads((final / "summary.json").read_text()))
+    return manifest_row(trial, _summary(final))
+
+
+def _summary(folder: Path) -> dict:
+    """A finished trial's ``summary.json`` (read through :func:`crowdwalk.record.open_run`)."""
+    from crowdwalk.record import open_run
+
+    return open_run(folder).summary
 
 
 def manifest_row(trial: Trial, summary: dict) -> dict:
@@ -270,8 +277,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, *, scheduler: str | None = None,
             client.close()
             if cluster is not None:
                 cluster.close()
-    rows = [manifest_row(t, json.loads((out / "trials" / t.name / "summary.json").read_text()))
-            for t in trials]
+    rows = [manifest_row(t, _summary(out / "trials" / t.name)) for t in trials]
     write_manifest(rows, out / "manifest.csv")
     report = out / "report.md"
     report.write_text(report_text(spec, rows))

@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib
 import inspect
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -146,7 +146,6 @@ class MixedEngine:
                 parts.append(engine.pose(t, agents[rows]))
                 order.append(rows)
         back = np.argsort(np.concatenate(order), kind="stable")
-        cat = {name: np.concatenate([getattr(p, name) for p in parts])[back]
-               for name in ("agents", "root_position", "root_quaternion", "joints",
-                            "positions", "contact", "fallback", "stance_left")}
+        cat = {f.name: np.concatenate([getattr(p, f.name) for p in parts])[back]
+               for f in fields(PoseFrame) if f.name != "time"}
         return PoseFrame(time=float(t), **cat)

@@ -64,6 +64,7 @@ from crowdwalk.body import (
     rotation_z,
 )
 from crowdwalk.errors import invalid
+from crowdwalk.gait.foot import wrap_angle as _wrap
 
 __all__ = ["KlawEngine", "X_FACTOR", "double_support_fraction", "kochanek_bartels",
            "virtual_leg_length"]
@@ -142,10 +143,6 @@ def _dot(a, b):
 
 def _unit(v):
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
-
-
-def _wrap(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 def _foot_offsets(body: Body, pitch, yaw):

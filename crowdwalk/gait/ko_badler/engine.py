@@ -44,6 +44,7 @@ from crowdwalk.body import (
 from crowdwalk.errors import invalid
 from crowdwalk.gait.elevwalker import GaitStyle
 from crowdwalk.gait.engine import PoseFrame
+from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.ko_badler.generalize import (
     body_generalization,
     hip_height_at_heel_strike,
@@ -130,10 +131,6 @@ def _segment_frame(direction, lateral):
 
 def _t(a):
     return np.swapaxes(a, -1, -2)
-
-
-def _wrap(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
 
 
 class KoBadlerEngine:
