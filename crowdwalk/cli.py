@@ -415,6 +415,17 @@ _GL_MISSING = (
 )
 
 
+def _check_times(scene, command: str, **options: float | None) -> None:
+    """Each time option [s] must lie within a run's frames (from t = 0 to its last frame)."""
+    from crowdwalk.cli_conventions import check_time
+
+    if scene.poses is None:
+        return
+    t_range = (min(scene.time_range[0], 0.0), scene.time_range[1])
+    for option, value in options.items():
+        check_time(value, t_range, option=option, command=command)
+
+
 @app.command()
 @friendly_errors
 def view(
@@ -441,6 +452,7 @@ def view(
     from crowdwalk.viz import load_scenes
 
     scenes = load_scenes(targets, color=color, follow=follow, footprint_trail=trail)
+    _check_times(scenes[0], "view", time=time)
     if web:
         from crowdwalk.viz.web import serve
 
@@ -478,17 +490,13 @@ def render(
         raise invalid("render", "start", "unset for a .png (use --time) [s]", (start, end))
     if suffix != ".png" and time is not None:
         raise invalid("render", "time", "unset for a movie (use --start/--end) [s]", time)
-    from crowdwalk.cli_conventions import check_time
     from crowdwalk.viz import load_scenes
     from crowdwalk.viz.headless import gl_available
 
     for target in targets:
         _warn_incomplete(target)
     scene, *beside = load_scenes(targets, color=color, follow=follow, footprint_trail=trail)
-    if scene.poses is not None:  # a run: from its start (t = 0) to its last frame
-        t_range = (min(scene.time_range[0], 0.0), scene.time_range[1])
-        for name, value in (("time", time), ("start", start), ("end", end)):
-            check_time(value, t_range, name)
+    _check_times(scene, "render", time=time, start=start, end=end)
     if not gl_available():
         _fail(_GL_MISSING, 2)
     if suffix == ".png":
