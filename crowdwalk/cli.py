@@ -240,6 +240,8 @@ def compare(
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
     seeds: str = typer.Option(None, "--seeds", help="Seeds A..B: every planner with every "
                               "seed on Dask (resumable); intervals across seeds."),
+    poses: bool = typer.Option(None, "--poses/--no-poses", help="Write poses for each run "
+                               "(default: as the scenario's outputs.poses)."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
     """Run the same scenario, seed and agents with each planner; write report.md."""
@@ -271,9 +273,10 @@ def compare(
                 bar.update(task, description=label, completed=t, total=total,
                            remaining=remaining)
 
-        report = compare_planners(scenario, names, out, duration=duration, progress=update)
+        report = compare_planners(scenario, names, out, duration=duration, poses=poses,
+                                  progress=update)
     typer.echo(f"wrote the report {report} and one run folder per planner in {out}; "
-               + next_hint(f"crowdwalk view {out}/{names[0]}"))
+               + next_hint(f"crowdwalk view {' '.join(f'{out}/{n}' for n in names)}"))
 
 
 def _sweep_echo(done: int, total: int, trial: str) -> None:
