@@ -50,7 +50,6 @@ def test_closed_door_blocks_and_walkers_turn_to_the_other_exit(tmp_path):
     assert summary["max_overlap_m"] == 0.0
     close, redirect, reopen = summary["events"]
     assert close["action"] == "close" and 4.0 <= close["time_s"] < 5.0
-    assert close["walkers_rerouted"] >= 15
     east = _crossings(tmp_path, DOOR_X)
     west = _crossings(tmp_path, -2.0, sign=-1.0)
     # nobody passes the door while it is shut; most of the crowd leaves by the west exit
@@ -64,7 +63,7 @@ def test_closed_door_blocks_and_walkers_turn_to_the_other_exit(tmp_path):
         a = t.agent(i)
         gone = agents[i]["start_time_s"] + agents[i]["travel_time_s"] <= redirect["time_s"]
         assert gone or office.covers(shapely.Point(a.x[-1], a.y[-1]))
-    assert redirect["walkers_rerouted"] >= 3
+    assert close["walkers_rerouted"] >= 15 and redirect["walkers_rerouted"] >= 3
 
 
 def test_reopened_door_lets_the_waiting_walkers_through(tmp_path):
