@@ -11,6 +11,8 @@ import yaml
 from typer.testing import CliRunner
 
 from crowdwalk.cli import app
+from crowdwalk.crowd.clearance import ClearanceField
+from crowdwalk.crowd.events import door_wall, with_walls
 from crowdwalk.crowd.holding import SLOT_SPACING, waiting_positions
 from crowdwalk.crowd.run import run_scenario
 from crowdwalk.errors import InputError
@@ -163,3 +165,17 @@ def test_waiting_area_schema_errors():
     with pytest.raises(InputError, match=r"waiting_areas\[1\].node must be one of"):
         parse_scenario(bad, "w.yaml")
     assert build_world(load_scenario(SCENARIOS / "waiting_areas.yaml"))
+
+
+def test_clearance_round_a_shut_door_matches_the_area_rasterised_again():
+    world = build_world(load_scenario(SCENARIOS / "events.yaml"))
+    routes = world.routes
+    door = door_wall(routes, ("east_door", "east"), 0.5)
+    shut = routes.with_closed({frozenset(("east_door", "east")): door})
+    assert not shut.graph.has_edge("east_door", "east") and not shut.sees((14, 4), (15.5, 4))
+    assert routes.sees((14, 4), (15.5, 4))  # the open graph is unchanged
+    field = ClearanceField.from_area(routes.walkable_area)
+    fast, full = with_walls(field, [door]), ClearanceField.from_area(shut.walkable_area)
+    xy = np.column_stack([np.linspace(12.5, 17.0, 200), np.full(200, 4.2)])
+    np.testing.assert_allclose(fast(xy), full(xy), atol=0.01)  # along the corridor
+    assert fast(np.array([[14.75, 4.0]]))[0] < 0 < field(np.array([[14.75, 4.0]]))[0]
