@@ -274,6 +274,13 @@ class RouteGraph:
     costs : :class:`RouteCosts`
     obstacles : shapely polygons [m] cut out of the walkable area (walls, obstacles);
         paths go around them
+
+    Attributes
+    ----------
+    graph : networkx.DiGraph
+        The corridors that can be walked (routing).
+    layout : networkx.DiGraph
+        Every corridor, closed ones too (:meth:`with_closed`): the walkable area's shape.
     """
 
     def __init__(self, places, corridors, terrain=None, costs: RouteCosts = RouteCosts(),
@@ -309,7 +316,7 @@ class RouteGraph:
                 g.add_edge(c.b, c.a, width=c.width, length=line.length, cost=cb,
                            geometry=LineString(np.asarray(line.coords)[::-1]), oneway=False)
         self.graph = g
-        self._layout = g  # every corridor, open or closed: the walkable area's geometry
+        self.layout = g  # every corridor, open or closed (the walkable area)
         self._fields: dict[str, tuple[dict, dict]] = {}
         self._paths: dict[tuple, np.ndarray] = {}
 
@@ -426,8 +433,8 @@ class RouteGraph:
         for cached in ("walkable_area", "_walkable_tolerant", "_inner", "_corner_legs"):
             new.__dict__.pop(cached, None)
         new._fields, new._paths = {}, {}
-        new.graph = self._layout.copy(as_view=False)
-        new.graph.remove_edges_from([(u, v) for u, v in self._layout.edges
+        new.graph = self.layout.copy(as_view=False)
+        new.graph.remove_edges_from([(u, v) for u, v in self.layout.edges
                                      if frozenset((u, v)) in walls])
         base = [] if self._base_obstacles is None else [self._base_obstacles]
         new.obstacles = shapely.union_all(base + list(walls.values())) if base or walls \
@@ -449,8 +456,8 @@ class RouteGraph:
         p = self.places[name]
         if p.area is not None:
             return p.area
-        widths = [d["width"] for *_, d in self._layout.in_edges(name, data=True)]
-        widths += [d["width"] for *_, d in self._layout.out_edges(name, data=True)]
+        widths = [d["width"] for *_, d in self.layout.in_edges(name, data=True)]
+        widths += [d["width"] for *_, d in self.layout.out_edges(name, data=True)]
         return Point(p.x, p.y).buffer(max([0.5] + [w / 2 for w in widths]))
 
     @functools.cached_property
@@ -460,8 +467,8 @@ class RouteGraph:
         vertical change higher than ``costs.max_step`` (walls, tall obstacles): the
         corridors are cut along such edges and only the pieces that carry a corridor centre
         line or a node are kept."""
-        parts = [d["geometry"].buffer(d["width"] / 2) for *_, d in self._layout.edges(data=True)]
-        parts += [self.node_area(n) for n in self._layout.nodes]
+        parts = [d["geometry"].buffer(d["width"] / 2) for *_, d in self.layout.edges(data=True)]
+        parts += [self.node_area(n) for n in self.layout.nodes]
         geom = shapely.union_all(parts)
         if self.terrain is not None:
             walls = self.terrain.steps(self.costs.max_step)
@@ -470,7 +477,7 @@ class RouteGraph:
                     _WALL_HALF_THICKNESS, cap_style="flat")
                 pieces = shapely.get_parts(geom.difference(cut))
                 carriers = shapely.union_all(
-                    [d["geometry"] for *_, d in self._layout.edges(data=True)]
+                    [d["geometry"] for *_, d in self.layout.edges(data=True)]
                     + [Point(p.x, p.y) for p in self.places.values()])
                 geom = shapely.union_all(pieces[shapely.intersects(pieces, carriers)])
         if self.obstacles is not None:

@@ -62,7 +62,7 @@ def door_wall(routes, corridor: tuple[str, str], at: float, *, owner: str = "Eve
     alone. Raises :class:`~crowdwalk.errors.InputError` where it cannot block the
     corridor there (it would cut another corridor or a node area)."""
     a, b = corridor
-    g = routes._layout
+    g = routes.layout
     if g.has_edge(a, b):
         data = g.edges[a, b]
     else:
