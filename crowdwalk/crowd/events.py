@@ -257,9 +257,7 @@ class EventTimeline:
             if key not in made:
                 made[key] = self._cheapest_start(routes, origin, options, start)
             if made[key] >= 0:
-                st.route[i] = made[key]
-                st.segment[i] = routes.table.start[made[key]]
-                st.progress[i] = routes.table.s0[made[key]]
+                routes.assign(st, i, made[key])
 
     @staticmethod
     def _cheapest_start(routes, origin: str, options: list[tuple], start) -> int:
@@ -326,11 +324,7 @@ class EventTimeline:
                 here = d
         if keep_same and seq == nodes[passed + 1:]:
             return
-        rid = routes.add(np.vstack([walks[v], graph.raw_path(seq)[1:]]), seq)
-        st.route[i] = rid
-        st.segment[i] = routes.table.start[rid]
-        st.progress[i] = routes.table.s0[rid]
-        st.best_progress[i] = -np.inf
+        routes.assign(st, i, routes.add(np.vstack([walks[v], graph.raw_path(seq)[1:]]), seq))
         st.progress_time[i] = t
 
     def summary(self) -> list[dict]:
