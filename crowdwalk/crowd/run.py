@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,7 @@ from crowdwalk.crowd.simulation import (
 from crowdwalk.errors import invalid
 from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
 from crowdwalk.style import summary_by_style
+from crowdwalk.workers import Workers, worker_count
 
 __all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
@@ -47,6 +49,9 @@ class RunOverrides:
         Output frame rate [1/s].
     seed : int or None
         The scenario's random seed (``simulation.seed``) [-].
+    workers : int or None
+        Worker processes beside this one (:func:`crowdwalk.workers.worker_count`; None:
+        one per further core for runs of at least 500 walkers, 0: one process).
     """
 
     planner: str | None = None
@@ -55,6 +60,7 @@ class RunOverrides:
     poses: bool | None = None
     fps: float | None = None
     seed: int | None = None
+    workers: int | None = None
 
 
 ProgressCallback = Callable[[float, float, int], None]
@@ -69,6 +75,8 @@ def check_overrides(overrides: RunOverrides) -> None:
         raise invalid("RunOverrides", "planner", f"one of {sorted(PLANNERS)}", o.planner)
     if o.seed is not None and not (isinstance(o.seed, int) and o.seed >= 0):
         raise invalid("RunOverrides", "seed", "an integer >= 0", o.seed)
+    if o.workers is not None and not (isinstance(o.workers, int) and o.workers >= 0):
+        raise invalid("RunOverrides", "workers", "an integer >= 0", o.workers)
     if o.max_agents is not None and o.max_agents < 1:
         raise invalid("RunOverrides", "max_agents", ">= 1", o.max_agents)
     for name in ("duration", "fps"):
@@ -79,8 +87,11 @@ def check_overrides(overrides: RunOverrides) -> None:
 
 
 def prepare(scenario, overrides: RunOverrides | None = None, *,
-            params: CrowdParams | None = None):
+            params: CrowdParams | None = None, parallel: bool = False):
     """World, population and simulation of a scenario (a path or a loaded Scenario).
+
+    With ``parallel`` the simulation gets worker processes (``overrides.workers``) for
+    its steering, planning and posing; ``simulation.workers`` then needs closing.
 
     Returns
     -------
@@ -115,16 +126,27 @@ def prepare(scenario, overrides: RunOverrides | None = None, *,
     duration = overrides.duration if overrides.duration is not None else sc.simulation.duration
     fps = overrides.fps if overrides.fps is not None else sc.simulation.fps
     want_poses = sc.outputs.poses if overrides.poses is None else overrides.poses
-    gait, pose_note = None, "disabled (outputs.poses is false)"
-    if want_poses:
-        try:
-            gait = _make_gait(pop, world.terrain)
-            pose_note = "written"
-        except ImportError as exc:  # a build without the gait package: say so, go on
-            pose_note = f"not available in this build ({exc})"
-    parts = build_parts(world, pop, params=params)
-    sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
-                          duration=duration, params=params, gait=gait)
+    count = worker_count(len(pop), overrides.workers) if parallel else 0
+    workers = Workers(count) if count else None
+    try:
+        gait, pose_note = None, "disabled (outputs.poses is false)"
+        if want_poses:
+            try:
+                gait = _make_gait(pop, world.terrain)
+                pose_note = "written"
+            except ImportError as exc:  # a build without the gait package: say so, go on
+                pose_note = f"not available in this build ({exc})"
+            if gait is not None and workers is not None:
+                from crowdwalk.gait.shards import ShardedEngine
+
+                gait = ShardedEngine(partial(_make_gait, pop, world.terrain), workers)
+        parts = build_parts(world, pop, params=params)
+        sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
+                              duration=duration, params=params, gait=gait, workers=workers)
+    except BaseException:
+        if workers is not None:
+            workers.close()
+        raise
     return sc, world, sim, pose_note, text
 
 
@@ -170,10 +192,20 @@ def run_scenario(
     dict
         The summary also written to ``summary.json``.
     """
+    wall0 = time.perf_counter()
+    sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params,
+                                              parallel=True)
+    try:
+        return _run(sc, world, sim, pose_note, text, out=out, wall0=wall0, progress=progress,
+                    sinks=sinks)
+    finally:
+        if sim.workers is not None:
+            sim.workers.close()
+
+
+def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dict:
     from crowdwalk.record import RunWriter
 
-    wall0 = time.perf_counter()
-    sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params)
     skeleton = sim.gait.skeleton if sim.gait is not None else None
     writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
                        fps=sim.fps, skeleton=skeleton)

@@ -50,6 +50,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
+from crowdwalk.workers import split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -75,11 +76,14 @@ class CrowdSimulation:
     params : CrowdParams, optional
     gait : crowdwalk.gait.engine.GaitEngine or None
         Receives every decided step and answers :meth:`poses` (None: no poses).
+    workers : crowdwalk.workers.Workers or None
+        Worker processes that steer and plan parts of a tick's deciding walkers
+        (:func:`crowdwalk.workers.split_rows`; None: all here).
     """
 
     def __init__(self, world, population: Population, *, parts: CrowdParts,
                  dt: float = 0.05, fps: float = 10.0, duration: float = 600.0,
-                 params: CrowdParams | None = None, gait=None) -> None:
+                 params: CrowdParams | None = None, gait=None, workers=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
@@ -121,6 +125,9 @@ class CrowdSimulation:
         self.state.segment = table.start[self.state.route].copy()
         self.state.progress = table.s0[self.state.route].copy()
         self.gait = gait
+        self.workers = workers
+        if workers is not None:
+            workers.share(self.clearance)
         self.time = 0.0
         self.tick = 0
         self.wall_planning = 0.0
@@ -252,8 +259,9 @@ class CrowdSimulation:
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, radius=self.radius,
                                 count=prm.neighbours, reach=prm.neighbour_range)
-        choice = choose_steps(
-            pos, st.stance[idx], heading=st.heading[idx], radius=self.radius[idx],
+        choice = split_rows(
+            self.workers, choose_steps, idx.size, pos, st.stance[idx],
+            heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
