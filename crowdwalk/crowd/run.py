@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from crowdwalk import interrupts
 from crowdwalk.crowd.simulation import (
     ARRIVED,
     WAITING,
@@ -132,14 +133,15 @@ def prepare(scenario, overrides: RunOverrides | None = None, *,
         gait, pose_note = None, "disabled (outputs.poses is false)"
         if want_poses:
             try:
-                gait = _make_gait(pop, world.terrain)
+                if workers is None:
+                    gait = _make_gait(pop, world.terrain)
+                else:  # posing in worker 0, beside the simulation
+                    from crowdwalk.gait.remote import RemoteEngine
+
+                    gait = RemoteEngine(partial(_make_gait, pop, world.terrain), workers)
                 pose_note = "written"
             except ImportError as exc:  # a build without the gait package: say so, go on
                 pose_note = f"not available in this build ({exc})"
-            if gait is not None and workers is not None:
-                from crowdwalk.gait.shards import ShardedEngine
-
-                gait = ShardedEngine(partial(_make_gait, pop, world.terrain), workers)
         parts = build_parts(world, pop, params=params)
         sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
                               duration=duration, params=params, gait=gait, workers=workers)
@@ -192,18 +194,20 @@ def run_scenario(
     dict
         The summary also written to ``summary.json``.
     """
-    wall0 = time.perf_counter()
-    sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params,
-                                              parallel=True)
-    try:
-        return _run(sc, world, sim, pose_note, text, out=out, wall0=wall0, progress=progress,
-                    sinks=sinks)
-    finally:
-        if sim.workers is not None:
-            sim.workers.close()
+    with interrupts.deferred():
+        wall0 = time.perf_counter()
+        sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params,
+                                                  parallel=True)
+        try:
+            return _run(sc, world, sim, pose_note, text, out=out, wall0=wall0,
+                        progress=progress, sinks=sinks)
+        finally:
+            if sim.workers is not None:
+                sim.workers.close()
 
 
 def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dict:
+    """The body of :func:`run_scenario`, within deferred interrupts."""
     from crowdwalk.record import RunWriter
 
     skeleton = sim.gait.skeleton if sim.gait is not None else None
@@ -221,38 +225,45 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
     timing = {"setup_s": setup, "poses_s": 0.0, "writing_s": 0.0}
     interrupted = False
 
-    def deliver_steps() -> None:
-        batch = sim.take_steps()
-        if batch is not None:
+    def deliver(frame) -> None:
+        """The steps decided up to an output frame, then the frame (its poses awaited)."""
+        t, snapshot, steps, poses_later = frame
+        w0 = time.perf_counter()
+        poses = poses_later()
+        w1 = time.perf_counter()
+        if steps is not None:
             for sink in everyone:
-                sink.steps(batch)
+                sink.steps(steps)
+        if snapshot is not None:
+            for sink in everyone:
+                sink.frame(t, snapshot, poses)
+        timing["poses_s"] += w1 - w0
+        timing["writing_s"] += time.perf_counter() - w1
 
+    # a frame is delivered when the next one has been asked for: a gait engine in a
+    # worker process (crowdwalk.gait.remote) poses it while the next ticks are simulated
+    waiting = None
     try:
-        snapshot = sim.snapshot()
-        for sink in everyone:
-            sink.frame(sim.time, snapshot, None)
+        deliver((sim.time, sim.snapshot(), None, lambda: None))
         while not sim.finished:
-            on_frame = sim.step()
-            w0 = time.perf_counter()
-            deliver_steps()
-            timing["writing_s"] += time.perf_counter() - w0
-            if not on_frame:
+            interrupts.check()
+            if not sim.step():
                 continue
             w0 = time.perf_counter()
-            poses = sim.poses()
-            w1 = time.perf_counter()
-            snapshot = sim.snapshot()
-            for sink in everyone:
-                sink.frame(sim.time, snapshot, poses)
-            timing["poses_s"] += w1 - w0
-            timing["writing_s"] += time.perf_counter() - w1
+            frame = (sim.time, sim.snapshot(), sim.take_steps(), sim.poses_later())
+            timing["poses_s"] += time.perf_counter() - w0
+            if waiting is not None:
+                deliver(waiting)
+            waiting = frame
             if progress is not None:
                 progress(sim.time, sim.duration, sim.remaining)
     except KeyboardInterrupt:
         interrupted = True
         raise
     finally:
-        deliver_steps()
+        if waiting is not None:
+            deliver(waiting)
+        deliver((sim.time, None, sim.take_steps(), lambda: None))  # steps after the last frame
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
                       step_commands_s=sim.wall_commands)

@@ -126,7 +126,10 @@ class CrowdSimulation:
         self.state.progress = table.s0[self.state.route].copy()
         self.gait = gait
         self.workers = workers
-        if workers is not None:
+        # the workers that steer parts of a tick (not the one holding a remote gait engine)
+        self._steer_on = [] if workers is None else [
+            w for w in range(len(workers)) if w != getattr(gait, "worker", None)]
+        if self._steer_on:
             workers.share(self.clearance)
         self.time = 0.0
         self.tick = 0
@@ -189,14 +192,22 @@ class CrowdSimulation:
     def poses(self):
         """Poses of the walking agents that have taken a step, at the current time
         (a :class:`crowdwalk.gait.engine.PoseFrame`), or None without a gait engine."""
+        return self.poses_later()()
+
+    def poses_later(self):
+        """A function returning :meth:`poses` of now; a gait engine with ``pose_async``
+        (:class:`crowdwalk.gait.remote.RemoteEngine`) computes them meanwhile."""
         if self.gait is None:
-            return None
+            return lambda: None
         self._flush_commands()
         idx = self.active
         idx = idx[self.state.animated[idx]]
         if idx.size == 0:
-            return None
-        return self.gait.pose(self.time, idx)
+            return lambda: None
+        if hasattr(self.gait, "pose_async"):
+            return self.gait.pose_async(self.time, idx)
+        frame = self.gait.pose(self.time, idx)
+        return lambda: frame
 
     # -- one tick ----------------------------------------------------------------------
 
@@ -265,7 +276,7 @@ class CrowdSimulation:
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
-            step_time=self.min_step_time[idx], lag=t - te)
+            step_time=self.min_step_time[idx], lag=t - te, on=self._steer_on)
         self.wall_steering += _time.perf_counter() - w0
         if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
             v = time_gap_speed(position=pos, direction=choice.direction,
