@@ -76,30 +76,37 @@ def _shared_object(key: int):
 
 
 def _serve(inbox, outbox) -> None:
-    """A worker's loop: ``(seq, target, method, args, kwargs)`` messages in order; seq None
-    needs no reply (a failure is then reported at the next reply)."""
+    """A worker's loop: ``(seq, target, method, args, kwargs)`` messages in order. A failed
+    call answers its traceback; a failed message without reply (seq None) breaks the
+    worker's state, so every later reply is that traceback."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    failed = None
+    broken = None
     while True:
         msg = inbox.get()
         if msg is None:
             return
         seq, target, method, args, kwargs = msg
-        try:
-            if failed is None:
-                if target is None:  # a function call
-                    result = method(*args, **kwargs)
-                elif method is None:  # keep an object: args = (key, object or factory)
-                    obj = args[1]
-                    _SHARED[target] = obj() if callable(obj) and kwargs.get("build") else obj
-                    result = None
-                else:  # a method (or an attribute) of a kept object
-                    attr = getattr(_SHARED[target], method)
-                    result = attr(*args, **kwargs) if callable(attr) else attr
-        except BaseException:  # noqa: BLE001 - the main process raises it
-            failed = traceback.format_exc()
+        failed = broken
+        if broken is None:
+            try:
+                result = _handle(target, method, args, kwargs)
+            except BaseException:  # noqa: BLE001 - the main process raises it
+                failed = traceback.format_exc()
+                if seq is None:
+                    broken = failed
         if seq is not None:
             outbox.put((seq, failed, None if failed else result))
+
+
+def _handle(target, method, args: tuple, kwargs: dict):
+    if target is None:  # a function call
+        return method(*args, **kwargs)
+    if method is None:  # keep an object: args = (key, object or factory)
+        obj = args[1]
+        _SHARED[target] = obj() if kwargs.get("build") else obj
+        return None
+    attr = getattr(_SHARED[target], method)  # a method (or an attribute) of a kept object
+    return attr(*args, **kwargs) if callable(attr) else attr
 
 
 class Workers:
