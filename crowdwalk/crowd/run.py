@@ -25,7 +25,7 @@ from crowdwalk.crowd.simulation import (
     build_parts,
 )
 from crowdwalk.errors import invalid
-from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
+from crowdwalk.sinks import BackgroundSink, OverlapMonitor, RunInfo, RunSink
 from crowdwalk.style import summary_by_style
 from crowdwalk.workers import Workers, worker_count
 
@@ -211,8 +211,10 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
     from crowdwalk.record import RunWriter
 
     skeleton = sim.gait.skeleton if sim.gait is not None else None
-    writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
-                       fps=sim.fps, skeleton=skeleton)
+    # the run folder is written in a thread of its own, beside the simulation
+    writer = BackgroundSink(partial(RunWriter, out, scenario_text=text, fps=sim.fps,
+                                    walkable_wkt=world.routes.walkable_area.wkt,
+                                    skeleton=skeleton))
     overlap = OverlapMonitor()
     everyone: list[RunSink] = [writer, overlap, *sinks]
     pop = sim.pop
