@@ -101,3 +101,11 @@ def test_a_run_with_workers_writes_the_same_run_folder(tmp_path, monkeypatch):
     assert _rows(a / "trajectories.sqlite", "trajectory_data") == \
         _rows(b / "trajectories.sqlite", "trajectory_data")
     assert _rows(a / "poses.sqlite", "pose_frame") == _rows(b / "poses.sqlite", "pose_frame")
+
+
+def test_a_negative_worker_count_is_bad_input():
+    from crowdwalk.crowd.run import check_overrides
+    from crowdwalk.errors import InputError
+
+    with pytest.raises(InputError, match="workers must be an integer >= 0"):
+        check_overrides(RunOverrides(workers=-1))
