@@ -185,8 +185,8 @@ class Workers:
                 p.terminate()
                 p.join()
         for box in (*self._inbox, *self._outbox):
+            box.cancel_join_thread()  # the workers are gone: what they did not read is moot
             box.close()
-            box.join_thread()
         self._procs = []
 
     def _pack(self, args: tuple, kwargs: dict) -> tuple[tuple, dict]:

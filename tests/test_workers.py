@@ -68,8 +68,10 @@ def test_a_dead_worker_is_reported_not_waited_for():
     with Workers(1) as w:
         w._procs[0].kill()
         w._procs[0].join()
+        w.keep("big", np.zeros(1_000_000))  # more than a pipe holds: nobody reads it
         with pytest.raises(WorkerError, match="ended"):
             w.call(0, None, len, [1])()
+    # and closing did not wait for the dead worker to read it
 
 
 def test_worker_count_follows_cores_and_run_size():
