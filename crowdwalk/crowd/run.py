@@ -8,6 +8,7 @@ readable; Ctrl-C (and SIGTERM at the CLI) still writes ``summary.json`` with
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -27,7 +28,7 @@ from crowdwalk.crowd.simulation import (
 from crowdwalk.errors import invalid
 from crowdwalk.sinks import BackgroundSink, OverlapMonitor, RunInfo, RunSink
 from crowdwalk.style import summary_by_style
-from crowdwalk.workers import Workers, worker_count
+from crowdwalk.workers import WorkerError, Workers, worker_count
 
 __all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
@@ -92,7 +93,7 @@ def prepare(scenario, overrides: RunOverrides | None = None, *,
     """World, population and simulation of a scenario (a path or a loaded Scenario).
 
     With ``parallel`` the simulation gets worker processes (``overrides.workers``) for
-    its steering, planning and posing; ``simulation.workers`` then needs closing.
+    its steering and posing; ``simulation.workers`` then needs closing.
 
     Returns
     -------
@@ -264,7 +265,11 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
         raise
     finally:
         if waiting is not None:
-            deliver(waiting)
+            try:
+                deliver(waiting)
+            except WorkerError:  # lost with its worker: keep the error already raised
+                if sys.exc_info()[0] is None:
+                    raise
         deliver((sim.time, None, sim.take_steps(), lambda: None))  # steps after the last frame
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,

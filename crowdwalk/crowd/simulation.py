@@ -77,7 +77,7 @@ class CrowdSimulation:
     gait : crowdwalk.gait.engine.GaitEngine or None
         Receives every decided step and answers :meth:`poses` (None: no poses).
     workers : crowdwalk.workers.Workers or None
-        Worker processes that steer and plan parts of a tick's deciding walkers
+        Worker processes that steer parts of a tick's deciding walkers
         (:func:`crowdwalk.workers.split_rows`; None: all here).
     """
 
