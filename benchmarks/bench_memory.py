@@ -1,7 +1,8 @@
 """Peak memory of a run against its agent count (what crowdwalk.checks budgets per agent).
 
-Runs ``stadium_egress`` (stands sized for the walkers, as ``bench_crowd.py``) with each
-agent count for a few simulated seconds, each in a fresh process, and prints the peak RSS
+Runs ``stadium_egress`` with its stands sized for the largest count (as ``bench_crowd.py``
+sizes them; the same world for every count) and the first n of its walkers, for a few
+simulated seconds, each in a fresh process, and prints the peak RSS
 of the run's process, of its largest worker process (:mod:`crowdwalk.workers`; from 500
 walkers one per further core) and the growth per agent between sizes (of the two summed:
 an upper bound, the peaks need not coincide).
@@ -25,18 +26,20 @@ from pathlib import Path
 from bench_crowd import stadium
 from crowdwalk.crowd.run import RunOverrides, run_scenario
 out = Path(sys.argv[1])
-run_scenario(stadium(int(sys.argv[2]), out.parent), out, overrides=RunOverrides(
-    duration=float(sys.argv[3]), poses=sys.argv[4] == "1"))
+run_scenario(stadium(int(sys.argv[6]), out.parent), out, overrides=RunOverrides(
+    duration=float(sys.argv[3]), poses=sys.argv[4] == "1", max_agents=int(sys.argv[2])))
 print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
       resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
 """
 
 
-def peak_rss_kib(agents: int, duration: float, poses: bool) -> tuple[int, int]:
-    """Peak RSS [KiB] of the run's process and of its largest child process."""
+def peak_rss_kib(agents: int, duration: float, poses: bool, world: int) -> tuple[int, int]:
+    """Peak RSS [KiB] of the run's process and of its largest child process (``agents``
+    of the stadium sized for ``world`` walkers)."""
     with TemporaryDirectory() as tmp:
         proc = subprocess.run([sys.executable, "-c", CHILD, str(Path(tmp) / "run"), str(agents),
-                               str(duration), "1" if poses else "0", str(ROOT / "benchmarks")],
+                               str(duration), "1" if poses else "0", str(ROOT / "benchmarks"),
+                               str(world)],
                               capture_output=True, text=True, check=True, cwd=ROOT)
     main, child = proc.stdout.split()[-2:]
     return int(main), int(child)
@@ -50,8 +53,10 @@ def main() -> None:
     ap.add_argument("--no-poses", action="store_true")
     ap.add_argument("--seconds", type=float, default=4.0)
     args = ap.parse_args()
-    rows = [(n, *peak_rss_kib(n, args.seconds, not args.no_poses)) for n in args.agents]
-    print(f"poses {'off' if args.no_poses else 'on'}, {args.seconds:g} s simulated; "
+    world = max(args.agents)
+    rows = [(n, *peak_rss_kib(n, args.seconds, not args.no_poses, world)) for n in args.agents]
+    print(f"stadium for {world:,} walkers, poses {'off' if args.no_poses else 'on'}, "
+          f"{args.seconds:g} s simulated; "
           f"budget in crowdwalk.checks: {BYTES_PER_AGENT // 1000} kB per agent")
     print("| agents | run process peak RSS [MiB] | largest worker [MiB] | growth per agent [kB] |")
     print("|---|---|---|---|")
