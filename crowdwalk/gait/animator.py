@@ -31,6 +31,10 @@ Around the walker the Animator adds what a crowd needs:
   and over the last tenth, so the feet leave and land where the stance feet are).
   Every frame, a swing sole still below the ground is lifted by its depth (IK again),
   re-checked and lifted further, up to three times.
+- **Level steps (docs/architecture.md, "Level steps").** The step asked of ElevInterp
+  is shortened by the swing hip's lead at heel strike under the style's pelvic
+  rotation (Eq. 10's pelvis term), and over level ground the swing knee flexes until the
+  sole clears the floor by ``GaitStyle.toe_clearance`` mid-swing.
 - **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
   the stance hip starts where the previous step left the root and rejoins the data over
   the first half of the step (sagittal two-link IK of the stance leg).
@@ -491,9 +495,9 @@ class Animator:
         return body.hip_separation * np.sin(self.attributes.pelvic_rotation[a])
 
     def _cleared(self, a: np.ndarray, body: Body, data, height: np.ndarray) -> np.ndarray:
-        """The step's datasets (k, N, 4) with the swing sole lifted to the walker's toe
-        clearance over level ground (``elevinterp.lift_swing_toe``; the swing hip drops
-        by the pelvic list); steps up or down keep ElevInterp's dataset."""
+        """The step's datasets (k, N, 4) with the swing sole lifted to
+        ``GaitStyle.toe_clearance`` over level ground (``elevinterp.lift_swing_toe``; the
+        swing hip drops by the pelvic list); steps up or down keep ElevInterp's dataset."""
         if not self.style.level_clearance:
             return data.angles
         level = np.abs(height) < _LEVEL_RISE
@@ -501,12 +505,11 @@ class Animator:
         if not level.any():
             return out
         at = self.attributes
-        tilt = self.style.pelvic_list if at is None else at.pelvic_list[a[level]]
-        clearance = self.style.toe_clearance
+        pelvic_list = self.style.pelvic_list if at is None else at.pelvic_list[a[level]]
         lb = body.take(np.flatnonzero(level))
         out[level] = lift_swing_toe(data.angles[level], lb, data.stance_fraction[level],
-                                    hip_drop=lb.hip_separation * np.sin(tilt),
-                                    clearance=clearance)
+                                    hip_drop=lb.hip_separation * np.sin(pelvic_list),
+                                    clearance=self.style.toe_clearance)
         return out
 
     def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
