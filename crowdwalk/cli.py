@@ -336,12 +336,14 @@ def verify(
     full: bool = typer.Option(False, "--full", help="Every case at full size (minutes)."),
     out: Path = typer.Option(Path("docs/verification.md"), "--out", help="Markdown table."),
     only: str = typer.Option("", "--only", help="Comma-separated case names."),
+    seeds: int = typer.Option(0, "--seeds", min=0, help="Seeds of the counterflow case "
+                              "(0: 1 fast, 5 full)."),
 ) -> None:
     """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
     from crowdwalk.verify import run_verification
 
     run_verification(full=full, out=out, only=[s for s in only.split(",") if s],
-                     echo=typer.echo)
+                     seeds=seeds or None, echo=typer.echo)
 
 
 # --- gait export (issue 4): export-bvh ----------------------------------------------

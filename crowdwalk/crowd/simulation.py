@@ -40,7 +40,7 @@ from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import step_durations, time_gap_speed
+from crowdwalk.crowd.speed import contact_gap_speed, step_durations, time_gap_speed
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
@@ -223,6 +223,40 @@ class CrowdSimulation:
                                                      self.min_step_time[a], 0.0),
                               stair_rise=self.params.stair_rise)
 
+    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs):
+        """The gap speed model's step for the deciders ``idx`` at ``pos`` (k, 2) [m]
+        among ``nbs`` (None for ``speed_model="free"``): a function of step directions
+        (k, 2) or (k, C, 2) giving the speed [m/s] and the longest step [m] (what that
+        speed covers in one step at the normal-mode cadence for it, WBDS relation; no
+        limit at the free speed), each (k,) or (k, C)."""
+        prm = self.params
+        if prm.speed_model == "free":
+            return None
+        free, leg = self.pop.free_speed[idx], self.leg_length[idx]
+        if prm.speed_model == "time_gap":  # Tordeux et al.: everybody ahead, now
+            gap_speed, others, followed = time_gap_speed, nbs.now, nbs.valid
+            gap_time = prm.time_gap
+        else:
+            # the contact gap to where the neighbours' committed steps end, among the
+            # walkers that do not come towards this one (an oncoming walker is avoided
+            # by steering, which anticipates its motion, not followed)
+            h = self.state.heading[idx]
+            own = np.stack([np.cos(h), np.sin(h)], axis=-1)
+            gap_speed, others, gap_time = contact_gap_speed, nbs.end, prm.contact_time_gap
+            followed = nbs.valid & (np.einsum("kmj,kj->km", nbs.velocity, own) >= -0.1)
+
+        def steps(direction: np.ndarray, *, everyone: bool = False
+                  ) -> tuple[np.ndarray, np.ndarray]:
+            v = gap_speed(position=pos, direction=direction, radius=self.radius[idx],
+                          others=others, others_radius=nbs.radius,
+                          valid=nbs.valid if everyone else followed,
+                          free_speed=free, time_gap=gap_time)
+            col = (slice(None),) + (None,) * (v.ndim - 1)
+            short = v / normal_mode.step_frequency(np.maximum(v, 0.1), leg[col])
+            return v, np.where(v < free[col], short, np.inf)
+
+        return steps
+
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
         te = st.t1[idx].copy()  # heel-strike (or wait-end) times, within this tick
@@ -252,25 +286,20 @@ class CrowdSimulation:
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, radius=self.radius,
                                 count=prm.neighbours, reach=prm.neighbour_range)
+        gap_steps = self._gap_steps(idx, pos, nbs) if nbs.valid.shape[1] else None
         choice = choose_steps(
             pos, st.stance[idx], heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
-            step_time=self.min_step_time[idx], lag=t - te)
+            step_time=self.min_step_time[idx], lag=t - te,
+            gap_reach=(None if gap_steps is None or prm.speed_model != "contact_gap"
+                       else lambda dirs: gap_steps(dirs, everyone=True)[1]))
         self.wall_steering += _time.perf_counter() - w0
-        if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
-            v = time_gap_speed(position=pos, direction=choice.direction,
-                               radius=self.radius[idx], others=nbs.now,
-                               others_radius=nbs.radius, valid=nbs.valid,
-                               free_speed=self.pop.free_speed[idx], time_gap=prm.time_gap)
+        if gap_steps is not None:
+            v, reach = gap_steps(choice.direction)
             self.step_speed[idx] = np.maximum(v, 0.05)
-            # a slower step is a shorter one: what that speed covers in one step at the
-            # normal-mode step frequency for it (WBDS relation)
-            reach = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[idx])
-            choice = replace(choice, free_length=np.where(
-                v < self.pop.free_speed[idx], np.minimum(choice.free_length, reach),
-                choice.free_length))
+            choice = replace(choice, free_length=np.minimum(choice.free_length, reach))
         plan = StepPlan.standing(idx.size)
         mv = np.flatnonzero(choice.move)
         if mv.size:
