@@ -60,3 +60,15 @@ def test_contact_gap_speed_counts_the_distance_to_first_contact():
     assert vc.shape == (3, 2)
     np.testing.assert_allclose(vc[:, 0], v)
     assert vc[0, 1] == 1.34
+
+
+def test_verify_names_an_unknown_speed_model_in_one_line(tmp_path):
+    from typer.testing import CliRunner
+
+    from crowdwalk.cli import app
+
+    result = CliRunner().invoke(app, ["verify", "--speed-model", "fast", "--only", "rimea1",
+                                      "--out", str(tmp_path / "v.md")])
+    assert result.exit_code == 2
+    assert "speed_model must be one of free, time_gap, contact_gap; got 'fast'" in result.output
+    assert not (tmp_path / "v.md").exists()
