@@ -61,10 +61,10 @@ class CrowdParams:
         allows (:func:`crowdwalk.crowd.speed.contact_gap_speed`).
     time_gap : float
         T of the time-gap model [s]: 0.8, calibrated on the SFPE handbook's corridor
-        speeds (``scripts/calibrate_time_gap.py``; single-seed runs are noisy: RMS
-        against SFPE 0.083 m/s at 0.8 s against 0.093-0.096 at 0.6-0.7 s in the first
-        runs, 0.135 against 0.099 at 0.7 s on the final version); validated on Weidmann
-        (1993).
+        speeds (``scripts/calibrate_time_gap.py --model time_gap``; single-seed runs are
+        noisy: RMS against SFPE 0.083 m/s at 0.8 s against 0.093-0.096 at 0.6-0.7 s in
+        the first runs, 0.135 against 0.099 at 0.7 s on the final version); validated
+        on Weidmann (1993).
     contact_time_gap : float
         T of the contact-gap model [s]: 1.2, calibrated on the SFPE handbook's
         corridor speeds as ``time_gap`` (``scripts/calibrate_time_gap.py --model
