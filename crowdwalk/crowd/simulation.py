@@ -42,7 +42,7 @@ from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import contact_gap_speed, step_durations, time_gap_speed
+from crowdwalk.crowd.speed import GapSteps, step_durations
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
@@ -52,6 +52,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
+from crowdwalk.workers import split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -77,11 +78,14 @@ class CrowdSimulation:
     params : CrowdParams, optional
     gait : crowdwalk.gait.engine.GaitEngine or None
         Receives every decided step and answers :meth:`poses` (None: no poses).
+    workers : crowdwalk.workers.Workers or None
+        Worker processes that steer parts of a tick's deciding walkers
+        (:func:`crowdwalk.workers.split_rows`; None: all here).
     """
 
     def __init__(self, world, population: Population, *, parts: CrowdParts,
                  dt: float = 0.05, fps: float = 10.0, duration: float = 600.0,
-                 params: CrowdParams | None = None, gait=None) -> None:
+                 params: CrowdParams | None = None, gait=None, workers=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
@@ -127,6 +131,12 @@ class CrowdSimulation:
         self.holding = WaitingAreas(sc.waiting_areas, world.routes, n) \
             if sc.waiting_areas else None
         self.gait = gait
+        self.workers = workers
+        # the workers that steer parts of a tick (not the one holding a remote gait engine)
+        self._steer_on = [] if workers is None else [
+            w for w in range(len(workers)) if w != getattr(gait, "worker", None)]
+        if self._steer_on:
+            workers.share(self.clearance)
         self.time = 0.0
         self.tick = 0
         self.wall_planning = 0.0
@@ -192,14 +202,22 @@ class CrowdSimulation:
     def poses(self):
         """Poses of the walking agents that have taken a step, at the current time
         (a :class:`crowdwalk.gait.engine.PoseFrame`), or None without a gait engine."""
+        return self.poses_later()()
+
+    def poses_later(self):
+        """A function returning :meth:`poses` of now; a gait engine with ``pose_async``
+        (:class:`crowdwalk.gait.remote.RemoteEngine`) computes them meanwhile."""
         if self.gait is None:
-            return None
+            return lambda: None
         self._flush_commands()
         idx = self.active
         idx = idx[self.state.animated[idx]]
         if idx.size == 0:
-            return None
-        return self.gait.pose(self.time, idx)
+            return lambda: None
+        if hasattr(self.gait, "pose_async"):
+            return self.gait.pose_async(self.time, idx)
+        frame = self.gait.pose(self.time, idx)
+        return lambda: frame
 
     # -- one tick ----------------------------------------------------------------------
 
@@ -233,39 +251,24 @@ class CrowdSimulation:
                                                      self.min_step_time[a], 0.0),
                               stair_rise=self.params.stair_rise)
 
-    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs):
-        """The gap speed model's step for the deciders ``idx`` at ``pos`` (k, 2) [m]
-        among ``nbs`` (None for ``speed_model="free"``): a function of step directions
-        (k, 2) or (k, C, 2) giving the speed [m/s] and the longest step [m] (what that
-        speed covers in one step at the normal-mode cadence for it, WBDS relation; no
-        limit at the free speed), each (k,) or (k, C)."""
+    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs) -> GapSteps | None:
+        """The gap speed model's steps for the deciders ``idx`` at ``pos`` (k, 2) [m]
+        among ``nbs`` (None for ``speed_model="free"``)."""
         prm = self.params
-        if prm.speed_model == "free":
+        if prm.speed_model == "free" or not nbs.valid.shape[1]:
             return None
         free, leg = self.pop.free_speed[idx], self.leg_length[idx]
         if prm.speed_model == "time_gap":  # Tordeux et al.: everybody ahead, now
-            gap_speed, others, followed = time_gap_speed, nbs.now, nbs.valid
-            gap_time = prm.time_gap
-        else:
-            # the contact gap to where the neighbours' committed steps end, among the
-            # walkers that do not come towards this one (an oncoming walker is avoided
-            # by steering, which anticipates its motion, not followed)
-            h = self.state.heading[idx]
-            own = np.stack([np.cos(h), np.sin(h)], axis=-1)
-            gap_speed, others, gap_time = contact_gap_speed, nbs.end, prm.contact_time_gap
-            followed = nbs.valid & (np.einsum("kmj,kj->km", nbs.velocity, own) >= -0.1)
-
-        def steps(direction: np.ndarray, *, everyone: bool = False
-                  ) -> tuple[np.ndarray, np.ndarray]:
-            v = gap_speed(position=pos, direction=direction, radius=self.radius[idx],
-                          others=others, others_radius=nbs.radius,
-                          valid=nbs.valid if everyone else followed,
-                          free_speed=free, time_gap=gap_time)
-            col = (slice(None),) + (None,) * (v.ndim - 1)
-            short = v / normal_mode.step_frequency(np.maximum(v, 0.1), leg[col])
-            return v, np.where(v < free[col], short, np.inf)
-
-        return steps
+            return GapSteps(pos, self.radius[idx], nbs.now, nbs.radius, nbs.valid,
+                            nbs.valid, free, leg, prm.time_gap, contact=False)
+        # the contact gap to where the neighbours' committed steps end; the step's speed
+        # does not count walkers that come towards this one (steering avoids them, which
+        # anticipates their motion; they are not followed)
+        h = self.state.heading[idx]
+        own = np.stack([np.cos(h), np.sin(h)], axis=-1)
+        followed = nbs.valid & (np.einsum("kmj,kj->km", nbs.velocity, own) >= -0.1)
+        return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
+                        free, leg, prm.contact_time_gap)
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
@@ -304,18 +307,18 @@ class CrowdSimulation:
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, radius=self.radius,
                                 count=prm.neighbours, reach=prm.neighbour_range)
-        gap_steps = self._gap_steps(idx, pos, nbs) if nbs.valid.shape[1] else None
-        choice = choose_steps(
-            pos, st.stance[idx], heading=st.heading[idx], radius=self.radius[idx],
+        gap = self._gap_steps(idx, pos, nbs)
+        choice = split_rows(
+            self.workers, choose_steps, idx.size, pos, st.stance[idx],
+            heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
-            step_time=self.min_step_time[idx], lag=t - te,
-            gap_reach=(None if gap_steps is None or prm.speed_model != "contact_gap"
-                       else lambda dirs: gap_steps(dirs, everyone=True)[1]))
+            step_time=self.min_step_time[idx], lag=t - te, on=self._steer_on,
+            gap=gap if prm.speed_model == "contact_gap" else None)
         self.wall_steering += _time.perf_counter() - w0
-        if gap_steps is not None:
-            v, reach = gap_steps(choice.direction)
+        if gap is not None:
+            v, reach = gap.along(choice.direction)
             self.step_speed[idx] = np.maximum(v, 0.05)
             choice = replace(choice, free_length=np.minimum(choice.free_length, reach))
         plan = StepPlan.standing(idx.size)

@@ -26,10 +26,14 @@ scores every candidate direction at the step it allows.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from planners import normal_mode
+
 __all__ = ["STAIR_UP_FACTOR", "STAIR_DOWN_FACTOR", "step_durations", "time_gap_speed",
-           "contact_gap_speed"]
+           "contact_gap_speed", "GapSteps"]
 
 #: Weidmann (1993): horizontal speed on stairs, up and down, over level speed 1.34 m/s.
 STAIR_UP_FACTOR = 0.610 / 1.34
@@ -110,3 +114,51 @@ def contact_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np
     gap = np.where(ahead, contact, np.inf).min(axis=2)  # (k, C)
     v = np.minimum(free_speed[:, None], np.maximum(gap, 0.0) / time_gap)
     return v if direction.ndim == 3 else v[:, 0]
+
+
+@dataclass(frozen=True, eq=False)
+class GapSteps:
+    """A gap speed model's step for m deciding walkers (struct-of-arrays).
+
+    Attributes
+    ----------
+    position, radius : (m, 2), (m,)
+        The walkers [m].
+    others, others_radius : (m, K, 2), (m, K)
+        Their neighbours where the gap is measured to [m], and radii [m].
+    valid, followed : (m, K) bool
+        The real neighbours (counted along candidate directions), and those the step's
+        own speed counts.
+    free_speed, leg_length : (m,)
+        [m/s], [m].
+    time_gap : float
+        T [s].
+    contact : bool
+        :func:`contact_gap_speed` (else :func:`time_gap_speed`, one direction each).
+    """
+
+    position: np.ndarray
+    radius: np.ndarray
+    others: np.ndarray
+    others_radius: np.ndarray
+    valid: np.ndarray
+    followed: np.ndarray
+    free_speed: np.ndarray
+    leg_length: np.ndarray
+    time_gap: float
+    contact: bool = True
+
+    def along(self, direction: np.ndarray, *, everyone: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Speed [m/s] and longest step [m] along unit ``direction`` (m, 2) or (m, C, 2),
+        each (m,) or (m, C): the step is what that speed covers in one step at the
+        normal-mode cadence for it (WBDS relation), unlimited at the free speed.
+        ``everyone``: count every neighbour, not only the followed ones."""
+        speed = contact_gap_speed if self.contact else time_gap_speed
+        v = speed(position=self.position, direction=direction, radius=self.radius,
+                  others=self.others, others_radius=self.others_radius,
+                  valid=self.valid if everyone else self.followed,
+                  free_speed=self.free_speed, time_gap=self.time_gap)
+        col = (slice(None),) + (None,) * (v.ndim - 1)
+        short = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[col])
+        return v, np.where(v < self.free_speed[col], short, np.inf)

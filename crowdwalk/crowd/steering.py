@@ -163,7 +163,7 @@ def choose_steps(
     stuck: np.ndarray | None = None,
     step_time: np.ndarray | None = None,
     lag: np.ndarray | None = None,
-    gap_reach=None,
+    gap=None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -201,11 +201,11 @@ def choose_steps(
         follower may step into the room its leader is vacating during the same step.
     lag : (m,), optional
         How long ago each agent's step would have started (its heel strike) [s].
-    gap_reach : callable, optional
-        The speed model's longest step (m, C) [m] along candidate directions (m, C, 2)
-        (:func:`crowdwalk.crowd.speed.contact_gap_speed`): the utility then scores each
-        direction at the step it allows, so that a walker falls in beside-behind the one
-        ahead (the zipper) or steps round an oncoming one rather than close up behind.
+    gap : crowdwalk.crowd.speed.GapSteps, optional
+        The contact-gap model's steps: the utility then scores each candidate direction
+        at the step the model allows along it (every neighbour counted), so that a
+        walker falls in beside-behind the one ahead (the zipper) or steps round an
+        oncoming one rather than close up behind.
 
     Returns
     -------
@@ -267,8 +267,8 @@ def choose_steps(
 
     # utility at the end point of the preferred (or longest clear) step
     use = np.minimum(free, nominal_step[:, None])  # (m, C)
-    if gap_reach is not None:
-        use = np.minimum(use, gap_reach(dirs))
+    if gap is not None:
+        use = np.minimum(use, gap.along(dirs, everyone=True)[1])
     end = stance[:, None, :] + 0.5 * use[..., None] * dirs  # (m, C, 2)
     cand = np.concatenate([end, position[:, None, :]], axis=1)  # (m, C+1, 2); last = wait
     utility = np.linalg.norm(target[:, None, :] - cand, axis=-1)
