@@ -38,6 +38,7 @@ import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.geometry import point_segment_distance, segment_distance, step_distance
+from crowdwalk.crowd.speed import GapSteps
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -163,7 +164,7 @@ def choose_steps(
     stuck: np.ndarray | None = None,
     step_time: np.ndarray | None = None,
     lag: np.ndarray | None = None,
-    gap=None,
+    gap: GapSteps | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
