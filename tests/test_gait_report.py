@@ -54,6 +54,7 @@ def test_lone_walker_steps_follow_speed_and_size(tmp_path, speed, height):
     assert abs(f.speed / f.free_speed - 1) <= 0.05
     assert abs(f.step_length_z) <= 2 and abs(f.cadence_z) <= 2
     assert f.heel_slide_max <= 0.010 and f.pelvis_d2_max <= 0.02
+    assert f.toe_drag_fraction == 0.0  # short slow steps too (mid-swing clearance)
 
 
 def test_winter_reference_interpolates_by_cadence():

@@ -64,10 +64,17 @@ from crowdwalk.steps import StepBatch
 __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
 
 
+#: Swing clearance of the per-frame pass: "contact" keeps the sole out of the ground
+#: (1 mm), "mid_swing" also keeps it ``_MID_SWING_CLEARANCE`` above the ground in mid-swing.
+SWING_CLEARANCE = ("contact", "mid_swing")
 _CLEARANCE = 0.002  # swing foot closer to the ground than this [m] → follow the Bezier
 _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off → 0.95
 _PHASE_END = 0.5 - 1e-6
+_BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
+_VELOCITY_PHASE = 0.02  # phase interval of the root velocities matched at a step's start
+_MAX_VELOCITY_FIX = 1.5  # largest root velocity offset matched [m/s]
+_VELOCITY_SLACK = 0.4  # root velocity jump at a heel strike left as it is [m/s]
 _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
@@ -82,6 +89,10 @@ _LIFT_WIDTH = 0.2  # half-width of each sample's lift bump, fraction of the step
 _LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the landing)
 _LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
 _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
+#: Least sole clearance in mid-swing [m] (``swing_clearance="mid_swing"``): Winter (1992)
+#: measured the minimum toe clearance of level walking at 1.29 ± 0.45 cm; one SD below.
+_MID_SWING_CLEARANCE = 0.0084
+_CLEARANCE_RAMP = 0.25  # ... reached over this first and left over this last fraction of swing
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
 
 
@@ -250,6 +261,7 @@ class _SwingState:
     use_bezier: np.ndarray  # (n,) bool
     lift_need: np.ndarray  # (n, G) anticipated lift at the _LIFT_GRID phases [m]
     hip_fix: np.ndarray  # (n, 3) root continuity offset [m]
+    hip_vel: np.ndarray  # (n, 3) ... and velocity offset [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
 
     @classmethod
@@ -257,7 +269,7 @@ class _SwingState:
         return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
                    np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.zeros((n, 3)))
 
 
 @dataclass(eq=False)
@@ -296,13 +308,15 @@ class _LastPose:
 
 @dataclass(frozen=True, eq=False)
 class _Landed:
-    """Where the previous step of m agents left the root (m, 3) [m] and the landed foot:
-    heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw (m,) [rad]."""
+    """Where the previous step of m agents left the root (m, 3) [m] and how fast (m, 3)
+    [m/s], and the landed foot: heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw
+    (m,) [rad]."""
 
     root: np.ndarray
     heel: np.ndarray
     yaw: np.ndarray
     old_yaw: np.ndarray
+    root_velocity: np.ndarray
 
 
 class Animator:
@@ -328,11 +342,16 @@ class Animator:
         style: GaitStyle | None = None,
         interp: ElevInterp | None = None,
         attributes=None,
+        swing_clearance: str = "mid_swing",
     ) -> None:
         if not isinstance(body, Body):
             raise invalid("Animator", "body", "a crowdwalk.body.Body", type(body).__name__)
+        if swing_clearance not in SWING_CLEARANCE:
+            raise invalid("Animator", "swing_clearance", f"one of {SWING_CLEARANCE}",
+                          swing_clearance)
         self.body = body
         self.ground = ground
+        self.swing_clearance = swing_clearance
         self.style = style or GaitStyle()
         self.attributes = attributes  # crowdwalk.style.Style (n) or None
         self.interp = interp or ElevInterp()
@@ -382,7 +401,7 @@ class Animator:
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
-        self._join_root(a, had, landed.root)
+        self._join_root(a, had, landed)
         self._swing_ends(cmd, body, had, data, trail)
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
@@ -395,14 +414,19 @@ class Animator:
         """Where the previous step (of the agents ``had`` a step) left the root and the
         foot that landed, at its end."""
         m = a.size
-        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m))
+        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m),
+                      np.zeros((m, 3)))
         if had.any():
             ah = a[had]
             k = ah.size
-            end = self._walk(ah, np.full(k, _PHASE_END), corrected=True)
+            end = self._walk(np.concatenate([ah, ah]),
+                             np.repeat([_PHASE_END, _PHASE_END - _VELOCITY_PHASE], k),
+                             corrected=True)
             old_st = np.where(self._step.stance_left[ah], 0, 1)
-            out.root[had] = end.root_position
-            feet = foot_points(self.body.take(ah), end.positions, end.rotations)
+            out.root[had] = end.root_position[:k]
+            dt = 2.0 * _VELOCITY_PHASE * self._step.duration[ah]
+            out.root_velocity[had] = (end.root_position[:k] - end.root_position[k:]) / dt[:, None]
+            feet = foot_points(self.body.take(ah), end.positions[:k], end.rotations[:k])
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
             out.heel[had] = new_st[:, 0]
             toward = new_st[:, 1] - new_st[:, 0]
@@ -474,6 +498,7 @@ class Animator:
             had, np.clip(2.0 * (data.stance_fraction - 0.5), 0.0, 0.45), 0.0
         )
         sw.hip_fix[a] = 0.0
+        sw.hip_vel[a] = 0.0
         sw.hip_drop[a] = 0.0
         sw.use_bezier[a] = False
         sw.lift_need[a] = 0.0
@@ -481,12 +506,24 @@ class Animator:
         step.commanded[a] = True
         return data
 
-    def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
-        """Root continuity: the stance hip starts where the previous step left the root
-        and blends to the data over the first half of the step."""
+    def _join_root(self, a: np.ndarray, had: np.ndarray, landed: _Landed) -> None:
+        """Root continuity: the stance hip starts where, and as fast as, the previous step
+        left the root, and blends to the data over the first half of the step (C¹: the
+        offset in position fades by a smoothstep, the one in velocity by u (1 − u)²)."""
         if had.any():
-            start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
-            self._swing.hip_fix[a[had]] = root_end[had] - start_pose.root_position
+            ah = a[had]
+            k = ah.size
+            start = self._walk(np.concatenate([ah, ah]),
+                               np.repeat([0.0, _VELOCITY_PHASE], k), corrected=False)
+            dt = 2.0 * _VELOCITY_PHASE * self._step.duration[ah]
+            v0 = (start.root_position[k:] - start.root_position[:k]) / dt[:, None]
+            self._swing.hip_fix[ah] = landed.root[had] - start.root_position[:k]
+            dv = landed.root_velocity[had] - v0
+            # only the part of the jump beyond _VELOCITY_SLACK (level steps keep their
+            # data), and bounded (steps of a few frames give no meaningful velocity)
+            speed = np.linalg.norm(dv, axis=1, keepdims=True)
+            matched = np.clip(speed - _VELOCITY_SLACK, 0.0, _MAX_VELOCITY_FIX)
+            self._swing.hip_vel[ah] = dv * matched / np.maximum(speed, 1e-12)
 
     def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray, data, trail) -> None:
         """The data-driven swing ankle at toe-off and at the landing (no swing corrections
@@ -792,7 +829,9 @@ class Animator:
             t_off = self._swing.toe_off[a]
             s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
-            ramp = _smoothstep((tau - t_off) / 0.15) * _smoothstep((1.0 - tau) / 0.15)
+            swing = np.maximum(1.0 - t_off, 1e-9)
+            ramp = (_smoothstep((tau - t_off) / (_BEZIER_IN * swing))
+                    * _smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
             blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
             target = _bezier(self._swing.bezier[a], tau)
             pinned = self._swing.has_trail[a] & (tau < t_off)
@@ -810,7 +849,10 @@ class Animator:
                 goal[:, 2] += lift
         hip_fix = None
         if corrected:
-            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
+            u = np.clip(tau / _HIP_BLEND, 0.0, 1.0)
+            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(u))[:, None]
+            span = _HIP_BLEND * self._step.duration[a] * u * (1.0 - u) ** 2
+            hip_fix += self._swing.hip_vel[a] * span[:, None]
             hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
@@ -918,7 +960,8 @@ class Animator:
         ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
         is checked again and raised further (the swing leg's IK does not translate the
         foot exactly: reach, knee plane), up to ``_LIFT_ROUNDS`` times."""
-        depth = self._points_depth(a, self._swing_sole(a, walked))
+        need = self._mid_swing_clearance(a, phase)
+        depth = self._points_depth(a, self._swing_sole(a, walked)) + need
         sink = np.flatnonzero(depth > 1e-4)
         if sink.size == 0:
             return walked, 0
@@ -933,11 +976,24 @@ class Animator:
                 getattr(walked, name)[sink] = getattr(again, name)
             for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
                 getattr(walked.warm, name)[sink] = getattr(again.warm, name)
-            depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
+            depth[sink] = (self._points_depth(a[sink], self._swing_sole(a[sink], again))
+                           + need[sink])
             sink = sink[depth[sink] > 1e-4]
             if sink.size == 0:
                 break
         return walked, lifted
+
+    def _mid_swing_clearance(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
+        """Sole clearance (k,) [m] the swing foot of agents a keeps at stance phases (k,):
+        ``_MID_SWING_CLEARANCE`` in mid-swing, ramped by smoothsteps from 0 at toe-off and
+        back to 0 at the landing (0 everywhere unless ``swing_clearance="mid_swing"``)."""
+        if self.swing_clearance != "mid_swing":
+            return np.zeros(a.size)
+        t_off = self._swing.toe_off[a]
+        ramp = _CLEARANCE_RAMP * np.maximum(1.0 - t_off, 1e-9)
+        tau = 2.0 * phase
+        return _MID_SWING_CLEARANCE * _smoothstep((tau - t_off) / ramp) * _smoothstep(
+            (1.0 - tau) / ramp)
 
     def _standing(self, a: np.ndarray):
         """A neutral standing pose above each agent's stance foothold."""

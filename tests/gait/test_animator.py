@@ -320,3 +320,32 @@ def test_speed_blend_changes_swing_knee_with_speed():
     assert fast - slow > 0.5 * gap
     slow0, fast0 = _swing_knee_peak(False)
     assert abs(fast0 - slow0) < 0.1
+
+
+@pytest.mark.parametrize("clearance", ["contact", "mid_swing"])
+def test_mid_swing_clearance_keeps_the_toe_off_level_ground(clearance):
+    """Short slow steps (0.50 m, below the slowest dataset) graze level ground with the
+    toe mid-swing unless the per-frame pass keeps the mid-swing clearance."""
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_flat, swing_clearance=clearance)
+    frames = _straight(animator, 1, steps=4, sl=0.50)
+    lowest = []
+    for frame in frames[30:]:  # after the first step
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        swing = 1 if frame.stance_left[0] else 0
+        phase = (frame.time % 0.6) / 0.6
+        if 0.55 < phase < 0.85:  # the middle of the swing
+            lowest.append(foot_points(body, frame.positions, rot)[0, swing, :, 2].min())
+    lowest = min(lowest)
+    assert lowest > -1e-3  # never in the ground
+    if clearance == "mid_swing":
+        assert lowest >= 0.008
+    else:
+        assert lowest < 0.008
+
+
+def test_swing_clearance_mode_is_checked():
+    with pytest.raises(InputError, match="swing_clearance"):
+        Animator(Body.from_heights([1.75]), ground=_flat, swing_clearance="high")
