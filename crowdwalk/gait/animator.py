@@ -72,9 +72,6 @@ _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off �
 _PHASE_END = 0.5 - 1e-6
 _BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
-_VELOCITY_PHASE = 0.02  # phase interval of the root velocities matched at a step's start
-_MAX_VELOCITY_FIX = 1.5  # largest root velocity offset matched [m/s]
-_VELOCITY_SLACK = 0.4  # root velocity jump at a heel strike left as it is [m/s]
 _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
@@ -262,15 +259,15 @@ class _SwingState:
     use_bezier: np.ndarray  # (n,) bool
     lift_need: np.ndarray  # (n, G) anticipated lift at the _LIFT_GRID phases [m]
     hip_fix: np.ndarray  # (n, 3) root continuity offset [m]
-    hip_vel: np.ndarray  # (n, 3) ... and velocity offset [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
+    keep_clear: np.ndarray  # (n,) bool, the mid-swing clearance holds (uneven or not level)
 
     @classmethod
     def zeros(cls, n: int) -> _SwingState:
         return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
                    np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.zeros(n, bool))
 
 
 @dataclass(eq=False)
@@ -309,15 +306,13 @@ class _LastPose:
 
 @dataclass(frozen=True, eq=False)
 class _Landed:
-    """Where the previous step of m agents left the root (m, 3) [m] and how fast (m, 3)
-    [m/s], and the landed foot: heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw
-    (m,) [rad]."""
+    """Where the previous step of m agents left the root (m, 3) [m] and the landed foot:
+    heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw (m,) [rad]."""
 
     root: np.ndarray
     heel: np.ndarray
     yaw: np.ndarray
     old_yaw: np.ndarray
-    root_velocity: np.ndarray
 
 
 class Animator:
@@ -402,10 +397,13 @@ class Animator:
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
-        self._join_root(a, had, landed)
+        self._join_root(a, had, landed.root)
         self._swing_ends(cmd, body, had, data, trail)
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
+        # level steps on flat ground: the dataset already clears it (Animator._cleared)
+        self._swing.keep_clear[a] = (bumpy | (np.abs(cmd.step_height) >= _LEVEL_RISE)
+                                     | (not self.style.level_clearance))
         self._swing_curve(cmd, bumpy)
         if bumpy.any():
             self._anticipate_lift(a[bumpy])
@@ -415,19 +413,14 @@ class Animator:
         """Where the previous step (of the agents ``had`` a step) left the root and the
         foot that landed, at its end."""
         m = a.size
-        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m),
-                      np.zeros((m, 3)))
+        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m))
         if had.any():
             ah = a[had]
             k = ah.size
-            end = self._walk(np.concatenate([ah, ah]),
-                             np.repeat([_PHASE_END, _PHASE_END - _VELOCITY_PHASE], k),
-                             corrected=True)
+            end = self._walk(ah, np.full(k, _PHASE_END), corrected=True)
             old_st = np.where(self._step.stance_left[ah], 0, 1)
-            out.root[had] = end.root_position[:k]
-            dt = 2.0 * _VELOCITY_PHASE * self._step.duration[ah]
-            out.root_velocity[had] = (end.root_position[:k] - end.root_position[k:]) / dt[:, None]
-            feet = foot_points(self.body.take(ah), end.positions[:k], end.rotations[:k])
+            out.root[had] = end.root_position
+            feet = foot_points(self.body.take(ah), end.positions, end.rotations)
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
             out.heel[had] = new_st[:, 0]
             toward = new_st[:, 1] - new_st[:, 0]
@@ -500,7 +493,6 @@ class Animator:
             had, np.clip(2.0 * (data.stance_fraction - 0.5), 0.0, 0.45), 0.0
         )
         sw.hip_fix[a] = 0.0
-        sw.hip_vel[a] = 0.0
         sw.hip_drop[a] = 0.0
         sw.use_bezier[a] = False
         sw.lift_need[a] = 0.0
@@ -534,24 +526,12 @@ class Animator:
                                     clearance=clearance)
         return out
 
-    def _join_root(self, a: np.ndarray, had: np.ndarray, landed: _Landed) -> None:
-        """Root continuity: the stance hip starts where, and as fast as, the previous step
-        left the root, and blends to the data over the first half of the step (C¹: the
-        offset in position fades by a smoothstep, the one in velocity by u (1 − u)²)."""
+    def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
+        """Root continuity: the stance hip starts where the previous step left the root
+        and blends to the data over the first half of the step."""
         if had.any():
-            ah = a[had]
-            k = ah.size
-            start = self._walk(np.concatenate([ah, ah]),
-                               np.repeat([0.0, _VELOCITY_PHASE], k), corrected=False)
-            dt = 2.0 * _VELOCITY_PHASE * self._step.duration[ah]
-            v0 = (start.root_position[k:] - start.root_position[:k]) / dt[:, None]
-            self._swing.hip_fix[ah] = landed.root[had] - start.root_position[:k]
-            dv = landed.root_velocity[had] - v0
-            # only the part of the jump beyond _VELOCITY_SLACK (level steps keep their
-            # data), and bounded (steps of a few frames give no meaningful velocity)
-            speed = np.linalg.norm(dv, axis=1, keepdims=True)
-            matched = np.clip(speed - _VELOCITY_SLACK, 0.0, _MAX_VELOCITY_FIX)
-            self._swing.hip_vel[ah] = dv * matched / np.maximum(speed, 1e-12)
+            start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
+            self._swing.hip_fix[a[had]] = root_end[had] - start_pose.root_position
 
     def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray, data, trail) -> None:
         """The data-driven swing ankle at toe-off and at the landing (no swing corrections
@@ -879,10 +859,7 @@ class Animator:
                 goal[:, 2] += lift
         hip_fix = None
         if corrected:
-            u = np.clip(tau / _HIP_BLEND, 0.0, 1.0)
-            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(u))[:, None]
-            span = _HIP_BLEND * self._step.duration[a] * u * (1.0 - u) ** 2
-            hip_fix += self._swing.hip_vel[a] * span[:, None]
+            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
             hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
@@ -1016,14 +993,16 @@ class Animator:
     def _mid_swing_clearance(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         """Sole clearance (k,) [m] the swing foot of agents a keeps at stance phases (k,):
         ``_MID_SWING_CLEARANCE`` in mid-swing, ramped by smoothsteps from 0 at toe-off and
-        back to 0 at the landing (0 everywhere unless ``swing_clearance="mid_swing"``)."""
+        back to 0 at the landing, on steps over uneven ground or up or down (level steps on
+        flat ground clear it by their dataset, :meth:`_cleared`); 0 everywhere unless
+        ``swing_clearance="mid_swing"``."""
         if self.swing_clearance != "mid_swing":
             return np.zeros(a.size)
         t_off = self._swing.toe_off[a]
         ramp = _CLEARANCE_RAMP * np.maximum(1.0 - t_off, 1e-9)
         tau = 2.0 * phase
-        return _MID_SWING_CLEARANCE * _smoothstep((tau - t_off) / ramp) * _smoothstep(
-            (1.0 - tau) / ramp)
+        return np.where(self._swing.keep_clear[a], _MID_SWING_CLEARANCE, 0.0) * _smoothstep(
+            (tau - t_off) / ramp) * _smoothstep((1.0 - tau) / ramp)
 
     def _standing(self, a: np.ndarray):
         """A neutral standing pose above each agent's stance foothold."""

@@ -324,10 +324,12 @@ def test_speed_blend_changes_swing_knee_with_speed():
 
 @pytest.mark.parametrize("clearance", ["contact", "mid_swing"])
 def test_mid_swing_clearance_keeps_the_toe_off_level_ground(clearance):
-    """Short slow steps (0.50 m, below the slowest dataset) graze level ground with the
-    toe mid-swing unless the per-frame pass keeps the mid-swing clearance."""
+    """Short slow steps (0.50 m, below the slowest dataset) of the data graze level ground
+    with the toe mid-swing unless the per-frame pass keeps the mid-swing clearance."""
     body = Body.from_heights([1.75])
-    animator = Animator(body, ground=_flat, swing_clearance=clearance)
+    # the datasets' own level clearance off, so that the per-frame pass alone is seen
+    animator = Animator(body, ground=_flat, style=GaitStyle(level_clearance=False),
+                        swing_clearance=clearance)
     frames = _straight(animator, 1, steps=4, sl=0.50)
     lowest = []
     for frame in frames[30:]:  # after the first step
