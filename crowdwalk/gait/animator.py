@@ -64,9 +64,6 @@ from crowdwalk.steps import StepBatch
 __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
 
 
-#: Swing clearance of the per-frame pass: "contact" keeps the sole out of the ground
-#: (1 mm), "mid_swing" also keeps it ``_MID_SWING_CLEARANCE`` above the ground in mid-swing.
-SWING_CLEARANCE = ("contact", "mid_swing")
 _CLEARANCE = 0.002  # swing foot closer to the ground than this [m] → follow the Bezier
 _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off → 0.95
 _PHASE_END = 0.5 - 1e-6
@@ -86,10 +83,6 @@ _LIFT_WIDTH = 0.2  # half-width of each sample's lift bump, fraction of the step
 _LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the landing)
 _LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
 _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
-#: Least sole clearance in mid-swing [m] (``swing_clearance="mid_swing"``): Winter (1992)
-#: measured the minimum toe clearance of level walking at 1.29 ± 0.45 cm; one SD below.
-_MID_SWING_CLEARANCE = 0.0084
-_CLEARANCE_RAMP = 0.25  # ... reached over this first and left over this last fraction of swing
 _LEVEL_RISE = 0.02  # steps rising or falling less than this are level [m]
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
 
@@ -260,14 +253,13 @@ class _SwingState:
     lift_need: np.ndarray  # (n, G) anticipated lift at the _LIFT_GRID phases [m]
     hip_fix: np.ndarray  # (n, 3) root continuity offset [m]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
-    keep_clear: np.ndarray  # (n,) bool, the mid-swing clearance holds (uneven or not level)
 
     @classmethod
     def zeros(cls, n: int) -> _SwingState:
         return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
                    np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros(n, bool))
+                   np.zeros((n, 3)))
 
 
 @dataclass(eq=False)
@@ -338,16 +330,11 @@ class Animator:
         style: GaitStyle | None = None,
         interp: ElevInterp | None = None,
         attributes=None,
-        swing_clearance: str = "mid_swing",
     ) -> None:
         if not isinstance(body, Body):
             raise invalid("Animator", "body", "a crowdwalk.body.Body", type(body).__name__)
-        if swing_clearance not in SWING_CLEARANCE:
-            raise invalid("Animator", "swing_clearance", f"one of {SWING_CLEARANCE}",
-                          swing_clearance)
         self.body = body
         self.ground = ground
-        self.swing_clearance = swing_clearance
         self.style = style or GaitStyle()
         self.attributes = attributes  # crowdwalk.style.Style (n) or None
         self.interp = interp or ElevInterp()
@@ -401,9 +388,6 @@ class Animator:
         self._swing_ends(cmd, body, had, data, trail)
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
-        # level steps on flat ground: the dataset already clears it (Animator._cleared)
-        self._swing.keep_clear[a] = (bumpy | (np.abs(cmd.step_height) >= _LEVEL_RISE)
-                                     | (not self.style.level_clearance))
         self._swing_curve(cmd, bumpy)
         if bumpy.any():
             self._anticipate_lift(a[bumpy])
@@ -967,8 +951,7 @@ class Animator:
         ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
         is checked again and raised further (the swing leg's IK does not translate the
         foot exactly: reach, knee plane), up to ``_LIFT_ROUNDS`` times."""
-        need = self._mid_swing_clearance(a, phase)
-        depth = self._points_depth(a, self._swing_sole(a, walked)) + need
+        depth = self._points_depth(a, self._swing_sole(a, walked))
         sink = np.flatnonzero(depth > 1e-4)
         if sink.size == 0:
             return walked, 0
@@ -983,26 +966,11 @@ class Animator:
                 getattr(walked, name)[sink] = getattr(again, name)
             for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
                 getattr(walked.warm, name)[sink] = getattr(again.warm, name)
-            depth[sink] = (self._points_depth(a[sink], self._swing_sole(a[sink], again))
-                           + need[sink])
+            depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]
             if sink.size == 0:
                 break
         return walked, lifted
-
-    def _mid_swing_clearance(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
-        """Sole clearance (k,) [m] the swing foot of agents a keeps at stance phases (k,):
-        ``_MID_SWING_CLEARANCE`` in mid-swing, ramped by smoothsteps from 0 at toe-off and
-        back to 0 at the landing, on steps over uneven ground or up or down (level steps on
-        flat ground clear it by their dataset, :meth:`_cleared`); 0 everywhere unless
-        ``swing_clearance="mid_swing"``."""
-        if self.swing_clearance != "mid_swing":
-            return np.zeros(a.size)
-        t_off = self._swing.toe_off[a]
-        ramp = _CLEARANCE_RAMP * np.maximum(1.0 - t_off, 1e-9)
-        tau = 2.0 * phase
-        return np.where(self._swing.keep_clear[a], _MID_SWING_CLEARANCE, 0.0) * _smoothstep(
-            (tau - t_off) / ramp) * _smoothstep((1.0 - tau) / ramp)
 
     def _standing(self, a: np.ndarray):
         """A neutral standing pose above each agent's stance foothold."""
