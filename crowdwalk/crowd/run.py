@@ -207,9 +207,13 @@ def _run(scenario, out, *, overrides, progress, params, sinks) -> dict:
         snapshot = sim.snapshot()
         for sink in everyone:
             sink.frame(sim.time, snapshot, None)
+        walkable = sim.routes.graph
         while not sim.finished:
             interrupts.check()
             on_frame = sim.step()
+            if sim.routes.graph is not walkable:  # an event shut or opened a door
+                walkable = sim.routes.graph
+                writer.set_walkable(walkable.walkable_area.wkt)
             w0 = time.perf_counter()
             deliver_steps()
             timing["writing_s"] += time.perf_counter() - w0
