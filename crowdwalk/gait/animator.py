@@ -71,6 +71,7 @@ __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
 _CLEARANCE = 0.002  # swing foot closer to the ground than this [m] → follow the Bezier
 _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off → 0.95
 _PHASE_END = 0.5 - 1e-6
+_BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
 _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
@@ -825,7 +826,9 @@ class Animator:
             t_off = self._swing.toe_off[a]
             s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
-            ramp = _smoothstep((tau - t_off) / 0.15) * _smoothstep((1.0 - tau) / 0.15)
+            swing = np.maximum(1.0 - t_off, 1e-9)
+            ramp = (_smoothstep((tau - t_off) / (_BEZIER_IN * swing))
+                    * _smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
             blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
             target = _bezier(self._swing.bezier[a], tau)
             pinned = self._swing.has_trail[a] & (tau < t_off)
