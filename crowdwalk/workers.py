@@ -32,8 +32,11 @@ __all__ = ["Workers", "WorkerError", "available_cores", "split_rows", "worker_co
 
 #: A run with fewer walkers stays in one process (workers cost ~2 s to start) [-].
 MIN_PARALLEL_AGENTS = 500
-#: A call with fewer rows is not split (sending costs ~1 ms) [-].
-MIN_SPLIT_ROWS = 64
+#: A call with fewer rows is not split [-]: the 1,000-walker stadium (~100 walkers deciding
+#: per tick) ran at 1.21 sim s per wall s with its steering split and 1.45 without
+#: (``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2``, load 1-4); the 10,000-
+#: walker one (~1,000 per tick) spends 63-82 % of its time steering.
+MIN_SPLIT_ROWS = 400
 
 
 class WorkerError(RuntimeError):

@@ -41,7 +41,8 @@ def workers():
         yield w
 
 
-def test_split_rows_equals_one_call_and_sends_shared_objects_once(workers):
+def test_split_rows_equals_one_call_and_sends_shared_objects_once(workers, monkeypatch):
+    monkeypatch.setattr(W, "MIN_SPLIT_ROWS", 2)
     rng = np.random.default_rng(3)
     x = rng.normal(size=(200, 3))
     labels = [f"a{i}" for i in range(200)]
@@ -55,7 +56,8 @@ def test_split_rows_equals_one_call_and_sends_shared_objects_once(workers):
     assert np.array_equal(only_one.total, whole.total)
 
 
-def test_a_failure_in_a_worker_is_raised_here_with_its_traceback(workers):
+def test_a_failure_in_a_worker_is_raised_here_with_its_traceback(workers, monkeypatch):
+    monkeypatch.setattr(W, "MIN_SPLIT_ROWS", 2)
     x = np.zeros((200, 1))
     x[:67] = 1.0  # the first worker's part
     with pytest.raises(WorkerError, match="bad rows: 67"):
