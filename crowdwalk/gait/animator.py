@@ -485,8 +485,9 @@ class Animator:
         st.ball[a], st.yaw[a], st.slope[a] = stance.ball, stance.yaw, stance.slope
         # Spin turn (§6.1, MetaGait's): on the ball of the stance foot, once its heel is up
         st.spin[a] = 0.0 if cmd.spin is None else cmd.spin
-        step.spin_start[a] = _spin_start(body, data.angles, cmd.heading - stance.yaw,
-                                         stance.slope)
+        # (ψ before the spin is at most the hips' twist from the foot)
+        step.spin_start[a] = _spin_start(body, data.angles,
+                                         cmd.heading - st.spin[a] - stance.yaw, stance.slope)
         st.toe_out[a] = toe_out
         st.start[a], st.target[a] = cmd.start, cmd.target
         sw.d0[a] = 0.0
