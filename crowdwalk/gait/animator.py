@@ -370,7 +370,7 @@ class Animator:
         self._warm = _SolverWarmth.zeros(n)
         self._last = _LastPose.zeros(n, nj)
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
-                      "lifted": 0, "lift_steps": 0}  # fmt: skip
+                      "lifted": 0, "lift_steps": 0, "yaw_fixes": 0}  # fmt: skip
 
     # -- public -----------------------------------------------------------------------
     @property
@@ -663,13 +663,16 @@ class Animator:
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
         walked = self._walk(a, phase, corrected=True)
-        toe_fix = None
+        toe_fix = np.zeros(a.size)
         for _ in range(_YAW_ROUNDS):
             more = self._swing_yaw_fix(a, phase, walked)
-            if more is None:
+            fix = np.flatnonzero(np.abs(more) > np.radians(0.5))
+            if fix.size == 0:
                 break
-            toe_fix = more if toe_fix is None else toe_fix + more
-            walked = self._walk(a, phase, corrected=True, toe_fix=toe_fix)
+            toe_fix[fix] += more[fix]
+            self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
+                                                toe_fix=toe_fix[fix]))
+            self.stats["yaw_fixes"] += fix.size
         walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix)
         self.stats["lifted"] += int(lifted)
 
@@ -844,11 +847,11 @@ class Animator:
         return toe0 + (toe1 - toe0) * _smoothstep((tau - t_off) / np.maximum(1.0 - t_off,
                                                                               1e-9))
 
-    def _swing_yaw_fix(self, a: np.ndarray, phase: np.ndarray, walked) -> np.ndarray | None:
+    def _swing_yaw_fix(self, a: np.ndarray, phase: np.ndarray, walked) -> np.ndarray:
         """Toe-out corrections (k,) [rad] that turn the swing foot of agents a to the yaw
         :meth:`_swing_toe` asks for (the swing leg's IK toward a pinned or corrected ankle
         and the skew talocrural axis turn it: a trailing foot pinned on its toes would
-        yaw by 20° in push-off in a 15° turn); None when every foot is within 0.5°."""
+        yaw by 20° in push-off in a 15° turn)."""
         rows = np.arange(a.size)
         sw = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)]
         along = walked.rotations[rows, sw[:, 3]][:, :, 0]
@@ -856,11 +859,19 @@ class Animator:
         side_sw = np.where(self._step.stance_left[a], -1.0, 1.0)
         want = psi + side_sw * self._swing_toe(a, 2.0 * phase, psi)
         err = wrap_angle(np.arctan2(along[:, 1], along[:, 0]) - want)
-        # a steep foot's yaw is ill-conditioned: the correction fades out beyond 55° pitch
-        err *= np.clip((np.hypot(along[:, 0], along[:, 1]) - 0.35) / 0.2, 0.0, 1.0)
-        if not (np.abs(err) > np.radians(0.5)).any():
-            return None
+        # a steep foot's yaw is ill-conditioned: the correction fades out beyond 45° pitch
+        err *= np.clip((np.hypot(along[:, 0], along[:, 1]) - 0.5) / 0.2, 0.0, 1.0)
         return -side_sw * err
+
+    @staticmethod
+    def _merge(walked, rows: np.ndarray, again) -> None:
+        """Put the re-solved poses ``again`` of ``rows`` into ``walked`` (in place; the
+        walker's arrays are fresh per call)."""
+        for name in ("root_position", "root_rotation", "local", "positions", "rotations",
+                     "contact", "converged", "solves"):  # fmt: skip
+            getattr(walked, name)[rows] = getattr(again, name)
+        for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
+            getattr(walked.warm, name)[rows] = getattr(again.warm, name)
 
     def _walk(self, a: np.ndarray, phase: np.ndarray, corrected: bool,
               lift: np.ndarray | None = None, toe_fix: np.ndarray | None = None):  # fmt: skip
@@ -1031,12 +1042,7 @@ class Animator:
             lift[sink] += depth[sink] + _LIFT_MARGIN
             again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink],
                                toe_fix=None if toe_fix is None else toe_fix[sink])
-            # the walker's arrays are fresh per call: merge in place
-            for name in ("root_position", "root_rotation", "local", "positions", "rotations",
-                         "contact", "converged", "solves"):  # fmt: skip
-                getattr(walked, name)[sink] = getattr(again, name)
-            for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
-                getattr(walked.warm, name)[sink] = getattr(again.warm, name)
+            self._merge(walked, sink, again)
             depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]
             if sink.size == 0:

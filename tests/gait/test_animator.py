@@ -355,3 +355,35 @@ def test_a_spin_turn_pivots_on_the_ball_with_the_heel_up():
     assert np.abs(np.diff(yaw)).max() < 12.0
     moving = ball[1:][turning]
     assert np.linalg.norm(moving[:, :2] - moving[0, :2], axis=1).max() < 0.002
+
+
+def test_the_trailing_foot_keeps_its_yaw_in_push_off_in_a_turn():
+    """After a 15-degree turn the trailing foot, pinned on its toes in push-off, does not
+    turn with the body (the swing leg's IK used to yaw it by 20 degrees)."""
+    from crowdwalk.gait.foot import foot_points as points
+
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_flat)
+    turn = np.radians(15.0)
+    d = np.array([np.cos(turn), np.sin(turn), 0.0])
+    n = np.array([-d[1], d[0], 0.0])
+    s1 = np.array([0.65, -0.045, 0.0])
+    t1 = s1 + 0.65 * d + 0.09 * n
+    animator.command(_command([0], 0.0, 1, [[0, 0.045, 0]], [s1], duration=0.5))
+    animator.command(_command([0], 0.5, 0, [s1], [t1], duration=0.5, heading=turn))
+    animator.command(_command([0], 1.0, 1, [t1], [t1 + 0.65 * d - 0.09 * n], duration=0.5,
+                              heading=turn))
+    yaw = []
+    for f in range(12):
+        frame = animator.pose(1.0 + f / 50.0)
+        if not frame.contact[0, 1]:
+            break
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        p = points(body, frame.positions, rot)[0, 1]  # the right (trailing) foot
+        if p[1, 2] > 0.06:  # the ball well up: the foot stands on its toes
+            break
+        yaw.append(np.degrees(np.arctan2(*(p[2] - p[0])[1::-1])))
+    assert len(yaw) >= 3
+    assert np.ptp(yaw) <= 4.0
