@@ -848,10 +848,10 @@ class Animator:
                                                                               1e-9))
 
     def _swing_yaw_fix(self, a: np.ndarray, phase: np.ndarray, walked) -> np.ndarray:
-        """Toe-out corrections (k,) [rad] that turn the swing foot of agents a to the yaw
-        :meth:`_swing_toe` asks for (the swing leg's IK toward a pinned or corrected ankle
-        and the skew talocrural axis turn it: a trailing foot pinned on its toes would
-        yaw by 20° in push-off in a 15° turn)."""
+        """Toe-out corrections (k,) [rad] that turn the trailing foot of agents a, pinned
+        in push-off, to the yaw :meth:`_swing_toe` asks for (the swing leg's IK toward the
+        pinned ankle and the skew talocrural axis turn it: by 20° in push-off after a 15°
+        turn)."""
         rows = np.arange(a.size)
         sw = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)]
         along = walked.rotations[rows, sw[:, 3]][:, :, 0]
@@ -859,8 +859,11 @@ class Animator:
         side_sw = np.where(self._step.stance_left[a], -1.0, 1.0)
         want = psi + side_sw * self._swing_toe(a, 2.0 * phase, psi)
         err = wrap_angle(np.arctan2(along[:, 1], along[:, 0]) - want)
-        # a steep foot's yaw is ill-conditioned: the correction fades out beyond 45° pitch
+        # a steep foot's yaw is ill-conditioned: the correction fades out beyond 45° pitch;
+        # it is for the trailing foot on the ground, and fades out over the early swing
         err *= np.clip((np.hypot(along[:, 0], along[:, 1]) - 0.5) / 0.2, 0.0, 1.0)
+        t_off = self._swing.toe_off[a]
+        err *= self._swing.has_trail[a] * (1.0 - _smoothstep((2.0 * phase - t_off) / 0.15))
         return -side_sw * err
 
     @staticmethod
