@@ -44,7 +44,7 @@ from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import step_durations, time_gap_speed
+from crowdwalk.crowd.speed import GapSteps, step_durations
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
@@ -55,6 +55,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
+from crowdwalk.workers import split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -80,11 +81,14 @@ class CrowdSimulation:
     params : CrowdParams, optional
     gait : crowdwalk.gait.engine.GaitEngine or None
         Receives every decided step and answers :meth:`poses` (None: no poses).
+    workers : crowdwalk.workers.Workers or None
+        Worker processes that steer parts of a tick's deciding walkers
+        (:func:`crowdwalk.workers.split_rows`; None: all here).
     """
 
     def __init__(self, world, population: Population, *, parts: CrowdParts,
                  dt: float = 0.05, fps: float = 10.0, duration: float = 600.0,
-                 params: CrowdParams | None = None, gait=None) -> None:
+                 params: CrowdParams | None = None, gait=None, workers=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
@@ -131,6 +135,12 @@ class CrowdSimulation:
         self.holding = WaitingAreas(sc.waiting_areas, world.routes, n) \
             if sc.waiting_areas else None
         self.gait = gait
+        self.workers = workers
+        # the workers that steer parts of a tick (not the one holding a remote gait engine)
+        self._steer_on = [] if workers is None else [
+            w for w in range(len(workers)) if w != getattr(gait, "worker", None)]
+        if self._steer_on:
+            workers.share(self.clearance)
         self.time = 0.0
         self.tick = 0
         self.wall_planning = 0.0
@@ -196,14 +206,22 @@ class CrowdSimulation:
     def poses(self):
         """Poses of the walking agents that have taken a step, at the current time
         (a :class:`crowdwalk.gait.engine.PoseFrame`), or None without a gait engine."""
+        return self.poses_later()()
+
+    def poses_later(self):
+        """A function returning :meth:`poses` of now; a gait engine with ``pose_async``
+        (:class:`crowdwalk.gait.remote.RemoteEngine`) computes them meanwhile."""
         if self.gait is None:
-            return None
+            return lambda: None
         self._flush_commands()
         idx = self.active
         idx = idx[self.state.animated[idx]]
         if idx.size == 0:
-            return None
-        return self.gait.pose(self.time, idx)
+            return lambda: None
+        if hasattr(self.gait, "pose_async"):
+            return self.gait.pose_async(self.time, idx)
+        frame = self.gait.pose(self.time, idx)
+        return lambda: frame
 
     # -- one tick ----------------------------------------------------------------------
 
@@ -236,6 +254,25 @@ class CrowdSimulation:
                               min_step_time=np.where(plan.shortened | self.hold_frequency[a],
                                                      self.min_step_time[a], 0.0),
                               stair_rise=self.params.stair_rise)
+
+    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs) -> GapSteps | None:
+        """The gap speed model's steps for the deciders ``idx`` at ``pos`` (k, 2) [m]
+        among ``nbs`` (None for ``speed_model="free"``)."""
+        prm = self.params
+        if prm.speed_model == "free" or not nbs.valid.shape[1]:
+            return None
+        free, leg = self.pop.free_speed[idx], self.leg_length[idx]
+        if prm.speed_model == "time_gap":  # Tordeux et al.: everybody ahead, now
+            return GapSteps(pos, self.radius[idx], nbs.now, nbs.radius, nbs.valid,
+                            nbs.valid, free, leg, prm.time_gap, contact=False)
+        # the contact gap to where the neighbours' committed steps end; the step's speed
+        # does not count walkers that come towards this one (steering avoids them, which
+        # anticipates their motion; they are not followed)
+        h = self.state.heading[idx]
+        own = np.stack([np.cos(h), np.sin(h)], axis=-1)
+        followed = nbs.valid & (np.einsum("kmj,kj->km", nbs.velocity, own) >= -0.1)
+        return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
+                        free, leg, prm.contact_time_gap)
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
@@ -274,25 +311,20 @@ class CrowdSimulation:
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, radius=self.radius,
                                 count=prm.neighbours, reach=prm.neighbour_range)
-        choice = choose_steps(
-            pos, st.stance[idx], heading=st.heading[idx], radius=self.radius[idx],
+        gap = self._gap_steps(idx, pos, nbs)
+        choice = split_rows(
+            self.workers, choose_steps, idx.size, pos, st.stance[idx],
+            heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
-            step_time=self.min_step_time[idx], lag=t - te)
+            step_time=self.min_step_time[idx], lag=t - te, on=self._steer_on,
+            gap=gap if prm.speed_model == "contact_gap" else None)
         self.wall_steering += _time.perf_counter() - w0
-        if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
-            v = time_gap_speed(position=pos, direction=choice.direction,
-                               radius=self.radius[idx], others=nbs.now,
-                               others_radius=nbs.radius, valid=nbs.valid,
-                               free_speed=self.pop.free_speed[idx], time_gap=prm.time_gap)
+        if gap is not None:
+            v, reach = gap.along(choice.direction)
             self.step_speed[idx] = np.maximum(v, 0.05)
-            # a slower step is a shorter one: what that speed covers in one step at the
-            # normal-mode step frequency for it (WBDS relation)
-            reach = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[idx])
-            choice = replace(choice, free_length=np.where(
-                v < self.pop.free_speed[idx], np.minimum(choice.free_length, reach),
-                choice.free_length))
+            choice = replace(choice, free_length=np.minimum(choice.free_length, reach))
         plan = StepPlan.standing(idx.size)
         mv = np.flatnonzero(choice.move)
         if mv.size:
