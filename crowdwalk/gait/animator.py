@@ -863,7 +863,7 @@ class Animator:
         # it is for the trailing foot on the ground, and fades out over the early swing
         err *= np.clip((np.hypot(along[:, 0], along[:, 1]) - 0.5) / 0.2, 0.0, 1.0)
         t_off = self._swing.toe_off[a]
-        err *= self._swing.has_trail[a] * (1.0 - _smoothstep((2.0 * phase - t_off) / 0.15))
+        err *= self._swing.has_trail[a] * (1.0 - _smoothstep((2.0 * phase - t_off) / 0.4))
         return -side_sw * err
 
     @staticmethod
