@@ -87,9 +87,9 @@ def test_uphill_steps_shorten_with_the_linear_form_and_jump_with_the_printed_one
 
 
 def _legs(leg):
-    from planners.lattice import _LegArrays
+    from planners.grids import LegArrays
 
-    return _LegArrays([leg])
+    return LegArrays([leg])
 
 
 def test_terminal_energy_is_level_walking_on_level_ground(leg):
