@@ -56,7 +56,8 @@ def find_init(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, tables.struct.n, tables.struct.J
     centres = tables.neutral.astype(np.int64)
     distinct, which = np.unique(centres, return_inverse=True)
-    orders = np.stack([fifo_order(int(c), n, J) for c in distinct])
+    orders = (fifo_order(int(distinct[0]), n, J)[None] if distinct.size == 1
+              else np.stack([fifo_order(int(c), n, J) for c in distinct]))
     configs = np.repeat(centres[:, None], n, axis=1)
     found = np.zeros(A, dtype=np.bool_)
     expanded = np.zeros(A, dtype=np.int64)

@@ -92,6 +92,8 @@ class LegGrids:
     flat_slack : ndarray, shape (A, 2, S)
         How much more than ``clearance`` the sole keeps away from the footholds' zones
         [m].
+    legs : ndarray, shape (A, 6)
+        The legs (:meth:`LegArrays.table`) [m].
     """
 
     lo: np.ndarray
@@ -104,6 +106,7 @@ class LegGrids:
     flat_ctrl: np.ndarray
     flat_ok: np.ndarray
     flat_slack: np.ndarray
+    legs: np.ndarray
 
 
 class _Cache:
@@ -132,6 +135,7 @@ class _Cache:
 
 
 _CACHES: dict[PlannerConfig, _Cache] = {}
+_LAST: list = [None, None]  # the last configuration and its cache (hashing one is slow)
 
 
 def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
@@ -150,9 +154,10 @@ def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
     else:
         normal = np.zeros(len(legs))
         keys = [(leg, 0.0, -1) for leg in legs]
-    cache = _CACHES.get(config)
+    cache = _LAST[1] if _LAST[0] is config else _CACHES.get(config)
     if cache is None:
         cache = _CACHES.setdefault(config, _Cache(config))
+    _LAST[:] = config, cache
     missing = list(dict.fromkeys(key for key in keys if key not in cache.rows))
     if missing:
         cache.add(missing, _entries(missing, config))
@@ -167,7 +172,7 @@ def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
         walking = walking * (1.0 + w.frequency * (normal / L - 1.0) ** 2)
     return LegGrids(got["lo"], got["delta"], got["neutral"], normal, walking + got["rest"],
                     got["flat_Ej"], got["flat_reach"], got["flat_ctrl"], got["flat_ok"],
-                    got["flat_slack"])
+                    got["flat_slack"], legs_col.table())
 
 
 def _entries(keys: list, config: PlannerConfig) -> dict:

@@ -17,7 +17,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from planners.config import PlannerConfig
-from planners.grids import LegArrays, leg_grids, swing_basis
+from planners.grids import leg_grids, swing_basis
 from planners.lattice_kernel import build_agents, build_agents_serial
 from planners.profile import RASTER_CELL
 from planners.swing import TABLE_LEVELS
@@ -381,7 +381,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
     kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, np.asarray(trailing, dtype=float),
            np.asarray(speeds, dtype=float), g.normal, g.per_metre,
-           g.lo + g.delta * g.neutral, LegArrays(legs).table(), g.flat_Ej, g.flat_reach,
+           g.lo + g.delta * g.neutral, g.legs, g.flat_Ej, g.flat_reach,
            g.flat_ctrl, g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
            st.step_front, st.step_j, st.step_depth, np.asarray(st.step_offset, dtype=np.int64),
            st.swing_back, st.swing_front, st.swing_stride, first, second, valid, basis,
