@@ -68,7 +68,7 @@ class Plan:
         Eq. 5 over the plan: total length / total energy [m kg/J].
     stats : dict
         Counted work: the search's ``nodes_expanded`` and ``legality_checks`` (see each
-        search), and the tables' ``lattice_steps``, ``key_frame_solves``,
+        search), and the tables' ``lattice_steps`` (evaluated), ``key_frame_solves``,
         ``swing_curves`` (built by §5.2), ``swing_curves_reused`` (from the flat-ground
         cache), ``swing_adjustments`` (see :class:`~planners.lattice.TableWork`);
         ``time_s`` (per plan, amortised over a batch); the grid (``step_min``,
