@@ -38,6 +38,7 @@ import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.geometry import point_segment_distance, segment_distance, step_distance
+from crowdwalk.crowd.speed import GapSteps
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -163,6 +164,7 @@ def choose_steps(
     stuck: np.ndarray | None = None,
     step_time: np.ndarray | None = None,
     lag: np.ndarray | None = None,
+    gap: GapSteps | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -200,6 +202,11 @@ def choose_steps(
         follower may step into the room its leader is vacating during the same step.
     lag : (m,), optional
         How long ago each agent's step would have started (its heel strike) [s].
+    gap : crowdwalk.crowd.speed.GapSteps, optional
+        The contact-gap model's steps: the utility then scores each candidate direction
+        at the step the model allows along it (every neighbour counted), so that a
+        walker falls in beside-behind the one ahead (the zipper) or steps round an
+        oncoming one rather than close up behind.
 
     Returns
     -------
@@ -261,6 +268,8 @@ def choose_steps(
 
     # utility at the end point of the preferred (or longest clear) step
     use = np.minimum(free, nominal_step[:, None])  # (m, C)
+    if gap is not None:
+        use = np.minimum(use, gap.along(dirs, everyone=True)[1])
     end = stance[:, None, :] + 0.5 * use[..., None] * dirs  # (m, C, 2)
     cand = np.concatenate([end, position[:, None, :]], axis=1)  # (m, C+1, 2); last = wait
     utility = np.linalg.norm(target[:, None, :] - cand, axis=-1)
