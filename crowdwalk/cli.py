@@ -240,6 +240,8 @@ def compare(
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
     seeds: str = typer.Option(None, "--seeds", help="Seeds A..B: every planner with every "
                               "seed on Dask (resumable); intervals across seeds."),
+    poses: bool = typer.Option(None, "--poses/--no-poses", help="Write poses for each run "
+                               "(default: as the scenario's outputs.poses)."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
     """Run the same scenario, seed and agents with each planner; write report.md."""
@@ -271,9 +273,10 @@ def compare(
                 bar.update(task, description=label, completed=t, total=total,
                            remaining=remaining)
 
-        report = compare_planners(scenario, names, out, duration=duration, progress=update)
+        report = compare_planners(scenario, names, out, duration=duration, poses=poses,
+                                  progress=update)
     typer.echo(f"wrote the report {report} and one run folder per planner in {out}; "
-               + next_hint(f"crowdwalk view {out}/{names[0]}"))
+               + next_hint(f"crowdwalk view {' '.join(f'{out}/{n}' for n in names)}"))
 
 
 def _sweep_echo(done: int, total: int, trial: str) -> None:
@@ -415,6 +418,17 @@ _GL_MISSING = (
 )
 
 
+def _check_times(scene, command: str, **options: float | None) -> None:
+    """Each time option [s] must lie within a run's frames (from t = 0 to its last frame)."""
+    from crowdwalk.cli_conventions import check_time
+
+    if scene.poses is None:
+        return
+    t_range = (min(scene.time_range[0], 0.0), scene.time_range[1])
+    for option, value in options.items():
+        check_time(value, t_range, option=option, command=command)
+
+
 @app.command()
 @friendly_errors
 def view(
@@ -441,6 +455,7 @@ def view(
     from crowdwalk.viz import load_scenes
 
     scenes = load_scenes(targets, color=color, follow=follow, footprint_trail=trail)
+    _check_times(scenes[0], "view", time=time)
     if web:
         from crowdwalk.viz.web import serve
 
@@ -478,17 +493,13 @@ def render(
         raise invalid("render", "start", "unset for a .png (use --time) [s]", (start, end))
     if suffix != ".png" and time is not None:
         raise invalid("render", "time", "unset for a movie (use --start/--end) [s]", time)
-    from crowdwalk.cli_conventions import check_time
     from crowdwalk.viz import load_scenes
     from crowdwalk.viz.headless import gl_available
 
     for target in targets:
         _warn_incomplete(target)
     scene, *beside = load_scenes(targets, color=color, follow=follow, footprint_trail=trail)
-    if scene.poses is not None:  # a run: from its start (t = 0) to its last frame
-        t_range = (min(scene.time_range[0], 0.0), scene.time_range[1])
-        for name, value in (("time", time), ("start", start), ("end", end)):
-            check_time(value, t_range, name)
+    _check_times(scene, "render", time=time, start=start, end=end)
     if not gl_available():
         _fail(_GL_MISSING, 2)
     if suffix == ".png":

@@ -43,13 +43,14 @@ def incomplete_note(path: Path) -> str | None:
             f"finished); showing what it wrote, {written} of simulation.")
 
 
-def check_time(value: float | None, time_range: tuple[float, float], option: str) -> None:
-    """``value`` [s] must lie inside the run's ``time_range`` (with half a frame of slack)."""
+def check_time(value: float | None, time_range: tuple[float, float], *, option: str,
+               command: str) -> None:
+    """``value`` [s] of ``command``'s ``--option`` must lie inside the run's ``time_range``."""
     if value is None:
         return
     t0, t1 = time_range
     if not t0 - 1e-6 <= value <= t1 + 1e-6:
-        raise invalid("render", option, f"within the run's time range [{t0:g}, {t1:g}] [s]",
+        raise invalid(command, option, f"within the run's time range [{t0:g}, {t1:g}] [s]",
                       value)
 
 

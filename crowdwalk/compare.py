@@ -190,6 +190,7 @@ def compare_planners(
     *,
     duration: float | None = None,
     max_agents: int | None = None,
+    poses: bool | None = None,
     progress: ProgressCallback | None = None,
 ) -> Path:
     """Run ``scenario`` with each planner and write ``out/report.md``.
@@ -206,6 +207,9 @@ def compare_planners(
         Simulated time limit [s] (default: the scenario's).
     max_agents : int, optional
         Keep only the first agents (tests).
+    poses : bool, optional
+        Write poses for each run (default: as the scenario's ``outputs.poses`` says), so
+        that the runs can be viewed side by side as walking figures.
     progress : callable, optional
         ``progress(planner, simulated_time [s], duration [s], agents_remaining)``.
 
@@ -229,7 +233,7 @@ def compare_planners(
 
         summaries[name] = run_scenario(
             scenario, out / name, progress=update,
-            overrides=RunOverrides(planner=name, duration=duration, poses=False,
+            overrides=RunOverrides(planner=name, duration=duration, poses=poses,
                                    max_agents=max_agents),
         )
         steps = open_run(out / name).footsteps()

@@ -16,6 +16,8 @@ drawn, in spawn order:
 
 from __future__ import annotations
 
+import bisect
+
 import numpy as np
 
 __all__ = ["choose_exits", "SPECIFIC_FLOW"]
@@ -82,11 +84,12 @@ def choose_exits(choice, routes, here: str, xy: np.ndarray, speed: np.ndarray,
     capacity = np.array([_capacity(routes, here, e) if np.isfinite(cost[:, k]).any()
                          else np.inf for k, e in enumerate(exits)])
     walk = cost / speed[:, None]  # (n, E) [s]
-    arrive = [[] for _ in exits]  # expected arrival times of those who chose each exit
+    arrive = [[] for _ in exits]  # sorted expected arrival times of those who chose each
     chosen = np.empty(n, dtype=np.int64)
     for i in np.argsort(spawn_time, kind="stable"):  # setup only: one pass in spawn order
-        queue = np.array([np.count_nonzero(np.asarray(a) > spawn_time[i]) for a in arrive])
+        t = float(spawn_time[i])
+        queue = np.array([len(a) - bisect.bisect_right(a, t) for a in arrive])  # still going
         k = int(np.argmin(walk[i] + queue / capacity))
         chosen[i] = k
-        arrive[k].append(spawn_time[i] + walk[i, k])
+        bisect.insort(arrive[k], t + float(walk[i, k]))
     return [exits[k] for k in chosen]

@@ -59,6 +59,12 @@ def test_render_time_outside_the_run_is_an_error(run_dir, tmp_path, option, valu
     assert not (tmp_path / "f.png").exists()
 
 
+def test_view_time_outside_the_run_names_view(run_dir):
+    result = runner.invoke(app, ["view", str(run_dir), "--web", "--time", "500"])
+    assert result.exit_code == 2, result.output
+    assert "view.time" in result.output and "time range [0, 2]" in result.output
+
+
 def test_incomplete_run_is_named_and_stays_readable(run_dir, tmp_path):
     killed = tmp_path / "killed"
     shutil.copytree(run_dir, killed)

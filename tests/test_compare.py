@@ -31,6 +31,13 @@ def test_report_has_tables_and_plots(report):
         assert (report.parent / png).stat().st_size > 5000
 
 
+def test_runs_are_posed_as_the_scenario_asks_so_they_can_be_viewed_side_by_side(report):
+    for planner in (PLANNED, "fixed"):
+        run = open_run(report.parent / planner)
+        assert run.summary["poses"] == "written"
+        assert (report.parent / planner / "poses.sqlite").stat().st_size > 10_000
+
+
 def test_runs_use_the_same_agents_and_differ_only_in_planner(report):
     a, b = (open_run(report.parent / p) for p in (PLANNED, "fixed"))
     sa, sb = a.summary, b.summary

@@ -213,3 +213,19 @@ def test_interrupted_crowdwalk_run_exits_130_with_a_summary(tmp_path):
     summary = open_run(tmp_path).summary
     assert summary["interrupted"] is True and summary["complete"] is False
     assert 1.0 <= summary["simulated_time_s"] < 70.0
+
+
+def test_a_signal_within_a_run_waits_for_the_tick_boundary():
+    """SIGINT only requests a stop; it is raised where the loop checks, not mid-callback."""
+    from crowdwalk import interrupts
+
+    reached = False
+    with pytest.raises(KeyboardInterrupt):
+        with interrupts.deferred():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+            reached = True
+            interrupts.check()
+            reached = False
+    assert reached
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

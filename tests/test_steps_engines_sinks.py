@@ -147,3 +147,10 @@ def test_terrain_footing_kind_and_stride_over_obstacles():
     _, always = terrain.footing(xy, d, stride=np.full(400, 10.0))
     assert not never.any()
     assert (always == (kind == TerrainKind.BLOCK)).all()
+
+
+def test_a_mixed_engine_poses_no_agents_as_an_empty_frame():
+    body = Body.from_heights([1.6, 1.8])
+    engines = [make_engine(name, body=body, ground=None) for name in ("elevation_angles", "klaw")]
+    frame = MixedEngine(engines, np.array([0, 1])).pose(0.0, np.array([], dtype=int))
+    assert frame.agents.size == 0 and frame.positions.shape[0] == 0

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from crowdwalk import interrupts
 from crowdwalk.crowd.simulation import (
     ARRIVED,
     WAITING,
@@ -170,6 +171,13 @@ def run_scenario(
     dict
         The summary also written to ``summary.json``.
     """
+    with interrupts.deferred():
+        return _run(scenario, out, overrides=overrides, progress=progress, params=params,
+                    sinks=sinks)
+
+
+def _run(scenario, out, *, overrides, progress, params, sinks) -> dict:
+    """The body of :func:`run_scenario`, within deferred interrupts."""
     from crowdwalk.record import RunWriter
 
     wall0 = time.perf_counter()
@@ -200,6 +208,7 @@ def run_scenario(
         for sink in everyone:
             sink.frame(sim.time, snapshot, None)
         while not sim.finished:
+            interrupts.check()
             on_frame = sim.step()
             w0 = time.perf_counter()
             deliver_steps()

@@ -138,6 +138,8 @@ class MixedEngine:
 
     def pose(self, t: float, agents: np.ndarray) -> PoseFrame:
         agents = np.asarray(agents)
+        if agents.size == 0:
+            return self.engines[0].pose(t, agents)
         which = self.choice[agents]
         parts, order = [], []
         for e, engine in enumerate(self.engines):

@@ -10,8 +10,8 @@ import numpy as np
 
 from crowdwalk.body import LEG_JOINTS, Body, rotation_y, rotation_z
 
-__all__ = ["direction", "wrap_angle", "mat_vec", "StanceFoot", "stance_foot_pose",
-           "foot_points"]
+__all__ = ["direction", "wrap_angle", "mat_vec", "two_link_knee", "StanceFoot",
+           "stance_foot_pose", "foot_points"]
 
 
 def direction(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
@@ -23,6 +23,24 @@ def direction(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
 def wrap_angle(a: np.ndarray) -> np.ndarray:
     """Angles [rad] wrapped to [-π, π)."""
     return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def two_link_knee(hip: np.ndarray, ankle: np.ndarray, thigh: np.ndarray, shank: np.ndarray,
+                  forward: np.ndarray) -> np.ndarray:
+    """Knee positions (k, 3) [m] of two-link legs from ``hip`` to ``ankle`` (k, 3) [m].
+
+    The knee bends toward ``forward`` (k, 3), projected off the hip–ankle line; the
+    hip–ankle distance is clamped to the leg's reach [|thigh − shank|, 0.99999 (thigh +
+    shank)] (k,) [m], so a leg asked to reach too far is straight, never undefined.
+    """
+    d = ankle - hip
+    dist = np.linalg.norm(d, axis=1)
+    u = d / np.maximum(dist, 1e-12)[:, None]
+    reach = np.clip(dist, np.abs(thigh - shank) + 1e-6, 0.99999 * (thigh + shank))
+    f = forward - np.sum(forward * u, axis=1, keepdims=True) * u
+    f = f / np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-12)
+    a = (thigh**2 - shank**2 + reach**2) / (2.0 * reach)  # hip to the knee's foot on the line
+    return hip + a[:, None] * u + np.sqrt(np.maximum(thigh**2 - a**2, 0.0))[:, None] * f
 
 
 def mat_vec(m: np.ndarray, v: np.ndarray) -> np.ndarray:

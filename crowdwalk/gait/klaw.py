@@ -64,6 +64,7 @@ from crowdwalk.body import (
     rotation_z,
 )
 from crowdwalk.errors import invalid
+from crowdwalk.gait.foot import two_link_knee
 from crowdwalk.gait.foot import wrap_angle as _wrap
 
 __all__ = ["KlawEngine", "X_FACTOR", "double_support_fraction", "kochanek_bartels",
@@ -176,18 +177,6 @@ def _roll_about(pivot, pivot_offset, hip, reach, yaw, pitch_range):
     cand = _wrap(cand)
     best = np.where(np.abs(cand[0]) <= np.abs(cand[1]), cand[0], cand[1])
     return np.clip(best, *pitch_range)
-
-
-def _knee_point(hip, ankle, thigh, shank, forward):
-    """Knee position (k, 3) of a two-link leg from hip to ankle, bending toward
-    ``forward`` (k, 3); the distance is clamped to the leg's reach."""
-    d = ankle - hip
-    dist = np.clip(np.linalg.norm(d, axis=1), np.abs(thigh - shank) + 1e-6,
-                   0.99999 * (thigh + shank))
-    u = _unit(d)
-    f = _unit(forward - _dot(forward, u)[:, None] * u)
-    a = (thigh**2 - shank**2 + dist**2) / (2.0 * dist)
-    return hip + a[:, None] * u + np.sqrt(np.maximum(thigh**2 - a**2, 0.0))[:, None] * f
 
 
 def _segment_frame(down, forward):
@@ -533,7 +522,7 @@ class KlawEngine:
         for leg in ("a", "b"):
             hip, ankle, pitch, yaw = (g[f"{q}_{leg}"] for q in ("hip", "ankle", "pitch", "yaw"))
             fwd = _fwd(yaw)
-            knee = _knee_point(hip, ankle, l1, l2, fwd)
+            knee = two_link_knee(hip, ankle, l1, l2, fwd)
             foot = rotation_z(yaw) @ rotation_y(-pitch)
             # toes flat on the ground while the foot stands on its ball, else in line
             toe = np.where(on_ball[leg][:, None, None], rotation_z(yaw), foot)

@@ -44,6 +44,7 @@ from crowdwalk.body import (
 from crowdwalk.errors import invalid
 from crowdwalk.gait.elevwalker import GaitStyle
 from crowdwalk.gait.engine import PoseFrame
+from crowdwalk.gait.foot import two_link_knee
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.ko_badler.generalize import (
     body_generalization,
@@ -59,7 +60,7 @@ from crowdwalk.gait.ko_badler.walkdata import (
     load_prototype,
 )
 
-__all__ = ["KoBadlerEngine", "foot_configuration", "two_link_knee"]
+__all__ = ["KoBadlerEngine", "foot_configuration"]
 
 _REACH = 0.999  # longest hip–ankle distance, fraction of thigh + shank
 _TOE_RELAX = 0.3  # step fraction after toe-off over which the swing toes straighten
@@ -99,22 +100,6 @@ def foot_configuration(body: BodyCondition, foot_angle, meta_angle):
     ball = ball + np.stack([-ab * np.cos(tb - f), ab * np.sin(tb - f)], axis=-1)
     ankle = np.where((f > 0)[..., None], heel, ball)
     return ankle, np.where(f > 0, 0.0, -m)
-
-
-def two_link_knee(hip, ankle, thigh, shank, forward):
-    """Knee positions (k, 3) [m] of legs from hip to ankle, bending toward ``forward``.
-
-    The hip–ankle distance is clipped to [|thigh − shank|, thigh + shank]; ``forward``
-    (k, 3) is the direction the knee points (projected off the hip–ankle line).
-    """
-    d = ankle - hip
-    dist = np.linalg.norm(d, axis=-1)
-    u = d / np.maximum(dist, _EPS)[:, None]
-    length = np.clip(dist, np.abs(thigh - shank) + 1e-6, thigh + shank - 1e-9)
-    cos_a = np.clip((thigh**2 + length**2 - shank**2) / (2 * thigh * length), -1.0, 1.0)
-    v = forward - np.sum(forward * u, axis=-1, keepdims=True) * u
-    v = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _EPS)
-    return hip + thigh[:, None] * (cos_a[:, None] * u + np.sqrt(1 - cos_a**2)[:, None] * v)
 
 
 def _segment_frame(direction, lateral):
