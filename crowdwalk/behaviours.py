@@ -101,12 +101,15 @@ class ExitChoice(_Model):
 
 
 class EventSpec(_Model):
-    """At ``time`` [s]: ``close`` or ``open`` the corridor between the two nodes of
-    ``corridor``, or ``redirect`` the walkers of ``group`` to ``destinations``."""
+    """At ``time`` [s]: ``close`` the corridor between the two nodes of ``corridor`` (a
+    door shut across it at fraction ``at`` of its length from the first node), ``open``
+    it again, or ``redirect`` the walkers of ``group`` to ``destinations`` (in order)."""
 
     time: NonNeg = Field(description="[s]")
     action: Literal["close", "open", "redirect"]
     corridor: tuple[str, str] | None = None
+    at: float | None = Field(None, gt=0, lt=1, description="door position (close), "
+                             "fraction of the corridor from its first node; default 0.5")
     group: str | None = None
     destinations: list[str] = []
 
@@ -115,9 +118,17 @@ class EventSpec(_Model):
         if self.action in ("close", "open"):
             if self.corridor is None or self.group is not None or self.destinations:
                 raise ValueError(f"{self.action} needs corridor (two nodes) and nothing else")
-        elif self.group is None or not self.destinations or self.corridor is not None:
-            raise ValueError("redirect needs group and destinations")
+            if self.action == "open" and self.at is not None:
+                raise ValueError("at is only used with close (the door opens where it is)")
+        elif self.group is None or not self.destinations or self.corridor is not None \
+                or self.at is not None:
+            raise ValueError("redirect needs group and destinations, and nothing else")
         return self
+
+    @property
+    def door_at(self) -> float:
+        """Where the door of a ``close`` is, as a fraction of the corridor [-]."""
+        return 0.5 if self.at is None else self.at
 
 
 class WaitingAreaSpec(_Model):

@@ -40,8 +40,8 @@ def at(loc: tuple, func, *args):
 def _loc_from_message(scenario, message: str) -> tuple | None:
     """The field path an owner-style message refers to, or None."""
     routes = scenario.routes
-    if m := re.match(r"Scenario\.groups\[(\d+)\]\.(\w+)", message):
-        return ("groups", int(m[1]), m[2])
+    if m := re.match(r"Scenario\.(groups|events|waiting_areas)\[(\d+)\]\.(\w+)", message):
+        return (m[1], int(m[2]), m[3])
     if m := re.match(r"Terrain\.features\[(\d+)\]", message):
         return ("terrain", "features", int(m[1]))
     if m := re.match(r"Terrain\.(\w+)", message):

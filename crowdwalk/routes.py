@@ -26,6 +26,7 @@ serves every agent going there.
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 import re
@@ -273,6 +274,13 @@ class RouteGraph:
     costs : :class:`RouteCosts`
     obstacles : shapely polygons [m] cut out of the walkable area (walls, obstacles);
         paths go around them
+
+    Attributes
+    ----------
+    graph : networkx.DiGraph
+        The corridors that can be walked (routing).
+    layout : networkx.DiGraph
+        Every corridor, closed ones too (:meth:`with_closed`): the walkable area's shape.
     """
 
     def __init__(self, places, corridors, terrain=None, costs: RouteCosts = RouteCosts(),
@@ -280,6 +288,7 @@ class RouteGraph:
         self.terrain = terrain
         self.costs = costs
         self.obstacles = shapely.union_all(list(obstacles)) if len(obstacles) else None
+        self._base_obstacles = self.obstacles  # without the walls of closed corridors
         self.places = {}
         for p in places:
             if p.name in self.places:
@@ -307,6 +316,7 @@ class RouteGraph:
                 g.add_edge(c.b, c.a, width=c.width, length=line.length, cost=cb,
                            geometry=LineString(np.asarray(line.coords)[::-1]), oneway=False)
         self.graph = g
+        self.layout = g  # every corridor, open or closed (the walkable area)
         self._fields: dict[str, tuple[dict, dict]] = {}
         self._paths: dict[tuple, np.ndarray] = {}
 
@@ -414,6 +424,23 @@ class RouteGraph:
             g.add_edge(c.a, c.b, width=c.width, oneway=c.oneway, geometry=line.wkt)
         nx.write_graphml(g, path)
 
+    def with_closed(self, walls: dict) -> RouteGraph:
+        """This graph with the corridors in ``walls`` closed: each key, a frozenset of the
+        corridor's two nodes, maps to the wall (shapely polygon [m]) that blocks it. Their
+        edges leave the routing graph (both directions) and the walls are cut out of the
+        walkable area; the corridors' costs and geometry are shared, not recomputed."""
+        new = copy.copy(self)
+        for cached in ("walkable_area", "_walkable_tolerant", "_inner", "_corner_legs"):
+            new.__dict__.pop(cached, None)
+        new._fields, new._paths = {}, {}
+        new.graph = self.layout.copy(as_view=False)
+        new.graph.remove_edges_from([(u, v) for u, v in self.layout.edges
+                                     if frozenset((u, v)) in walls])
+        base = [] if self._base_obstacles is None else [self._base_obstacles]
+        new.obstacles = shapely.union_all(base + list(walls.values())) if base or walls \
+            else None
+        return new
+
     # -- geometry --
 
     def node_xy(self, name: str) -> np.ndarray:
@@ -429,8 +456,8 @@ class RouteGraph:
         p = self.places[name]
         if p.area is not None:
             return p.area
-        widths = [d["width"] for *_, d in self.graph.in_edges(name, data=True)]
-        widths += [d["width"] for *_, d in self.graph.out_edges(name, data=True)]
+        widths = [d["width"] for *_, d in self.layout.in_edges(name, data=True)]
+        widths += [d["width"] for *_, d in self.layout.out_edges(name, data=True)]
         return Point(p.x, p.y).buffer(max([0.5] + [w / 2 for w in widths]))
 
     @functools.cached_property
@@ -440,8 +467,8 @@ class RouteGraph:
         vertical change higher than ``costs.max_step`` (walls, tall obstacles): the
         corridors are cut along such edges and only the pieces that carry a corridor centre
         line or a node are kept."""
-        parts = [d["geometry"].buffer(d["width"] / 2) for *_, d in self.graph.edges(data=True)]
-        parts += [self.node_area(n) for n in self.graph.nodes]
+        parts = [d["geometry"].buffer(d["width"] / 2) for *_, d in self.layout.edges(data=True)]
+        parts += [self.node_area(n) for n in self.layout.nodes]
         geom = shapely.union_all(parts)
         if self.terrain is not None:
             walls = self.terrain.steps(self.costs.max_step)
@@ -450,7 +477,7 @@ class RouteGraph:
                     _WALL_HALF_THICKNESS, cap_style="flat")
                 pieces = shapely.get_parts(geom.difference(cut))
                 carriers = shapely.union_all(
-                    [d["geometry"] for *_, d in self.graph.edges(data=True)]
+                    [d["geometry"] for *_, d in self.layout.edges(data=True)]
                     + [Point(p.x, p.y) for p in self.places.values()])
                 geom = shapely.union_all(pieces[shapely.intersects(pieces, carriers)])
         if self.obstacles is not None:

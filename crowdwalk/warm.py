@@ -4,7 +4,8 @@ The kernels are compiled with ``cache=True`` next to their modules; ``install.sh
 this once, so the first ``crowdwalk run`` loads them instead of compiling (about 25 s of
 CPU otherwise), and every sweep worker runs it before it takes work. It walks two
 walkers (``best_first`` and ``fixed``) for two simulated seconds up a short stair flight,
-with poses: the planners, the crowd and the gait kernels all run once.
+with poses: the planners, the crowd and the gait kernels all run once; then every planner
+plans a batch large enough for the parallel table kernel.
 
 Usage: ``python -m crowdwalk.warm`` (prints the seconds it took).
 """
@@ -42,10 +43,17 @@ def warm_kernels() -> float:
     from crowdwalk.crowd.run import run_scenario
     from crowdwalk.scenario import parse_scenario
 
+    from planners import PLANNERS, GroundProfile, Leg, plan_batch
+    from planners.lattice import PARALLEL_AGENTS
+
     t0 = time.perf_counter()
     scenario = parse_scenario(yaml.safe_dump(WARM_SCENARIO), source="<warm>")
     with tempfile.TemporaryDirectory() as tmp:
         run_scenario(scenario, tmp)
+    # the batch kernels (every core) and every search, as crowds of walkers use them
+    stairs = GroundProfile.stairs(0.17, 0.30, 3, first_edge=0.6)
+    for planner in sorted(PLANNERS):
+        plan_batch([stairs] * PARALLEL_AGENTS, Leg.from_body_height(1.75), 1.34, planner)
     return time.perf_counter() - t0
 
 

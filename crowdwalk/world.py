@@ -81,13 +81,27 @@ def _check_reachable(scenario: Scenario, routes: RouteGraph) -> None:
 
 
 def _check_behaviours(scenario: Scenario, routes: RouteGraph) -> None:
-    """Events name existing corridors."""
-    for key in ("events", "waiting_areas"):
-        if getattr(scenario, key):
-            raise invalid("Scenario", key, "empty in this version (the schema is in place; "
-                          "the simulation does not carry them out yet)", key)
-    for i, e in enumerate(scenario.events):
-        if e.corridor is not None and not routes.graph.has_edge(*e.corridor) \
-                and not routes.graph.has_edge(*e.corridor[::-1]):
-            raise invalid(f"Scenario.events[{i}]", "corridor", "two nodes joined by a corridor",
-                          list(e.corridor))
+    """Events name existing corridors, in an order that can happen (open what is closed,
+    close what is open), and every door closes its corridor alone."""
+    from crowdwalk.crowd.events import door_wall
+
+    closed: set[frozenset] = set()
+    order = sorted(range(len(scenario.events)), key=lambda i: scenario.events[i].time)
+    for i in order:
+        e = scenario.events[i]
+        if e.corridor is None:
+            continue
+        owner = f"Scenario.events[{i}]"
+        if not routes.graph.has_edge(*e.corridor) and not routes.graph.has_edge(
+                *e.corridor[::-1]):
+            raise invalid(owner, "corridor", "two nodes joined by a corridor", list(e.corridor))
+        key = frozenset(e.corridor)
+        if (e.action == "close") == (key in closed):
+            state = "open" if e.action == "close" else "closed"
+            raise invalid(owner, "action", f"for a corridor that is {state} at {e.time:g} s "
+                          "(close an open corridor, open a closed one)", e.action)
+        if e.action == "close":
+            door_wall(routes, e.corridor, e.door_at, owner=owner)
+            closed.add(key)
+        else:
+            closed.discard(key)

@@ -7,13 +7,15 @@ grid neighbours of a configuration: one step length one interval longer or short
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
 from planners.search import SearchResult
 
-__all__ = ["best_first", "bfp", "find_init"]
+__all__ = ["best_first", "bfp", "fifo_order", "find_init"]
 
 
 def best_first(tables: StepTables) -> SearchResult:
@@ -45,10 +47,36 @@ def find_init(tables: StepTables) -> SearchResult:
     distance from ``q_init``. Counted: ``checks`` -- configurations popped and looked up
     (Collide); ``expanded`` -- illegal ones whose neighbours were generated. Where nothing
     is legal the whole grid is searched and ``found`` is False.
+
+    Every configuration popped before the first legal one is illegal and expanded, so
+    the FIFO order of the pops does not depend on the ground: it is generated once per
+    ``(q_init, J, n)`` (:func:`fifo_order`, cached) and each search walks it, looking
+    every configuration up until the first legal one.
     """
-    A, n = tables.neutral.size, tables.struct.n
-    configs = np.repeat(tables.neutral.astype(np.int64)[:, None], n, axis=1)
-    return _run(_find_init, tables, configs, np.zeros(A, dtype=np.bool_))
+    A, n, J = tables.neutral.size, tables.struct.n, tables.struct.J
+    centres = tables.neutral.astype(np.int64)
+    distinct, which = np.unique(centres, return_inverse=True)
+    orders = np.stack([fifo_order(int(c), n, J) for c in distinct])
+    configs = np.repeat(centres[:, None], n, axis=1)
+    found = np.zeros(A, dtype=np.bool_)
+    expanded = np.zeros(A, dtype=np.int64)
+    checks = np.zeros(A, dtype=np.int64)
+    st = tables.struct
+    _find_init(tables.step_legal, tables.swing_ok, J, np.asarray(st.step_offset, dtype=np.int64),
+               np.asarray(st.swing_offset, dtype=np.int64),
+               np.asarray(st.swing_strides, dtype=np.int64), orders,
+               which.astype(np.int64), configs, found, expanded, checks)
+    return SearchResult(configs, found, expanded, checks)
+
+
+@lru_cache(maxsize=64)
+def fifo_order(centre: int, n: int, J: int) -> np.ndarray:
+    """Fig. 3's queue over the whole grid from ``(centre, ..., centre)``, every
+    configuration expanded: the configurations (J**n, n) in the order they are popped."""
+    order = np.empty((J**n, n), dtype=np.int8)
+    _fifo(centre, n, J, order)
+    order.setflags(write=False)
+    return order
 
 
 def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
@@ -127,9 +155,9 @@ def _decode(c, n, J, out):
 
 
 @nb.njit(cache=True, nogil=True)
-def _find_init(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
-               configs, found, expanded, checks):
-    A, n = configs.shape
+def _fifo(centre, n, J, order):
+    """Breadth-first order of the whole grid from (centre, ..., centre) (Fig. 3's queue,
+    every configuration expanded): fills ``order`` (J**n, n)."""
     total = J**n
     visited = np.zeros(total, dtype=np.bool_)
     queue = np.empty(total, dtype=np.int64)
@@ -137,31 +165,45 @@ def _find_init(step_legal, swing_ok, cost, progress, J, step_off, swing_off, str
     place = np.empty(n, dtype=np.int64)  # code change of step k by one interval
     for k in range(n):
         place[k] = J ** (n - 1 - k)
+    q[:] = centre
+    start = _code(q, J)
+    queue[0] = start
+    visited[start] = True
+    head, tail = 0, 1
+    while head < tail:
+        c = queue[head]
+        _decode(c, n, J, q)
+        order[head, :] = q
+        head += 1
+        for k in range(n):
+            if q[k] > 0 and not visited[c - place[k]]:
+                visited[c - place[k]] = True
+                queue[tail] = c - place[k]
+                tail += 1
+            if q[k] < J - 1 and not visited[c + place[k]]:
+                visited[c + place[k]] = True
+                queue[tail] = c + place[k]
+                tail += 1
+
+
+@nb.njit(cache=True, nogil=True)
+def _find_init(step_legal, swing_ok, J, step_off, swing_off, strides, orders, which,
+               configs, found, expanded, checks):
+    """Walk each agent's FIFO order ``orders[which[a]]`` to the first legal
+    configuration, counting the look-ups and the illegal (expanded) configurations."""
+    A, n = configs.shape
+    q = np.empty(n, dtype=np.int64)
     for a in range(A):
-        visited[:] = False
-        start = _code(configs[a], J)
-        queue[0] = start
-        visited[start] = True
-        head, tail = 0, 1
-        while head < tail:
-            c = queue[head]
-            head += 1
-            _decode(c, n, J, q)
+        order = orders[which[a]]
+        for i in range(order.shape[0]):
+            for k in range(n):
+                q[k] = order[i, k]
             checks[a] += 1
             if _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
                 configs[a, :] = q
                 found[a] = True
                 break
             expanded[a] += 1
-            for k in range(n):
-                if q[k] > 0 and not visited[c - place[k]]:
-                    visited[c - place[k]] = True
-                    queue[tail] = c - place[k]
-                    tail += 1
-                if q[k] < J - 1 and not visited[c + place[k]]:
-                    visited[c + place[k]] = True
-                    queue[tail] = c + place[k]
-                    tail += 1
 
 
 @nb.njit(cache=True, nogil=True)

@@ -144,48 +144,55 @@ def _pelvis_between(p_s, s1, z1, s2, z2, reach):
 
 
 @_jit
+def key_frame(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b_len,
+              toe, ankle, nominal_lift, pelvis_ratio, cos_knee):
+    """Joint rotations (thigh, calf) [rad] and reachability of one step (see
+    :func:`key_frames`); compiled, for other kernels."""
+    L = a_len + b_len
+    H = pelvis_ratio * L
+    min_reach = np.sqrt(a_len**2 + b_len**2 - 2 * a_len * b_len * cos_knee)
+    ss, fs = stance_s, front_s
+    zs, zf = stance_z + ankle, front_z + ankle
+    reach = DOUBLE_SUPPORT_REACH * L
+    # K1: mid-swing of the front-going leg F, stance leg S
+    p1z = zs + H
+    f1 = _angles(ss, p1z, summit_s, summit_z, a_len, b_len, L, min_reach)
+    s1 = _angles(ss, p1z, ss, zs, a_len, b_len, L, min_reach)
+    # K2: heel strike of F, pelvis midway
+    p2s = 0.5 * (ss + fs)
+    p2z = _pelvis_between(p2s, ss, zs, fs, zf, reach)
+    f2 = _angles(p2s, p2z, fs, zf, a_len, b_len, L, min_reach)
+    s2 = _angles(p2s, p2z, ss, zs, a_len, b_len, L, min_reach)
+    # K3: toe-off of S; its ankle rotates about the toe
+    toe_s = ss + toe
+    r_toe = np.hypot(toe, ankle)
+    pitch = TOE_OFF_FOOT_ANGLE + np.arctan2(ankle, toe)
+    back_s = toe_s - r_toe * np.cos(pitch)
+    back_z = stance_z + r_toe * np.sin(pitch)
+    p3s = ss + TOE_OFF_PELVIS_FRACTION * (fs - ss)
+    p3z = _pelvis_between(p3s, back_s, back_z, fs, zf, reach)
+    f3 = _angles(p3s, p3z, fs, zf, a_len, b_len, L, min_reach)
+    s3 = _angles(p3s, p3z, back_s, back_z, a_len, b_len, L, min_reach)
+    # K1': legs swapped, S at a nominal mid-swing above F; F stands as S did at K1
+    p4z = zf + H
+    f4 = s1
+    s4 = _angles(fs, p4z, fs, max(zf, zs) + nominal_lift, a_len, b_len, L, min_reach)
+    # summed as the reference: each leg's three changes, then both legs
+    thigh = ((abs(f2[0] - f1[0]) + abs(f3[0] - f2[0]) + abs(f4[0] - f3[0]))
+             + (abs(s2[0] - s1[0]) + abs(s3[0] - s2[0]) + abs(s4[0] - s3[0])))
+    calf = ((abs(f2[1] - f1[1]) + abs(f3[1] - f2[1]) + abs(f4[1] - f3[1]))
+            + (abs(s2[1] - s1[1]) + abs(s3[1] - s2[1]) + abs(s4[1] - s3[1])))
+    ok = f1[2] and s1[2] and f2[2] and s2[2] and f3[2] and s3[2] and f4[2] and s4[2]
+    return thigh, calf, ok
+
+
+@_jit
 def _key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, thigh, shank,
                 toe_offset, ankle_height, nominal_lift, pelvis_ratio, cos_knee,
                 out_thigh, out_calf, out_reachable):
     """Joint rotations and reachability of each step (see :func:`key_frames`)."""
-    pitch0 = TOE_OFF_FOOT_ANGLE
     for i in range(stance_s.size):
-        a_len, b_len = thigh[i], shank[i]
-        ankle = ankle_height[i]
-        L = a_len + b_len
-        H = pelvis_ratio * L
-        min_reach = np.sqrt(a_len**2 + b_len**2 - 2 * a_len * b_len * cos_knee)
-        ss, fs = stance_s[i], front_s[i]
-        zs, zf = stance_z[i] + ankle, front_z[i] + ankle
-        reach = DOUBLE_SUPPORT_REACH * L
-        # K1: mid-swing of the front-going leg F, stance leg S
-        p1z = zs + H
-        f1 = _angles(ss, p1z, summit_s[i], summit_z[i], a_len, b_len, L, min_reach)
-        s1 = _angles(ss, p1z, ss, zs, a_len, b_len, L, min_reach)
-        # K2: heel strike of F, pelvis midway
-        p2s = 0.5 * (ss + fs)
-        p2z = _pelvis_between(p2s, ss, zs, fs, zf, reach)
-        f2 = _angles(p2s, p2z, fs, zf, a_len, b_len, L, min_reach)
-        s2 = _angles(p2s, p2z, ss, zs, a_len, b_len, L, min_reach)
-        # K3: toe-off of S; its ankle rotates about the toe
-        toe = toe_offset[i]
-        toe_s = ss + toe
-        r_toe = np.hypot(toe, ankle)
-        pitch = pitch0 + np.arctan2(ankle, toe)
-        back_s = toe_s - r_toe * np.cos(pitch)
-        back_z = stance_z[i] + r_toe * np.sin(pitch)
-        p3s = ss + TOE_OFF_PELVIS_FRACTION * (fs - ss)
-        p3z = _pelvis_between(p3s, back_s, back_z, fs, zf, reach)
-        f3 = _angles(p3s, p3z, fs, zf, a_len, b_len, L, min_reach)
-        s3 = _angles(p3s, p3z, back_s, back_z, a_len, b_len, L, min_reach)
-        # K1': legs swapped, S at a nominal mid-swing above F; F stands as S did at K1
-        p4z = zf + H
-        f4 = s1
-        s4 = _angles(fs, p4z, fs, max(zf, zs) + nominal_lift[i], a_len, b_len, L, min_reach)
-        # summed as the reference: each leg's three changes, then both legs
-        out_thigh[i] = ((abs(f2[0] - f1[0]) + abs(f3[0] - f2[0]) + abs(f4[0] - f3[0]))
-                        + (abs(s2[0] - s1[0]) + abs(s3[0] - s2[0]) + abs(s4[0] - s3[0])))
-        out_calf[i] = ((abs(f2[1] - f1[1]) + abs(f3[1] - f2[1]) + abs(f4[1] - f3[1]))
-                       + (abs(s2[1] - s1[1]) + abs(s3[1] - s2[1]) + abs(s4[1] - s3[1])))
-        out_reachable[i] = (f1[2] and s1[2] and f2[2] and s2[2] and f3[2] and s3[2]
-                            and f4[2] and s4[2])
+        out_thigh[i], out_calf[i], out_reachable[i] = key_frame(
+            stance_s[i], stance_z[i], front_s[i], front_z[i], summit_s[i], summit_z[i],
+            thigh[i], shank[i], toe_offset[i], ankle_height[i], nominal_lift[i],
+            pelvis_ratio, cos_knee)

@@ -1,11 +1,12 @@
-"""Precomputed step tables on the foothold lattice (one vectorised pass per batch).
+"""Precomputed step tables on the foothold lattice (one compiled pass per batch).
 
 After k steps of lengths ``L_min + j*dL`` (j = 0..J-1) every foothold lies on the lattice
 ``k*L_min + m*dL`` (m = 0..(J-1)k). Legality and energy of step k depend only on the
 stance foothold f_{k-1} and the step's own length (a *step* entry), except the swing
 curve, which depends on the lift-off foothold f_{k-2} and the touch-down foothold f_k
-(a *swing* entry). Every node, step and swing of the horizon is evaluated once for all
-agents together; the searches then only look tables up.
+(a *swing* entry). Every node, step and swing of the horizon is evaluated once per agent
+(:mod:`planners.lattice_kernel`, agents in parallel); the searches then only look tables
+up.
 """
 
 from __future__ import annotations
@@ -17,27 +18,25 @@ import numpy as np
 
 from planners.config import PlannerConfig
 from planners.energy import (
-    frequency_energy,
     normal_step,
     step_energy,
-    terminal_energy,
-    total_energy,
-    vertical_energy,
-    walking_energy,
 )
+from planners.lattice_kernel import build_agents, build_agents_serial
 from planners.leg import Leg
-from planners.legality import Reason, foot_support, snap_to_support
-from planners.profile import _VERTICAL, RASTER_CELL, GroundProfile
-from planners.swing import adjust_swings, bezier_points, sole_clearance
+from planners.profile import RASTER_CELL, GroundProfile
+from planners.swing import TABLE_LEVELS, adjust_swings, bernstein, bezier_points, sole_clearance
 
 __all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables",
-           "combine_profiles", "grid", "neutral_index"]
+           "grid", "neutral_index"]
 
 
 #: Extra clearance of the reusable curves for straight sloped spans [m].
 SLOPE_EXTRA = 0.03
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
 LOOKUP_CONFIGS = 65536
+#: Batches of at least this many agents build their tables on every core (smaller ones
+#: on one: starting the threads costs more than it saves).
+PARALLEL_AGENTS = 8
 #: Compute swing curves only for pairs a legal sequence of steps can use (False: for
 #: every pair of supported footholds; the results are the same, only slower).
 PRUNE_SWINGS = True
@@ -198,50 +197,6 @@ def structure(n: int, J: int) -> Structure:
                      a(step_stance), a(step_front), a(step_j), tuple(step_offset),
                      a(swing_back), a(swing_front), tuple(swing_offset), tuple(swing_strides),
                      a(swing_stride))
-
-
-def combine_profiles(profiles, lo: np.ndarray, hi: np.ndarray, origins: np.ndarray,
-                     cell: float):
-    """One profile holding every agent's profile side by side.
-
-    Agent a's profile, cropped (or padded flat) to ``[lo[a] - 1, hi[a] + 1]`` [m], is
-    shifted by ``offset[a]`` so that queries of different agents never meet and every
-    stance foot ``origins[a] + offset[a]`` lies on a multiple of ``cell`` [m] (rasters
-    then align with each agent's origin, whatever the batch or a translation). Returns the
-    combined :class:`GroundProfile` and the offsets (A,) [m].
-    """
-    if len(profiles) == 1:
-        offset = np.floor(origins[0] / cell) * cell - origins[0]
-        p = profiles[0]
-        return (p if offset == 0 else GroundProfile(p.s + offset, p.z)), np.array([offset])
-    start, end = lo - 1.0, hi + 1.0  # (A,): cropped to the part that can be queried
-    offsets = np.empty(len(profiles))
-    cursor = 0.0
-    for a in range(offsets.size):  # each agent's offset follows the previous one's end
-        offsets[a] = np.ceil((cursor - start[a] + origins[a]) / cell) * cell - origins[a]
-        cursor = end[a] + offsets[a] + 1.0
-    sizes = np.array([p.s.size for p in profiles])
-    bounds = np.concatenate([[0], np.cumsum(sizes)])
-    agent = np.repeat(np.arange(sizes.size), sizes)
-    s, z = np.concatenate([p.s for p in profiles]), np.concatenate([p.z for p in profiles])
-    # every profile's own slopes (GroundProfile._slopes, side by side)
-    ds, dz = np.diff(s), np.diff(z)
-    slope = np.zeros(s.size)
-    np.divide(dz, ds, out=slope[:-1], where=(ds > _VERTICAL) & (agent[1:] == agent[:-1]))
-
-    def heights(q):  # GroundProfile.height of each agent's own profile at q (A,)
-        q = np.maximum(q, s[bounds[:-1]])
-        at_or_below = np.add.reduceat((s <= q[agent]).astype(np.intp), bounds[:-1])
-        i = bounds[:-1] + at_or_below - 1
-        return z[i] + slope[i] * (q - s[i])
-
-    inside = np.flatnonzero((s > start[agent]) & (s < end[agent]))
-    rows = np.concatenate([np.arange(sizes.size), agent[inside], np.arange(sizes.size)])
-    rank = np.concatenate([np.full(sizes.size, -1), inside, np.full(sizes.size, s.size)])
-    order = np.lexsort((rank, rows))  # per agent: start, the vertices inside, end
-    out_s = np.concatenate([start, s[inside], end]) + offsets[rows]
-    out_z = np.concatenate([heights(start), z[inside], heights(end)])
-    return GroundProfile(out_s[order], out_z[order]), offsets
 
 
 class _LegArrays:
@@ -555,152 +510,65 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     neutral = neutral_index(legs, config)
     if trailing is None:
         trailing = -(lo + delta * neutral)
-    reach = config.n_steps * (lo + delta * config.intervals)
-    profile, shift = combine_profiles(profiles, origins + trailing - 1.0, origins + reach + 1.0,
-                                      origins, RASTER_CELL)
-    base = (origins + shift)[:, None]  # (A, 1) absolute s of each stance foot
+    # each agent's own profile, shifted so that its stance foot lies on a raster cell
+    # boundary (rasters then align with the agent's origin, whatever the batch)
+    offsets = np.floor(origins / RASTER_CELL) * RASTER_CELL - origins
+    base = origins + offsets
+    sizes = np.array([p.s.size for p in profiles])
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    prof_s = np.concatenate([p.s + o for p, o in zip(profiles, offsets.tolist(), strict=True)])
+    prof_z = np.concatenate([p.z for p in profiles])
     legs_col = _LegArrays(legs)
-
-    # Nodes: footholds relative to the stance foot, their heights and support.
-    depth = st.node_depth[None, :]
-    node_s = np.where(depth == -1, trailing[:, None],
-                      np.maximum(depth, 0) * lo[:, None] + st.node_m * delta[:, None])
-    if config.snap:
-        moved = snap_to_support(base + node_s[:, 2:], 0.5 * delta[:, None], profile,
-                                legs_col.heel_offset, legs_col.toe_offset, config) - base
-        node_s = np.concatenate([node_s[:, :2], moved], axis=1)
-    node_z = profile.height(base + node_s)
-    support = foot_support(base + node_s, profile, legs_col.heel_offset, legs_col.toe_offset,
-                           config)
-    support[:, :2] = 0  # the feet already standing are where they are
-
-    # Steps: stance node -> front node.
-    stance_s, front_s = node_s[:, st.step_stance], node_s[:, st.step_front]
-    stance_z, front_z = node_z[:, st.step_stance], node_z[:, st.step_front]
-    rise = front_z - stance_z
-    highest = profile.max_height(base + stance_s, base + front_s)
-    # Key frames of level steps on level ground depend only on the length: cached.
-    length = front_s - stance_s
-    nominal = lo[:, None] + delta[:, None] * st.step_j
-    level = (rise == 0) & (highest == stance_z) & (np.abs(length - nominal) <= 1e-12)
-    flat_Ej, flat_reach = flat_joint_energy(legs, config)
-    Ej = np.take_along_axis(flat_Ej, np.broadcast_to(st.step_j, rise.shape), axis=1)
-    reachable = np.take_along_axis(flat_reach, np.broadcast_to(st.step_j, rise.shape), axis=1)
-    # Key frames are solved for the non-level steps that can be legal: a landing across
-    # an edge or a rise beyond the limit is illegal whatever the knee does, and its
-    # energy is never used (it is set to +inf below).
-    hopeless = (support[:, st.step_front] != 0) | (np.abs(rise) > config.max_step_rise)
-    other = np.nonzero(~level & ~hopeless)
-    key_frames = np.bincount(other[0], minlength=A)
-    if other[0].size:
-        sub = legs_col.take(other[0])
-        summit_z = highest[other] + sub.ankle_height + 0.75 * config.swing_lift
-        _, _, Ej[other], _, reachable[other] = step_energy(
-            stance_s[other], stance_z[other], front_s[other], front_z[other], summit_z, sub,
-            speeds[other[0]], config)
+    leg_table = np.concatenate([getattr(legs_col, name) for name in _LegArrays.names], axis=1)
     w = config.weights
-    En = walking_energy(length, speeds[:, None])
-    Ev = vertical_energy(rise, w.down_ratio, w.vertical)
-    E = total_energy(En, Ev, Ej, w)
-    if config.step_model == "normal_mode":
-        E = E + frequency_energy(En, length, normal_step(legs_col, speeds[:, None]), w)
-    E = np.where(hopeless & ~level, np.inf, E)
+    normal = (normal_step(legs_col, speeds[:, None])[:, 0] if config.step_model == "normal_mode"
+              else np.zeros(A))
     per_metre = neutral_energy_per_metre(legs, speeds, config)
-    last = slice(st.node_offset[st.n], None)  # the nodes of depth n
-    far = node_s[:, last].max(axis=1)  # (A,) every plan's common end
-    terminal = np.zeros(node_s.shape)
-    cost, progress = E, length
-    if config.terminal_cost:
-        terminal[:, last] = terminal_energy(profile, base + node_s[:, last], base[:, 0] + far,
-                                            base[:, 0] + trailing - 2.0, legs_col, speeds,
-                                            per_metre, lo + delta * neutral, config)
-        final = st.step_depth == st.n
-        cost = E + np.where(final, terminal[:, st.step_front], 0.0)
-        progress = np.where(final, far[:, None] - stance_s, length)
-    reason = support[:, st.step_front].copy()
-    reason |= np.where(np.abs(rise) > config.max_step_rise, int(Reason.STEP_HEIGHT), 0)
-    reason |= np.where(reachable, 0, int(Reason.KNEE_REACH))
-
-    # Swings: lift-off node -> touch-down node, only for pairs some legal sequence of
-    # steps (from the start, through a stance foothold between them) can use.
-    back, front = st.swing_back, st.swing_front
-    step_ok = reason == 0
-    reach = np.zeros(node_s.shape, dtype=bool)
-    reach[:, :2] = True
-    for k in range(1, st.n + 1):
-        sl = slice(st.step_offset[k - 1], st.step_offset[k] if k < st.n else None)
-        arrive = step_ok[:, sl] & reach[:, st.step_stance[sl]]
-        np.logical_or.at(reach, (slice(None), st.step_front[sl]), arrive)
+    flat_Ej, flat_reach = flat_joint_energy(legs, config)
+    level, sloped = flat_swings(legs, config), flat_swings(legs, config, SLOPE_EXTRA)
+    flat_ctrl, flat_ok, flat_slack = (np.ascontiguousarray(np.stack([x, y], axis=1))
+                                      for x, y in zip(level, sloped, strict=True))
     first, second, valid = st.pair_steps
-    through = (valid & step_ok[:, first] & step_ok[:, second]).any(axis=-1)
-    needed = through & reach[:, back] if PRUNE_SWINGS else (
-        (support[:, front] == 0) & (support[:, back] == 0))
-    P = back.size
-    controls = np.zeros((A, P, 4, 2))
-    rounds = np.full((A, P), -1)
-    swing_ok = np.zeros((A, P), dtype=bool)
-    built, reused, adjustments = (np.zeros(A, dtype=np.int64) for _ in range(3))
-    agent_of, which = np.nonzero(needed)
-    if agent_of.size:
-        b_node, f_node = back[which], front[which]
-        start = base[agent_of, 0] + node_s[agent_of, b_node]
-        end = base[agent_of, 0] + node_s[agent_of, f_node]
-        z_start, z_end = node_z[agent_of, b_node], node_z[agent_of, f_node]
-        # Spans where the ground is one straight segment reuse the flat curve, sheared to
-        # the slope: the sole then keeps the flat clearance minus |grade| x foot offset.
-        stride = st.swing_stride[which].copy()
-        # Depth 1 swings start at the trailing foot; when it stands a grid step behind
-        # (the default), their strides are on the grid too.
-        behind = (-trailing - lo) / delta
-        on_grid = ((np.abs(behind - np.round(behind)) < 1e-9) & (behind > -0.5)
-                   & (behind < config.intervals + 0.5))
-        depth_one = (stride < 0) & on_grid[agent_of]
-        stride[depth_one] = (np.round(behind[agent_of[depth_one]]).astype(np.int64)
-                             + st.node_m[f_node[depth_one]])
-        heel = legs_col.heel_offset[agent_of, 0]
-        toe = legs_col.toe_offset[agent_of, 0]
-        vertices = (np.searchsorted(profile.s, end + toe, side="left")
-                    - np.searchsorted(profile.s, start - heel, side="right"))
-        grade = (z_end - z_start) / (end - start)
-        nominal = 2 * lo[agent_of] + np.maximum(stride, 0) * delta[agent_of]
-        flat = ((stride >= 0) & (vertices == 0) & (np.abs(grade) <= config.max_foot_slope)
-                & (np.abs(end - start - nominal) <= 1e-9))  # snapped footholds differ
-        # Level spans use the flat curves; sloped ones the curves with SLOPE_EXTRA more
-        # clearance (enough for grades up to about 15 %).
-        for extra, subset in ((0.0, flat & (grade == 0)), (SLOPE_EXTRA, flat & (grade != 0))):
-            if not subset.any():
-                continue
-            flat_ctrl, flat_ok, flat_slack = flat_swings(legs, config, extra)
-            ag, rows = agent_of[subset], np.flatnonzero(subset)
-            fits = flat_ok[ag, stride[rows]] & (
-                np.abs(grade[rows]) * np.maximum(heel[rows], toe[rows])
-                <= flat_slack[ag, stride[rows]])
-            flat[rows[~fits]] = False
-            ag, rows = ag[fits], rows[fits]
-            ctrl = flat_ctrl[ag, stride[rows]].copy()
-            ctrl[..., 1] += z_start[rows, None] + grade[rows, None] * ctrl[..., 0]
-            ctrl[..., 0] += node_s[ag, b_node[rows], None]
-            controls[ag, which[rows]] = ctrl
-            rounds[ag, which[rows]] = 0
-            swing_ok[ag, which[rows]] = True
-            reused += np.bincount(ag, minlength=A)
-        rest = ~flat
-        if rest.any():
-            margin = 2 * float(legs_col.foot_length.max())
-            lo_s = np.floor((float(start[rest].min()) - margin) / RASTER_CELL) * RASTER_CELL
-            ground = profile.raster(lo_s, float(end[rest].max()) + margin, RASTER_CELL)
-            ag = agent_of[rest]
-            swing = adjust_swings(start[rest], z_start[rest], end[rest], z_end[rest], ground,
-                                  legs_col.take(ag), config)
-            ctrl = swing.controls
-            ctrl[..., 0] -= base[ag]
-            controls[ag, which[rest]] = ctrl
-            rounds[ag, which[rest]] = swing.rounds
-            swing_ok[ag, which[rest]] = swing.ok
-            built += np.bincount(ag, minlength=A)
-            adjustments += np.bincount(ag, weights=swing.rounds, minlength=A).astype(np.int64)
-    return StepTables(st, lo, delta, neutral, per_metre,
-                      node_s, node_z, length, rise, En, Ev, Ej, E, reason,
-                      swing_ok, controls, rounds, config, cost, progress, terminal, far,
-                      TableWork(np.full(A, rise.shape[1]), key_frames, built, reused,
-                                adjustments))
+    basis, influence = _swing_basis(config.bezier_samples)
+    Nn, Ns, Np = st.node_depth.size, st.step_stance.size, st.swing_back.size
+    node_s, node_z, terminal = np.empty((A, Nn)), np.empty((A, Nn)), np.zeros((A, Nn))
+    length, rise, En, Ev, Ej, E, cost, progress = (np.empty((A, Ns)) for _ in range(8))
+    reason = np.empty((A, Ns), dtype=np.int64)
+    far = np.empty(A)
+    swing_ok = np.zeros((A, Np), dtype=np.bool_)
+    controls = np.zeros((A, Np, 4, 2))
+    rounds = np.empty((A, Np), dtype=np.int64)
+    work = np.zeros((A, 4), dtype=np.int64)
+    fparams = np.array([config.max_step_rise, config.max_foot_slope, config.support_tolerance,
+                        config.edge_margin, config.swing_lift, config.pelvis_height_ratio,
+                        float(np.cos(np.pi - config.knee_max_flexion)), config.min_step_ratio,
+                        config.max_step_ratio, config.intervals, config.clearance,
+                        config.max_swing_lift, RASTER_CELL])
+    iparams = np.array([config.snap, config.terminal_cost, PRUNE_SWINGS,
+                        config.max_adjustments, TABLE_LEVELS], dtype=np.int64)
+    weights = np.array([w.alpha, w.beta, w.gamma, w.down_ratio, w.vertical == "linear",
+                        w.frequency * w.alpha, w.c_thigh, w.c_calf], dtype=float)
+    kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
+    kernel(prof_s, prof_z, bounds, base, lo, delta, np.asarray(trailing, dtype=float),
+                 np.asarray(speeds, dtype=float), normal, per_metre, lo + delta * neutral,
+                 leg_table, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack,
+                 st.node_depth, st.node_m, st.step_stance, st.step_front, st.step_j,
+                 st.step_depth, np.asarray(st.step_offset, dtype=np.int64), st.swing_back,
+                 st.swing_front, st.swing_stride, first, second, valid, basis, influence,
+                 fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E,
+                 reason, cost, progress, terminal, far, swing_ok, controls, rounds, work)
+    return StepTables(st, lo, delta, neutral, per_metre, node_s, node_z, length, rise, En,
+                      Ev, Ej, E, reason, swing_ok, controls, rounds, config, cost, progress,
+                      terminal, far,
+                      TableWork(np.full(A, Ns), work[:, 0], work[:, 1], work[:, 2],
+                                work[:, 3]))
+
+
+@lru_cache(maxsize=8)
+def _swing_basis(samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bernstein basis (4, T) at the swing samples and the control points' influence
+    (2, T-1) at the segment midpoints (as :func:`~planners.swing.adjust_swings`)."""
+    t = np.linspace(0.0, 1.0, samples)
+    t_mid = 0.5 * (t[:-1] + t[1:])
+    influence = np.stack([3 * t_mid * (1 - t_mid) ** 2, 3 * t_mid**2 * (1 - t_mid)])
+    return np.ascontiguousarray(bernstein(t).T), influence

@@ -209,98 +209,114 @@ def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cel
     (C, 4, 2), ``out_summit`` (C, 2) (the highest sample of the final curve), ``ok`` (C,)
     and ``rounds`` (C,)."""
     T = basis.shape[1]
-    scale = 1.0 / cell
-    ps = np.empty(T)
-    pz = np.empty(T)
-    deficit = np.empty(T - 1)
-    moves = np.zeros((2, 2))
+    scratch = np.empty((3, T))
     for c in range(start_s.size):
-        p0s, p0z = start_s[c], start_z[c] + ankle[c]
-        p3s, p3z = end_s[c], end_z[c] + ankle[c]
-        ms, mz = 0.5 * (p0s + p3s), 0.5 * (p0z + p3z)
-        ctrl = controls[c]
-        ctrl[0, 0], ctrl[0, 1] = p0s, p0z
-        ctrl[1, 0], ctrl[1, 1] = ms, mz + swing_lift
-        ctrl[2, 0], ctrl[2, 1] = ms, mz + swing_lift
-        ctrl[3, 0], ctrl[3, 1] = p3s, p3z
-        top = max(p0z, p3z) + max_swing_lift
-        zone = 0.5 * foot[c]
-        for round_ in range(max_adjustments + 1):
-            for i in range(T):
-                ps[i] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
-                         + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
-                pz[i] = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
-                         + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
-            clear = True
-            for i in range(T - 1):  # sole_clearance
-                s_lo, s_hi = min(ps[i], ps[i + 1]), max(ps[i], ps[i + 1])
-                z_lo = min(pz[i], pz[i + 1])
-                in_zone = (s_hi <= p0s + zone) or (s_lo >= p3s - zone)
-                if in_zone:
-                    ground = _raster_max(s_lo, s_hi, r_start, scale, table)
-                    straight = _raster_vertices(s_lo, s_hi, r_start, scale, vertex_cum) == 0
-                    need = -(max_foot_slope * (s_hi - s_lo) if straight else 0.0)
-                else:
-                    ground = _raster_max(s_lo - heel[c], s_hi + toe[c], r_start, scale,
-                                         table)
-                    need = clearance
-                deficit[i] = need - (z_lo - ankle[c] - ground)
-                if deficit[i] > 1e-9:
-                    clear = False
-            if clear:
-                ok[c] = True
-                break
-            if round_ == max_adjustments:
-                break
-            rounds[c] += 1
-            summit, high = 0, _round9(pz[0] - pz[0])
-            for i in range(1, T):
-                v = _round9(pz[i] - pz[0])
-                if v > high:
-                    summit, high = i, v
-            for side in range(2):
-                worst, worst_r = 0, -np.inf
-                for i in range(T - 1):
-                    if (i < summit) == (side == 0):
-                        r = _round9(deficit[i])
-                        if r > worst_r:
-                            worst, worst_r = i, r
-                need = deficit[worst] if worst_r > -np.inf else -np.inf
-                if not need > 1e-9:
-                    moves[side, 0] = 0.0
-                    moves[side, 1] = 0.0
-                    continue
-                us = 0.5 * (ps[worst] + ps[worst + 1]) - ms
-                uz = 0.5 * (pz[worst] + pz[worst + 1]) + need - mz
-                uz = max(uz, 0.3 * abs(us) + 1e-9)
-                norm = np.sqrt(us * us + uz * uz)
-                us, uz = us / norm, uz / norm
-                weight = influence[side, worst]
-                dist = min(max(2.0 * need / max(weight * uz, 1e-3) + 0.002, 0.005), 0.3)
-                moves[side, 0] = dist * us
-                moves[side, 1] = dist * uz
-            # a half without collision follows the other one upward by the same amount
-            if not moves[0, 1] > 0:
-                moves[0, 1] = moves[1, 1]
-            if not moves[1, 1] > 0:
-                moves[1, 1] = moves[0, 1]
-            inside = True
-            for k in range(2):
-                ctrl[1 + k, 0] = min(max(ctrl[1 + k, 0] + moves[k, 0], p0s), p3s)
-                ctrl[1 + k, 1] += moves[k, 1]
-                if ctrl[1 + k, 1] > top:
-                    inside = False
-            if not inside:
-                break
-        high = -np.inf  # the final curve's highest sample
+        ok[c], rounds[c] = adjust_one(
+            start_s[c], start_z[c], end_s[c], end_z[c], heel[c], toe[c], ankle[c], foot[c],
+            r_start, cell, table, vertex_cum, basis, influence, clearance, swing_lift,
+            max_swing_lift, max_foot_slope, max_adjustments, controls[c], out_summit[c],
+            scratch)
+
+
+@_jit
+def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cell,
+               table, vertex_cum, basis, influence, clearance, swing_lift, max_swing_lift,
+               max_foot_slope, max_adjustments, ctrl, out_summit, scratch):
+    """§5.2 adjustment of one curve: fills ``ctrl`` (4, 2) and ``out_summit`` (2,);
+    returns (ok, rounds). ``scratch`` is (3, T) work space."""
+    T = basis.shape[1]
+    scale = 1.0 / cell
+    ps = scratch[0]
+    pz = scratch[1]
+    deficit = scratch[2]
+    moves = np.zeros((2, 2))
+    ok = False
+    rounds = 0
+    p0s, p0z = start_s, start_z + ankle
+    p3s, p3z = end_s, end_z + ankle
+    ms, mz = 0.5 * (p0s + p3s), 0.5 * (p0z + p3z)
+    ctrl[0, 0], ctrl[0, 1] = p0s, p0z
+    ctrl[1, 0], ctrl[1, 1] = ms, mz + swing_lift
+    ctrl[2, 0], ctrl[2, 1] = ms, mz + swing_lift
+    ctrl[3, 0], ctrl[3, 1] = p3s, p3z
+    top = max(p0z, p3z) + max_swing_lift
+    zone = 0.5 * foot
+    for round_ in range(max_adjustments + 1):
         for i in range(T):
-            zi = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
-                  + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
-            if zi > high:
-                high = zi
-                out_summit[c, 0] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
-                                    + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
-        out_summit[c, 1] = high
+            ps[i] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
+                     + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
+            pz[i] = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
+                     + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
+        clear = True
+        for i in range(T - 1):  # sole_clearance
+            s_lo, s_hi = min(ps[i], ps[i + 1]), max(ps[i], ps[i + 1])
+            z_lo = min(pz[i], pz[i + 1])
+            in_zone = (s_hi <= p0s + zone) or (s_lo >= p3s - zone)
+            if in_zone:
+                ground = _raster_max(s_lo, s_hi, r_start, scale, table)
+                straight = _raster_vertices(s_lo, s_hi, r_start, scale, vertex_cum) == 0
+                need = -(max_foot_slope * (s_hi - s_lo) if straight else 0.0)
+            else:
+                ground = _raster_max(s_lo - heel, s_hi + toe, r_start, scale, table)
+                need = clearance
+            deficit[i] = need - (z_lo - ankle - ground)
+            if deficit[i] > 1e-9:
+                clear = False
+        if clear:
+            ok = True
+            break
+        if round_ == max_adjustments:
+            break
+        rounds += 1
+        summit, high = 0, _round9(pz[0] - pz[0])
+        for i in range(1, T):
+            v = _round9(pz[i] - pz[0])
+            if v > high:
+                summit, high = i, v
+        for side in range(2):
+            worst, worst_r = 0, -np.inf
+            for i in range(T - 1):
+                if (i < summit) == (side == 0):
+                    r = _round9(deficit[i])
+                    if r > worst_r:
+                        worst, worst_r = i, r
+            need = deficit[worst] if worst_r > -np.inf else -np.inf
+            if not need > 1e-9:
+                moves[side, 0] = 0.0
+                moves[side, 1] = 0.0
+                continue
+            us = 0.5 * (ps[worst] + ps[worst + 1]) - ms
+            uz = 0.5 * (pz[worst] + pz[worst + 1]) + need - mz
+            uz = max(uz, 0.3 * abs(us) + 1e-9)
+            norm = np.sqrt(us * us + uz * uz)
+            us, uz = us / norm, uz / norm
+            weight = influence[side, worst]
+            dist = min(max(2.0 * need / max(weight * uz, 1e-3) + 0.002, 0.005), 0.3)
+            moves[side, 0] = dist * us
+            moves[side, 1] = dist * uz
+        # a half without collision follows the other one upward by the same amount
+        if not moves[0, 1] > 0:
+            moves[0, 1] = moves[1, 1]
+        if not moves[1, 1] > 0:
+            moves[1, 1] = moves[0, 1]
+        inside = True
+        for k in range(2):
+            ctrl[1 + k, 0] = min(max(ctrl[1 + k, 0] + moves[k, 0], p0s), p3s)
+            ctrl[1 + k, 1] += moves[k, 1]
+            if ctrl[1 + k, 1] > top:
+                inside = False
+        if not inside:
+            break
+    high = -np.inf  # the final curve's highest sample
+    for i in range(T):
+        zi = (ctrl[0, 1] * basis[0, i] + ctrl[1, 1] * basis[1, i]
+              + ctrl[2, 1] * basis[2, i] + ctrl[3, 1] * basis[3, i])
+        if zi > high:
+            high = zi
+            out_summit[0] = (ctrl[0, 0] * basis[0, i] + ctrl[1, 0] * basis[1, i]
+                             + ctrl[2, 0] * basis[2, i] + ctrl[3, 0] * basis[3, i])
+    out_summit[1] = high
+    return ok, rounds
 
 
 class _FootView:

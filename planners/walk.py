@@ -47,7 +47,9 @@ def walk(profile: GroundProfile, leg: Leg, speed: float, planner: str = "best_fi
     -------
     Plan
         Every step taken (footholds from ``start``), their energies, swing curves and
-        phase durations; ``stats`` sums the counters of every plan and adds ``plans``.
+        phase durations; ``stats`` sums the counters of every plan made and counts them
+        in ``plans`` (the plans whose first step was taken, and the last one, which
+        passed ``stop`` or found no legal step).
 
     Raises
     ------
@@ -62,11 +64,17 @@ def walk(profile: GroundProfile, leg: Leg, speed: float, planner: str = "best_fi
                       f"the start s = {start:g} [m]", f"{stop - start:.2f} m")
     taken: list[Plan] = []
     totals = dict.fromkeys(_COUNTED, 0)
-    current, s, status, message = first, start, OK, ""
+    totals["plans"] = 0
+
+    def count(p: Plan) -> Plan:  # every plan made, whether its step is taken or not
+        for key in _COUNTED:
+            totals[key] += p.stats[key]
+        totals["plans"] += 1
+        return p
+
+    current, s, status, message = count(first), start, OK, ""
     limit = int(np.ceil((stop - start) / first.stats["step_min"])) + 1
     for _ in range(limit):
-        for key in _COUNTED:
-            totals[key] += current.stats[key]
         if current.step_lengths.size == 0:
             status, message = NO_FOOTHOLD, current.message
             break
@@ -75,7 +83,7 @@ def walk(profile: GroundProfile, leg: Leg, speed: float, planner: str = "best_fi
             break
         taken.append(current)
         s += step
-        current = plan(profile, leg, speed, planner, config, trailing=-step, origin=s)
+        current = count(plan(profile, leg, speed, planner, config, trailing=-step, origin=s))
     return _joined(taken, first, status, message, totals)
 
 
@@ -88,8 +96,7 @@ def _joined(taken: list[Plan], first: Plan, status: str, message: str, totals) -
     s = np.concatenate([[first.footholds_s[0]], [p.footholds_s[1] for p in taken]])
     z = np.concatenate([[first.footholds_z[0]], [p.footholds_z[1] for p in taken]])
     lengths, energy = column("step_lengths", ()), column("E", ())
-    stats = {**first.stats, **totals, "plans": len(taken) + (status != OK),
-             "terminal_energy": 0.0, "reach": float(s[-1])}
+    stats = {**first.stats, **totals, "terminal_energy": 0.0, "reach": float(s[-1])}
     efficiency = float(lengths.sum() / energy.sum()) if lengths.size else 0.0
     return Plan(status, message, first.planner, s, z, lengths, column("step_heights", ()),
                 column("swing_controls", (4, 2)), column("phase_durations", (3,)),

@@ -178,23 +178,6 @@ def test_poisson_arrivals():
         SpawnTimes(process="poisson")
 
 
-def test_events_and_waiting_areas_are_checked_and_not_yet_simulated():
-    def event(d):
-        d["events"] = [{"time": 10, "action": "close", "corridor": ["yard", "nowhere"]}]
-    with pytest.raises(InputError, match=r"events\[0\].corridor\[1\] must be one of"):
-        parse_scenario(_with("arrivals_density", event), "a.yaml")
-
-    def waiting(d):
-        d["waiting_areas"] = [{"node": "gate", "release_time": 5, "release_rate": 1}]
-    with pytest.raises(InputError, match="either release_time or release_rate"):
-        parse_scenario(_with("arrivals_density", waiting), "a.yaml")
-
-    def fine(d):
-        d["events"] = [{"time": 10, "action": "close", "corridor": ["yard", "gate"]}]
-    with pytest.raises(InputError, match="events must be empty in this version"):
-        build_world(parse_scenario(_with("arrivals_density", fine), "a.yaml"))
-
-
 # --- measurement --------------------------------------------------------------------
 
 

@@ -57,11 +57,29 @@ class Routes:
             key = (str(population.origin[i]), tuple(population.destinations[i]),
                    None if np.isnan(start).any() else tuple(start))
             if key not in keys:
-                keys[key] = self._add(*key)
+                keys[key] = self.route_of(*key)
             route[i] = keys[key]
         self.of_agent = route
 
-    def _add(self, origin: str, destinations: tuple, start) -> int:
+    def use_graph(self, graph) -> None:
+        """Route on ``graph`` from now on (a :class:`~crowdwalk.routes.RouteGraph` of the
+        same places, e.g. with corridors closed); routes already in the table stay."""
+        self.graph = graph
+        self._edges = None
+
+    def nodes_of(self, rid: int) -> tuple[list[str], np.ndarray]:
+        """Route ``rid``'s node names and their global arc lengths along it (k,) [m]."""
+        return self._nodes.get(int(rid), ([], np.zeros(0)))
+
+    def add(self, line: np.ndarray, nodes: list[str]) -> int:
+        """Add a route polyline (k, 2) [m] through route ``nodes`` (in order); its id."""
+        rid = self.table.add(line)
+        self._remember_nodes(rid, nodes)
+        return rid
+
+    def route_of(self, origin: str, destinations: tuple, start) -> int:
+        """The route (its id) from ``origin`` (or ``start`` (2,) [m] in its area, None: the
+        node) through ``destinations`` in order."""
         here, parts, nodes = origin, [], [origin]
         for k, dest in enumerate(destinations):
             if dest == here:
@@ -74,9 +92,7 @@ class Routes:
         if not parts:  # already at the destination
             p = self.graph.node_xy(origin) if start is None else np.asarray(start)
             parts = [np.stack([p, p])]
-        rid = self.table.add(np.concatenate(parts))
-        self._remember_nodes(rid, nodes)
-        return rid
+        return self.add(np.concatenate(parts), nodes)
 
     def _remember_nodes(self, rid: int, nodes: list[str]) -> None:
         """Store a route's node names and their global arc lengths along it [m]."""
@@ -91,7 +107,7 @@ class Routes:
 
     def _edge_samples(self) -> dict:
         """Points about 1 m apart along every corridor of the route graph (k, 2) [m] and
-        its width [m], by edge (computed once: the graph does not change)."""
+        its width [m], by edge (computed once per graph)."""
         if self._edges is None:
             self._edges = {}
             for u, v, data in self.graph.graph.edges(data=True):
@@ -101,6 +117,16 @@ class Routes:
                                 for f in np.linspace(0, 1, k)])
                 self._edges[(u, v)] = (pts, data["width"])
         return self._edges
+
+    def walks_from(self, here: np.ndarray, nodes) -> dict[str, np.ndarray]:
+        """The shortest walks (k, 2) [m] from ``here`` to each of ``nodes`` that can be
+        walked (a wall, such as a closed door, may leave none)."""
+        out = {}
+        for v in nodes:
+            walk = self.graph.shortest_walk(here, self.graph.node_xy(v))
+            if len(walk) > 2 or self.graph.sees(walk[0], walk[-1]):
+                out[v] = walk
+        return out
 
     def reroute(self, state, blocked: np.ndarray, *, t: float, walkers: np.ndarray) -> None:
         """Agents ``blocked`` without progress for ``reroute_after`` seconds look for a
@@ -146,10 +172,9 @@ class Routes:
             behind = set(nodes[:passed + 1])
             near = [v for v in dict.fromkeys([ahead[0], *g.successors(nodes[passed])])
                     if v not in behind and v in cost]
-            walks = {v: self.graph.shortest_walk(here, self.graph.node_xy(v)) for v in near}
+            walks = self.walks_from(here, near)
             if not walks and nodes[passed] in cost:  # no way on but back
-                walks = {nodes[passed]: self.graph.shortest_walk(
-                    here, self.graph.node_xy(nodes[passed]))}
+                walks = self.walks_from(here, [nodes[passed]])
             if not walks:
                 continue
             # the walk to v runs along the corridor from the node passed: its queue counts
@@ -158,9 +183,7 @@ class Routes:
             alt = list(reversed(paths[best]))
             if alt == ahead:
                 continue
-            line = np.vstack([walks[best], self.graph.raw_path(alt)[1:]])
-            rid = self.table.add(line)
-            self._remember_nodes(rid, alt)
+            rid = self.add(np.vstack([walks[best], self.graph.raw_path(alt)[1:]]), alt)
             st.route[i] = rid
             st.segment[i] = self.table.start[rid]
             st.progress[i] = self.table.s0[rid]

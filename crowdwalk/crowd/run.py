@@ -327,6 +327,8 @@ def summarise(sim: CrowdSimulation, scenario, *, timing: dict, max_overlap: floa
         "timing": {**{k: float(v) for k, v in timing.items()},
                    "simulated_s_per_wall_s": float(sim.time / wall) if wall > 0 else None},
         "groups": by_group,
+        "events": sim.events.summary() if sim.events is not None else [],
+        "waiting_areas": sim.holding.summary() if sim.holding is not None else [],
         "styles": summary_by_style(agents),
         "agents": agents,
     }

@@ -35,6 +35,8 @@ import numpy as np
 
 from crowdwalk.crowd.commit import take_steps
 from crowdwalk.crowd.conflicts import clashes_with_neighbours, same_tick_yielders
+from crowdwalk.crowd.events import EventTimeline
+from crowdwalk.crowd.holding import WaitingAreas
 from crowdwalk.crowd.neighbours import gather_neighbours
 from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
@@ -123,6 +125,10 @@ class CrowdSimulation:
         self.state.route = self.routes.of_agent.copy()
         self.state.segment = table.start[self.state.route].copy()
         self.state.progress = table.s0[self.state.route].copy()
+        sc = world.scenario
+        self.events = EventTimeline(sc, world.routes, population) if sc.events else None
+        self.holding = WaitingAreas(sc.waiting_areas, world.routes, n) \
+            if sc.waiting_areas else None
         self.gait = gait
         self.time = 0.0
         self.tick = 0
@@ -157,6 +163,10 @@ class CrowdSimulation:
     def step(self) -> bool:
         """Advance one tick; returns True when the tick ends on an output frame."""
         t = (self.tick + 1) * self.dt
+        if self.events is not None:
+            self.events.apply(self, t)
+        if self.holding is not None:
+            self.holding.release(self, t)
         self._spawn(t)
         st = self.state
         deciding = np.flatnonzero((st.status == ACTIVE) & (st.t1 <= t + 1e-9))
@@ -245,6 +255,14 @@ class CrowdSimulation:
             idx, te, pos = idx[keep], te[keep], pos[keep]
             if idx.size == 0:
                 return
+        if self.holding is not None:  # walkers standing in a waiting area
+            held = self.holding.hold(self, idx, t)
+            if held.any():
+                stand(st, self.queue, agents=idx[held], t=t, terrain=self.terrain,
+                      legs=self.legs, params=prm)
+                idx, te, pos = idx[~held], te[~held], pos[~held]
+                if idx.size == 0:
+                    return
         target, route_dir = steering_targets(
             table, route=st.route[idx], progress=st.progress[idx], xy=pos,
             heading=st.heading[idx], radius=self.radius[idx], clearance=self.clearance,

@@ -55,7 +55,7 @@ import numpy as np
 from crowdwalk.body import JOINT_NAMES, LEG_JOINTS, PARENTS, Body, matrix_to_quaternion
 from crowdwalk.errors import invalid
 from crowdwalk.gait.datasets import sample
-from crowdwalk.gait.elevinterp import ElevInterp
+from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
 from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose
 from crowdwalk.gait.engine import GroundHeight, PoseFrame
 from crowdwalk.gait.foot import StanceFoot, direction, foot_points, stance_foot_pose, wrap_angle
@@ -82,6 +82,7 @@ _LIFT_WIDTH = 0.2  # half-width of each sample's lift bump, fraction of the step
 _LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the landing)
 _LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
 _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
+_LEVEL_RISE = 0.02  # steps rising or falling less than this are level [m]
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
 
 
@@ -447,11 +448,12 @@ class Animator:
         stance_foothold = stance.ball - body.ball_offset[:, None] * d
         rel = cmd.target - stance_foothold
         length = rel[:, 0] * np.cos(cmd.heading) + rel[:, 1] * np.sin(cmd.heading)
-        length = np.maximum(length, _MIN_STEP)
+        # Eq. 10's pelvis term: a rotated pelvis puts the swing hip ahead at heel strike
+        length = np.maximum(length - self._swing_hip_lead(a, body), _MIN_STEP)
         height = rel[:, 2]
         data = self.interp.request(body, length, height, speed=cmd.speed)
         step, st, sw = self._step, self._stance, self._swing
-        step.angles[a] = data.angles
+        step.angles[a] = self._cleared(a, body, data, height)
         step.stance_fraction[a] = data.stance_fraction
         step.psi0[a] = psi0
         step.psi1[a] = cmd.heading
@@ -480,6 +482,32 @@ class Animator:
         self._warm_start_swap(a, had)
         step.commanded[a] = True
         return data
+
+    def _swing_hip_lead(self, a: np.ndarray, body: Body) -> np.ndarray:
+        """How far (k,) [m] the swing hip is ahead of the stance hip at heel strike: the
+        pelvic rotation ρ (the style's; none without) turns the hip axis, 2 (w/2) sin ρ."""
+        if self.attributes is None:
+            return np.zeros(a.size)
+        return body.hip_separation * np.sin(self.attributes.pelvic_rotation[a])
+
+    def _cleared(self, a: np.ndarray, body: Body, data, height: np.ndarray) -> np.ndarray:
+        """The step's datasets (k, N, 4) with the swing sole lifted to the walker's toe
+        clearance over level ground (``elevinterp.lift_swing_toe``; the swing hip drops
+        by the pelvic list); steps up or down keep ElevInterp's dataset."""
+        if not self.style.level_clearance:
+            return data.angles
+        level = np.abs(height) < _LEVEL_RISE
+        out = data.angles.copy()
+        if not level.any():
+            return out
+        at = self.attributes
+        tilt = self.style.pelvic_list if at is None else at.pelvic_list[a[level]]
+        clearance = self.style.toe_clearance
+        lb = body.take(np.flatnonzero(level))
+        out[level] = lift_swing_toe(data.angles[level], lb, data.stance_fraction[level],
+                                    hip_drop=lb.hip_separation * np.sin(tilt),
+                                    clearance=clearance)
+        return out
 
     def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
         """Root continuity: the stance hip starts where the previous step left the root
@@ -524,7 +552,9 @@ class Animator:
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
         to_land = ankle_land - hip1
         reach = np.linalg.norm(to_land, axis=1)
-        short = np.maximum(reach - _REACH * (body.thigh + body.shank), 0.0)
+        data_reach = np.linalg.norm(ankle1 - hip1, axis=1)  # the data's own landing leg
+        short = np.maximum(reach - np.maximum(_REACH * (body.thigh + body.shank), data_reach),
+                           0.0)
         sw.hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
         sw.d1[a] = ankle_land - ankle1 - sw.hip_drop[a]
 

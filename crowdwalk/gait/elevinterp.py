@@ -61,6 +61,7 @@ __all__ = [
     "SagittalLeg",
     "StepDatasets",
     "dataset_step",
+    "lift_swing_toe",
     "step_of",
 ]
 
@@ -241,6 +242,19 @@ class ElevInterpConfig:
         RMS against Winter (docs/architecture.md, "Speed blend").
     speed_fade : float
         The speed residual fades linearly to zero at this |step height| [leg lengths].
+    level_datum : bool
+        Level requests are served from the level datasets (an extension of §5, module
+        notes): step heights are measured from the height Eq. 10 gives the level datasets
+        for the body at that length, so SH = 0 does not blend in the stair datasets.
+        False: the paper's Height/Length space.
+    heel_rise : bool
+        Near-level datasets are closed by the trailing foot (an extension of §5, module
+        notes): the foot elevation is lowered (heel raised, rolling on the ball) from
+        mid-stance through push-off so that Eq. 10 lands the swing foot at the requested
+        height, instead of the Animator bending the swing knee to reach it. False: the
+        blended dataset as it is.
+    level_fade : float
+        Datum and heel rise fade linearly to zero at this |step height| [leg lengths].
     """
 
     tolerance: float = 0.002
@@ -252,11 +266,14 @@ class ElevInterpConfig:
     last_resort_extrapolation: float = 1.0
     speed_blend: bool = False
     speed_fade: float = 0.04
+    level_datum: bool = True
+    heel_rise: bool = True
+    level_fade: float = 0.04
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
         units = {"tolerance": "m", "insert_spacing": "1", "shape_resolution": "1",
-                 "speed_fade": "1"}
+                 "speed_fade": "1", "level_fade": "1"}
         for name, unit in units.items():
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
@@ -471,6 +488,7 @@ class ElevInterp:
         self.config = config or ElevInterpConfig()
         self._curves = np.stack([d.angles for d in datasets])
         self._phases = np.array([[d.stance_fraction, d.double_support] for d in datasets])
+        self._level = np.array([i for i, d in enumerate(datasets) if d.kind == "level"], int)
         self._spaces: dict[tuple[int, ...], _ShapeSpace] = {}
         self.stats = {"requests": 0, "refined": 0, "clamped": 0, "inserted": 0, "failed": 0}
 
@@ -526,7 +544,7 @@ class ElevInterp:
         for g, key in enumerate(shapes):
             idx = np.flatnonzero(which == g)
             space = self._space(key, props[idx[0]])
-            out = self._solve(space, target[idx], props[idx], length[idx])
+            out = self._solve_level(space, target[idx], props[idx], length[idx])
             angles[idx], phases[idx], achieved[idx], served[idx], flags[idx] = out
         if speed is not None and self.config.speed_blend:
             v = np.broadcast_to(np.asarray(speed, dtype=float), sl.shape)
@@ -629,6 +647,48 @@ class ElevInterp:
             if np.any(bad):
                 raise invalid("ElevInterp", f"leg.{name}", "finite and > 0 [m]", float(d[bad][0]))
 
+    def _solve_level(self, space: _ShapeSpace, target: np.ndarray, props: np.ndarray,
+                     metres: np.ndarray):
+        """:meth:`_solve` with the level datum and the heel-rise closure where configured
+        (lengths in leg lengths): the request's height is moved onto the level datasets'
+        own Eq. 10 height, the blend closed by the trailing foot, and the length asked
+        again for what the closure moved it (a second solve)."""
+        cfg = self.config
+        if not (cfg.level_datum or cfg.heel_rise) or self._level.size < 2:
+            return self._solve(space, target, props, metres)
+        level = space.points[self._level]
+        level = level[np.argsort(level[:, 0])]
+        # level steps: low rises, and lengths no shorter than the level data's (faded)
+        fade = np.clip(1.0 - np.abs(target[:, 1]) / cfg.level_fade, 0.0, 1.0) * np.clip(
+            (target[:, 0] / level[0, 0] - _SHORT_FROM) / _SHORT_OVER, 0.0, 1.0)
+        ask = target.copy()
+        if cfg.level_datum:
+            ask[:, 1] += fade * np.interp(target[:, 0], *level.T)
+        out = self._solve(space, ask, props, metres)
+        missed = out[4][:, 0] & (fade > 0.0)
+        if missed.any():  # the shifted request is not servable: the paper's request
+            fade[missed], ask[missed] = 0.0, target[missed]
+            out = self._solve(space, ask, props, metres)
+        if not cfg.heel_rise:
+            curves, phases, step, served, flags = out
+            return curves, phases, step, served - (ask - target), flags
+        for again in (True, True, False):
+            curves, phases, step, served, flags = out
+            curves, step = _heel_rise(curves, phases[:, 0], step,
+                                      np.where(fade > 0.0, target[:, 1], step[:, 1]), props)
+            if again:
+                ask[:, 0] += np.where(fade > 0.0, target[:, 0] - step[:, 0], 0.0)
+                out = self._solve(space, ask, props, metres)
+        served = served - (ask - target)
+        converged = np.linalg.norm(step - served, axis=1) <= cfg.tolerance / metres
+        flags = np.stack([flags[:, 0] | ~converged, flags[:, 1], converged], axis=1)
+        missed = flags[:, 0] & (fade > 0.0)
+        if missed.any():  # closing did not reach the request: the paper's blend there
+            paper = self._solve(space, target[missed], props[missed], metres[missed])
+            for mine, theirs in zip((curves, phases, step, served, flags), paper, strict=True):
+                mine[missed] = theirs
+        return curves, phases, step, served, flags
+
     def _solve(self, space: _ShapeSpace, target: np.ndarray, props: np.ndarray,
                metres: np.ndarray):
         """Steps 1–6 of §5.1 for requests of one body shape (lengths in leg lengths)."""
@@ -672,6 +732,90 @@ class ElevInterp:
         self.stats["inserted"] += space.insert(curves[good], phases[good], cfg.max_inserted)
         flags = np.stack([clamped | ~converged, refine, converged], axis=1)
         return curves, phases, step, target, flags
+
+
+_SHORT_FROM, _SHORT_OVER = 0.7, 0.15  # level handling fades in over 70-85 % of level_xs
+_RISE_FROM, _RISE_OVER, _FALL_OVER = 0.3, 0.2, 0.1  # heel-rise window [stride fraction]
+_MAX_RISE = 0.2  # largest change of the trailing foot's elevation [rad]
+
+
+def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray,
+               height: np.ndarray, props: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Datasets (k, N, 4) closed by the trailing foot, and the steps (k, 2) they produce.
+
+    The stance foot at t = 0.5 rolls on its ball (§4.1); its ankle is ``R cos(f + β)``
+    above the ground (R, β from ball offset and ankle height), so the elevation f' that
+    raises it by the missing height ``height − step[:, 1]`` is closed form. The foot
+    elevation changes by f' − f over a window: 0 until t = 0.3 (foot flat), smoothly 1
+    at t = 0.5 (the other heel strikes), kept through push-off to the dataset's foot-off
+    ``stance_fraction`` (k,) and gone 0.1 later (the foot is off the ground: swing
+    clearance is untouched). Lengths in leg lengths; elevations [rad].
+    """
+    k, n = curves.shape[:2]
+    ankle_h, ball = props[:, 2], props[:, 4]
+    f = sample(curves, np.full(k, 0.5))[:, 0]
+    radius, beta = np.hypot(ball, ankle_h), np.arctan2(ball, ankle_h)
+    z = radius * np.cos(f + beta)
+    wanted = np.arccos(np.clip((z + height - step[:, 1]) / radius, -1.0, 1.0)) - beta
+    delta = np.clip(np.minimum(wanted, 0.0) - f, -_MAX_RISE, _MAX_RISE)
+    delta = np.where(f <= 0.0, delta, 0.0)  # a foot on its heel at t = 0.5: left as it is
+    t = np.arange(n) / n
+    rise = np.clip((t - _RISE_FROM) / _RISE_OVER, 0.0, 1.0)
+    fall = np.clip((t[None, :] - stance_fraction[:, None]) / _FALL_OVER, 0.0, 1.0)
+    window = np.where(t[None, :] < 0.5, (rise * rise * (3.0 - 2.0 * rise))[None, :],
+                      1.0 - fall * fall * (3.0 - 2.0 * fall))
+    closed = curves.copy()
+    closed[:, :, 0] += delta[:, None] * window
+    return closed, dataset_step(closed, _leg_of(props))
+
+
+def lift_swing_toe(angles: np.ndarray, leg: LegLike, stance_fraction: np.ndarray, *,
+                   hip_drop: np.ndarray, clearance: np.ndarray) -> np.ndarray:
+    """Datasets (k, N, 4) whose swing sole clears level ground by ``clearance`` (k,) [m].
+
+    Sagittal forward kinematics at every sample (the stance foot on level ground with
+    the §4.1 roll, the stance leg up, the swing leg down, the swing hip lowered by
+    ``hip_drop`` (k,) [m] × sin(2πt), the pelvic list's drop at mid-swing) give the
+    lowest point of the swing sole (heel, ball, toe tip) between foot-off
+    ``stance_fraction`` (k,) and heel strike. Where the middle third of the swing comes
+    closer than ``clearance``, the swing foot's elevation is raised (toes up) by
+    Δ·sin² over the swing, Δ the least that lifts every sample there (linearised, then
+    refined twice; at most 0.2 rad) — hip and knee keep the data. An extension of §5:
+    the data's own swing, with this body's foot, can graze the floor
+    (docs/architecture.md, "Level steps"). Datasets that clear are returned unchanged.
+    """
+    out = np.array(angles, dtype=float, copy=True)
+    k, n = out.shape[:2]
+    clearance = np.broadcast_to(np.asarray(clearance, dtype=float), (k,))[:, None]
+    thigh, shank, ankle_h, heel, ball, toe = (
+        np.broadcast_to(np.asarray(_dimension(leg, f), dtype=float), (k,))[:, None]
+        for f in (*LEG_FIELDS, "toe_offset"))
+    half = n // 2
+    t = (np.arange(half) / n)[None, :]  # the stance leg's t; the swing leg is at t + 0.5
+    t_off = np.asarray(stance_fraction, dtype=float)[:, None] - 0.5
+    u = np.clip((t - t_off) / np.maximum(0.5 - t_off, 1e-6), 0.0, 1.0)  # through swing
+    window = np.where(t >= t_off, np.sin(np.pi * u) ** 2, 0.0)
+    middle = (u > 1.0 / 3.0) & (u < 2.0 / 3.0)
+    drop = np.asarray(hip_drop, dtype=float).reshape(-1, 1) * np.sin(2.0 * np.pi * t)
+    st = out[:, :half]
+    f = st[..., 0]
+    on_ball = f <= 0.0
+    c, s_ = np.cos(f), np.sin(f)
+    hip = (np.where(on_ball, -ball * s_, heel * s_) + ankle_h * c
+           + shank * np.cos(st[..., 1]) + thigh * np.cos(st[..., 2]) - drop)
+    for _ in range(3):
+        sw = out[:, half:2 * half]
+        ankle = hip - thigh * np.cos(sw[..., 2]) - shank * np.cos(sw[..., 1])
+        g, h = np.cos(sw[..., 0]), np.sin(sw[..., 0])
+        z = np.minimum(np.minimum(-heel * h, ball * h), toe * h) - ankle_h * g + ankle
+        rate = toe * g + ankle_h * h  # the toe tip's rise per radian of toes-up
+        need = np.where(middle & (z < clearance),
+                        (clearance - z) / np.maximum(rate * window, 1e-6), 0.0)
+        delta = np.clip(need.max(axis=1), 0.0, _MAX_RISE)
+        if not np.any(delta > 1e-6):
+            break
+        out[:, half:2 * half, 0] += delta[:, None] * window
+    return out
 
 
 def _blend_step(space: _ShapeSpace, simplex: np.ndarray, weights: np.ndarray,

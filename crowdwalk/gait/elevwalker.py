@@ -98,6 +98,12 @@ class GaitStyle:
         Gauss–Newton convergence threshold on the residuals [rad or m].
     max_iterations : int
         Gauss–Newton iterations before a solve counts as not converged.
+    toe_clearance : float
+        Least height of the swing sole over level ground [m] (KLAW's default
+        ``toe_clearance``; walkers with a style use their own).
+    level_clearance : bool
+        The Animator lifts the data's swing sole to ``toe_clearance`` over level ground
+        (an extension, docs/architecture.md "Level steps"); False: the data's swing.
     """
 
     step_width: float = 0.05
@@ -108,6 +114,8 @@ class GaitStyle:
     elbow_flexion: float = float(np.deg2rad(20.0))
     tolerance: float = 1e-6
     max_iterations: int = 12
+    toe_clearance: float = 0.013
+    level_clearance: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):

@@ -14,10 +14,12 @@ from crowdwalk.gait.elevinterp import (
     ElevInterpConfig,
     SagittalLeg,
     dataset_step,
+    lift_swing_toe,
     step_of,
 )
 
 CM = 0.01
+PAPER = ElevInterpConfig(level_datum=False, heel_rise=False)  # §5 as written
 LEVEL = ["level_xs", "level_s", "level_natural", "level_m", "level_l"]
 
 
@@ -109,7 +111,7 @@ def test_step_scales_with_body_height():
 
 
 def test_source_datasets_reproduce_their_own_steps_exactly():
-    interp = ElevInterp()
+    interp = ElevInterp(config=PAPER)
     body = leg(1.75)
     steps = interp.source_steps(body)
     out = interp.request(body, steps[:, 0], steps[:, 1])
@@ -124,7 +126,7 @@ def test_source_datasets_reproduce_their_own_steps_exactly():
 def test_interpolation_between_speeds_is_monotonic():
     # Between adjacent speeds the blend shifts monotonically: step length and thigh
     # excursion grow and the stance fraction shrinks (as in the measured series).
-    interp = ElevInterp()
+    interp = ElevInterp(config=PAPER)
     body = leg(1.75)
     steps = interp.source_steps(body)
     s = np.linspace(0, 1, 11)
@@ -277,3 +279,55 @@ def test_bad_leg_and_config_are_rejected():
         ElevInterp(load_datasets()[:2])
     with pytest.raises(InputError, match=r"SagittalLeg\.height"):
         SagittalLeg.from_body_height(np.nan)
+
+
+# --- level steps (extensions of §5, docs/architecture.md "Level steps") -----------------
+
+
+def test_level_datum_serves_level_steps_from_level_data_only():
+    # The level datasets' own Eq. 10 height is about -1.5 cm for this body: the paper's
+    # space blends a stair dataset into a SH = 0 request, the level datum does not.
+    body = leg(1.75)
+    natural = LEVEL.index("level_natural")
+    paper = ElevInterp(config=PAPER)
+    length = paper.source_steps(body)[natural, 0]
+    mixed = paper.request(body, length, 0.0)
+    datum = ElevInterp(config=ElevInterpConfig(heel_rise=False)).request(body, length, 0.0)
+    want = dataset_by_name("level_natural")
+    np.testing.assert_allclose(datum.angles[0], want.angles, atol=1e-9)
+    assert np.abs(mixed.angles[0] - want.angles).max() > np.deg2rad(1.0)
+
+
+def test_heel_rise_closes_level_steps_with_the_trailing_foot():
+    body = leg(np.full(3, 1.75))
+    length = np.array([0.58, 0.68, 0.76])
+    open_ = ElevInterp(config=ElevInterpConfig(heel_rise=False)).request(body, length, 0.0)
+    closed = ElevInterp().request(body, length, 0.0)
+    assert closed.converged.all()
+    # the step lands on the level foothold (Eq. 10, re-measured), not 1-2 cm below it
+    assert np.all(open_.step_height < -0.5 * CM)
+    np.testing.assert_allclose(dataset_step(closed.angles, body), np.stack(
+        [length, np.zeros(3)], axis=1), atol=0.2 * CM)
+    # ... by a higher heel from mid-stance to foot-off (the blend is re-solved for the
+    # length, so the flat foot moves a little too)
+    t = np.arange(100) / 100
+    rise = np.rad2deg(closed.angles[:, :, 0] - open_.angles[:, :, 0])
+    assert np.all(np.abs(rise[:, t < 0.3]) < 1.0)
+    assert np.all(rise[:, (t > 0.45) & (t < 0.6)] < -2.0)
+
+
+def test_lift_swing_toe_raises_only_the_swing_foot_to_the_clearance():
+    body = leg(np.full(2, 1.75))
+    data = ElevInterp().request(body, np.array([0.58, 0.68]), 0.0)
+    lifted = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
+                            clearance=0.03)
+    changed = lifted != data.angles
+    assert changed[:, :, 0].any() and not changed[:, :, 1:].any()  # foot only
+    assert not changed[:, :50].any()  # the swing half only
+    assert np.all(lifted[:, :, 0] >= data.angles[:, :, 0])  # toes up, never down
+    less = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
+                          clearance=0.01)
+    assert np.all(lifted[:, :, 0] >= less[:, :, 0]) and (lifted != less).any()
+    none = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
+                          clearance=-1.0)
+    np.testing.assert_array_equal(none, data.angles)  # a swing that clears is untouched

@@ -1,0 +1,530 @@
+"""The compiled pass of :func:`planners.lattice.build_tables`: one agent per iteration.
+
+Every node, step and swing of one agent's lattice is evaluated on the agent's own ground
+profile (shifted so that its stance foot lies on a raster cell boundary), with the same
+arithmetic, in the same order, as the vectorised definitions it replaces
+(:meth:`~planners.profile.GroundProfile.height` and ``span_heights``,
+:func:`~planners.legality.foot_support`, :func:`~planners.legality.snap_to_support`,
+:func:`~planners.energy.step_energy`, :func:`~planners.energy.terminal_energy`,
+:meth:`~planners.profile.GroundProfile.raster`, :func:`~planners.swing.adjust_swings`).
+Agents run in parallel (``prange``); the caller supplies the per-leg caches (flat-ground
+joint energies and swing curves) and every parameter as an argument.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from planners.energy import EV_PEAK_CM
+from planners.kinematics import key_frame
+from planners.swing import adjust_one
+
+__all__ = ["build_agents", "build_agents_serial"]
+
+_EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
+_VERTICAL = 1e-12
+# Reason flags (planners.legality.Reason)
+_EDGE, _SLOPE, _STEP_HEIGHT, _KNEE_REACH = 1, 2, 4, 8
+_jit = nb.njit(cache=True, nogil=True)
+
+
+@_jit
+def _right(s, x):
+    """``np.searchsorted(s, x, side="right")`` of a float."""
+    lo, hi = 0, s.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if s[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@_jit
+def _left(s, x):
+    """``np.searchsorted(s, x, side="left")`` of a float."""
+    lo, hi = 0, s.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if s[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@_jit
+def _height(s, z, slope, x):
+    """GroundProfile.height at ``x`` [m]."""
+    q = max(x, s[0])
+    i = _right(s, q) - 1
+    return z[i] + slope[i] * (q - s[i])
+
+
+@_jit
+def _span(s, z, slope, a, b):
+    """GroundProfile.span_heights over [a, b]: (highest, height(a), height(b)) [m]."""
+    qa = max(a, s[0])
+    ia = _right(s, qa) - 1
+    ha = z[ia] + slope[ia] * (qa - s[ia])
+    qb = max(b, s[0])
+    ib = _right(s, qb) - 1
+    hb = z[ib] + slope[ib] * (qb - s[ib])
+    empty = b < a
+    best = max(ha, ha if empty else hb)
+    lo = _left(s, a)
+    hi = 0 if max(a, b) < s[0] else (ia if empty else ib) + 1
+    for i in range(lo, hi):
+        best = max(best, z[i])
+    return best, ha, hb
+
+
+@_jit
+def _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
+    """foot_support of an ankle at ``x`` [m]: 0 or EDGE | SLOPE flags."""
+    heel = x - heel_off
+    toe = x + toe_off
+    count = _left(edges, toe + margin) - _right(edges, heel - margin)
+    highest, z_heel, z_toe = _span(s, z, slope, heel + 1e-9, toe - 1e-9)
+    bump = highest - max(z_heel, z_toe)
+    grade = abs(z_toe - z_heel) / (toe - heel)
+    reason = _EDGE if count > 0 else 0
+    if bump > tolerance or grade > max_slope:
+        reason |= _SLOPE
+    return reason
+
+
+@_jit
+def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
+    """snap_to_support of one foothold [m] (3 edges on each side)."""
+    E = edges.size
+    if E == 0 or _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance,
+                          max_slope) == 0:
+        return x
+    m = margin + 1e-9
+    i = _left(edges, x)
+    best, best_cost = x, np.inf
+    for side in range(2):
+        for d in range(-3, 3):
+            e = edges[min(max(i + d, 0), E - 1)]
+            c = e + heel_off + m if side == 0 else e - toe_off - m
+            shift = abs(c - x)
+            if shift <= window and shift < best_cost and _support(
+                    c, heel_off, toe_off, s, z, slope, edges, margin, tolerance,
+                    max_slope) == 0:
+                best, best_cost = c, shift
+    return best
+
+
+@_jit
+def _energy(length, rise, Ej, speed, normal, p):
+    """Eqs. 1, 2 and 4 of one step (+ the step-frequency term where ``normal`` > 0):
+    (En, Ev, E). ``p``: alpha, beta, gamma, down_ratio, linear (1/0), frequency*alpha."""
+    v = 60.0 * speed
+    En = (32.0 + 0.005 * (v * v)) * length / v
+    h = 100.0 * rise
+    a = abs(h)
+    if p[4] > 0:
+        up = 7.14 * a
+    elif a <= EV_PEAK_CM:
+        up = -0.18 * (a * a) + 7.14 * a
+    else:
+        up = _EV_PEAK + 7.14 * (a - EV_PEAK_CM)
+    Ev = up if h >= 0 else p[3] * up
+    E = p[0] * En + p[1] * Ev + p[2] * Ej
+    if normal > 0:
+        x = normal / max(length, 1e-6) - 1.0
+        E = E + p[5] * En * (x * x)
+    return En, Ev, E
+
+
+@_jit
+def _step_E(length, rise, summit_z, leg, speed, normal, p, c_thigh, c_calf, pelvis,
+            cos_knee, lift):
+    """step_energy(0, 0, length, rise, summit_z, ...)[3]: Eq. 4 of one step [J/kg]."""
+    thigh, calf, _ = key_frame(0.0, 0.0, length, rise, 0.0, summit_z, leg[0], leg[1],
+                               leg[4], leg[5], leg[5] + lift, pelvis, cos_knee)
+    Ej = c_thigh * thigh + c_calf * calf
+    return _energy(length, rise, Ej, speed, normal, p)[2]
+
+
+@_jit
+def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre, L0,
+              p, c_thigh, c_calf, pelvis, cos_knee, lift, max_slope, min_ratio, max_ratio):
+    """terminal_energy of the footholds ``starts`` (K,) to ``stop`` [m] over the profile
+    vertices lo_i..hi_i; fills ``out`` (K,) [J/kg]."""
+    s = s[lo_i:hi_i + 1]
+    z = z[lo_i:hi_i + 1]
+    nseg = s.size - 1
+    if nseg < 1:
+        for k in range(starts.size):
+            out[k] = per_metre * (stop - starts[k])
+        return
+    ds = np.empty(nseg)
+    dz = np.empty(nseg)
+    steep = np.empty(nseg, dtype=np.bool_)
+    nsteep = 0
+    for i in range(nseg):
+        ds[i] = s[i + 1] - s[i]
+        dz[i] = z[i + 1] - z[i]
+        steep[i] = abs(dz[i]) > max_slope * ds[i]
+        nsteep += steep[i]
+    where = np.empty(nsteep, dtype=np.int64)
+    w = 0
+    for i in range(nseg):
+        if steep[i]:
+            where[w] = i
+            w += 1
+    length = leg[0] + leg[1]
+    lo = min_ratio * length
+    longest = max_ratio * length
+    E0 = _step_E(L0, 0.0, 0.0 + (leg[5] + lift), leg, speed, normal, p, c_thigh, c_calf,
+                 pelvis, cos_knee, lift)
+    cost = np.empty(nseg)
+    gap = np.empty(nseg)
+    nxt = np.empty(nseg, dtype=np.int64)
+    w = 0
+    for i in range(nseg):
+        while w < nsteep and where[w] <= i:
+            w += 1
+        nxt[i] = w  # the first steep segment after i
+        gap[i] = s[where[w]] - s[i + 1] if w < nsteep else np.inf
+        if steep[i]:
+            g = min(max(gap[i], lo), L0)
+            rise = dz[i]
+        else:
+            g = L0
+            rise = dz[i] / max(ds[i], 1e-12) * L0
+        E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
+                    c_thigh, c_calf, pelvis, cos_knee, lift)
+        cost[i] = E - per_metre * g if steep[i] else (E - E0) / L0 * ds[i]
+    if nsteep > 1:  # a low obstacle may be stridden over (see terminal_energy)
+        for i in range(nseg):
+            j = where[min(nxt[i], nsteep - 1)]
+            if not (steep[i] and dz[i] > 0 and nxt[i] < nsteep and dz[j] < 0
+                    and gap[i] + leg[2] <= longest):
+                continue
+            stride = max(L0, min(gap[i] + leg[2], longest))
+            top = max(z[i + 1], z[j]) - z[i]
+            Es = _step_E(stride, 0.0, max(top, 0.0) + (leg[5] + lift), leg, speed, normal,
+                         p, c_thigh, c_calf, pelvis, cos_knee, lift)
+            both, jump = cost[i] + cost[j], Es - per_metre * stride
+            cost[j] = cost[j] if both <= jump else 0.0
+            cost[i] = min(both, jump) - cost[j]
+    cum = np.empty(nseg + 1)
+    cum[0] = 0.0
+    for i in range(nseg):
+        if not np.isfinite(cost[i]):
+            cost[i] = 0.0
+        cum[i + 1] = cum[i] + cost[i]
+    f_stop = _cumulative(s, ds, cost, cum, stop)
+    for k in range(starts.size):
+        out[k] = per_metre * (stop - starts[k]) + f_stop - _cumulative(s, ds, cost, cum,
+                                                                        starts[k])
+    return
+
+
+@_jit
+def _cumulative(s, ds, cost, cum, x):
+    """terminal_energy's F: the cost from the first vertex to ``x`` [J/kg]."""
+    k = min(max(_right(s, x) - 1, 0), s.size - 1)
+    seg = min(k, ds.size - 1)
+    frac = 0.0
+    if k < s.size - 1 and ds[seg] > 0:
+        frac = min(max((x - s[k]) / ds[seg], 0.0), 1.0)
+    return cum[k] + cost[seg] * frac
+
+
+@_jit
+def _raster(s, z, slope, start, cell, count, levels):
+    """GroundProfile.raster(start, start + count*cell) cells, their range-maximum table
+    (levels, count) and the cumulative vertex count per cell (count + 1,)."""
+    edges = start + cell * np.arange(count + 1)
+    at = np.empty(count + 1)
+    for k in range(count + 1):
+        at[k] = _height(s, z, slope, edges[k])
+    table = np.empty((levels, count))
+    cells = table[0]
+    for k in range(count):
+        cells[k] = max(at[k], at[k + 1])
+    scale = 1.0 / cell
+    vertex_cum = np.zeros(count + 1, dtype=np.int64)
+    for v in range(s.size):
+        sv = s[v]
+        vertex_cum[min(max(int((sv - start) * scale), 0), count - 1) + 1] += 1
+        if sv < edges[0] or sv > edges[count]:
+            continue
+        k = min(max(int(np.floor((sv - start) * scale)), 0), count)
+        while k > 0 and edges[k] > sv:
+            k -= 1
+        while k < count and edges[k + 1] <= sv:
+            k += 1
+        if k == count:
+            cells[count - 1] = max(cells[count - 1], z[v])
+            continue
+        cells[k] = max(cells[k], z[v])
+        if edges[k] == sv and k > 0:
+            cells[k - 1] = max(cells[k - 1], z[v])
+    for k in range(count):
+        vertex_cum[k + 1] += vertex_cum[k]
+    width = 1
+    for k in range(1, levels):
+        split = count - 2 * width + 1
+        for i in range(split):
+            table[k, i] = max(table[k - 1, i], table[k - 1, i + width])
+        for i in range(split, count):
+            table[k, i] = table[k - 1, i]
+        width *= 2
+    return table, vertex_cum
+
+
+@nb.njit(cache=True, nogil=True, parallel=True)
+def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
+                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
+                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
+                 step_depth, step_offset, swing_back, swing_front, swing_stride,
+                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
+                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+                 progress, terminal, far, swing_ok, controls, rounds, work):
+    """Fill every table of every agent (see :func:`planners.lattice.build_tables`).
+
+    Per agent a: its profile ``prof_s/prof_z[bounds[a]:bounds[a+1]]`` [m] (shifted:
+    the stance foot at ``base[a]``), grid ``lo, delta`` [m], ``trailing`` [m], speed
+    [m/s], normal-mode step [m] (0 without the term), neutral energy per metre and step
+    [J/(kg m)], [m]; ``legs`` (A, 6): thigh, shank, foot_length, heel, toe, ankle [m];
+    the per-leg flat caches (J,), (S, ...) for the two clearances (index 0 level,
+    1 sloped). ``fparams``: max_step_rise, max_foot_slope, support_tolerance,
+    edge_margin, swing_lift, pelvis_height_ratio, cos(pi - knee_max_flexion),
+    min_step_ratio, max_step_ratio, intervals, clearance, max_swing_lift, cell.
+    ``iparams``: snap, terminal_cost, prune, max_adjustments, table levels.
+    ``weights``: alpha, beta, gamma, down_ratio, linear, frequency*alpha, c_thigh,
+    c_calf. ``work`` (A, 4): key-frame solves, curves built, reused, adjustment rounds.
+    """
+    for a in nb.prange(base.size):
+        _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
+               neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack, node_depth,
+               node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
+               swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
+               fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+               progress, terminal, far, swing_ok, controls, rounds, work)
+
+
+@_jit
+def build_agents_serial(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
+                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
+                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
+                 step_depth, step_offset, swing_back, swing_front, swing_stride,
+                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
+                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+                 progress, terminal, far, swing_ok, controls, rounds, work):
+    """:func:`build_agents` one agent after the other (no thread start-up: for small
+    batches)."""
+    for a in range(base.size):
+        _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
+               neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack, node_depth,
+               node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
+               swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
+               fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+               progress, terminal, far, swing_ok, controls, rounds, work)
+
+
+@_jit
+def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
+                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
+                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
+                 step_depth, step_offset, swing_back, swing_front, swing_stride,
+                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
+                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+                 progress, terminal, far, swing_ok, controls, rounds, work):
+    """Every table of agent ``a`` (see :func:`build_agents`)."""
+    Nn = node_depth.size
+    Ns = step_stance.size
+    Np = swing_back.size
+    n = step_offset.size
+    J = flat_Ej.shape[1]
+    max_rise, max_slope, tolerance, margin, lift = (fparams[0], fparams[1], fparams[2],
+                                                   fparams[3], 0.75 * fparams[4])
+    pelvis, cos_knee, min_ratio, max_ratio = fparams[5], fparams[6], fparams[7], fparams[8]
+    intervals, clearance, max_lift, cell = fparams[9], fparams[10], fparams[11], fparams[12]
+    snap, terminal_cost, prune = iparams[0] > 0, iparams[1] > 0, iparams[2] > 0
+    max_adjustments, levels = iparams[3], iparams[4]
+    c_thigh, c_calf = weights[6], weights[7]
+    T = basis.shape[1]
+    last0 = Nn - ((J - 1) * n + 1)  # first node of depth n
+    s = prof_s[bounds[a]:bounds[a + 1]]
+    z = prof_z[bounds[a]:bounds[a + 1]]
+    m_v = s.size
+    slope = np.zeros(m_v)
+    n_edges = 0
+    for i in range(m_v - 1):
+        d = s[i + 1] - s[i]
+        if d > _VERTICAL:
+            slope[i] = (z[i + 1] - z[i]) / d
+        elif abs(z[i + 1] - z[i]) > tolerance:
+            n_edges += 1
+    edges = np.empty(n_edges)
+    e = 0
+    for i in range(m_v - 1):
+        if s[i + 1] - s[i] <= _VERTICAL and abs(z[i + 1] - z[i]) > tolerance:
+            edges[e] = s[i]
+            e += 1
+    leg = legs[a]
+    heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
+    b0 = base[a]
+    # nodes: footholds relative to the stance foot, heights, support
+    support = np.zeros(Nn, dtype=np.int64)
+    for v in range(Nn):
+        depth = node_depth[v]
+        x = trailing[a] if depth == -1 else max(depth, 0) * lo[a] + node_m[v] * delta[a]
+        if snap and v >= 2:
+            x = _snap(b0 + x, 0.5 * delta[a], heel_off, toe_off, s, z, slope, edges,
+                      margin, tolerance, max_slope) - b0
+        node_s[a, v] = x
+        node_z[a, v] = _height(s, z, slope, b0 + x)
+        if v >= 2:
+            support[v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges, margin,
+                                  tolerance, max_slope)
+    far_a = -np.inf
+    for v in range(last0, Nn):
+        far_a = max(far_a, node_s[a, v])
+    far[a] = far_a
+    if terminal_cost:
+        lo_i = max(_right(s, b0 + trailing[a] - 2.0) - 1, 0)
+        hi_i = min(_left(s, b0 + far_a + 2.0), m_v - 1)
+        starts = np.empty(Nn - last0)
+        for v in range(last0, Nn):
+            starts[v - last0] = b0 + node_s[a, v]
+        _terminal(s, z, lo_i, hi_i, starts, b0 + far_a, terminal[a, last0:], leg,
+                  speeds[a], normal[a], per_metre[a], neutral_len[a], weights, c_thigh,
+                  c_calf, pelvis, cos_knee, lift, max_slope, min_ratio, max_ratio)
+    # steps: stance node -> front node
+    key_frames = 0
+    for t in range(Ns):
+        st_v, fr_v = step_stance[t], step_front[t]
+        ss, fs = node_s[a, st_v], node_s[a, fr_v]
+        zs, zf = node_z[a, st_v], node_z[a, fr_v]
+        r = zf - zs
+        L = fs - ss
+        highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
+        nominal = lo[a] + delta[a] * step_j[t]
+        level = r == 0 and highest == zs and abs(L - nominal) <= 1e-12
+        hopeless = support[fr_v] != 0 or abs(r) > max_rise
+        ej = flat_Ej[a, step_j[t]]
+        reachable = flat_reach[a, step_j[t]]
+        if not level and not hopeless:
+            summit = highest + ankle + lift
+            th, ca, reachable = key_frame(ss, zs, fs, zf, ss, summit, leg[0], leg[1],
+                                          toe_off, ankle, ankle + lift, pelvis,
+                                          cos_knee)
+            ej = c_thigh * th + c_calf * ca
+            key_frames += 1
+        en, ev, et = _energy(L, r, ej, speeds[a], normal[a], weights)
+        if hopeless and not level:
+            et = np.inf
+        length[a, t], rise[a, t] = L, r
+        En[a, t], Ev[a, t], Ej[a, t], E[a, t] = en, ev, ej, et
+        flags = support[fr_v]
+        if abs(r) > max_rise:
+            flags |= _STEP_HEIGHT
+        if not reachable:
+            flags |= _KNEE_REACH
+        reason[a, t] = flags
+        if terminal_cost and step_depth[t] == n:
+            cost[a, t] = et + terminal[a, fr_v]
+            progress[a, t] = far_a - ss
+        else:
+            cost[a, t] = et
+            progress[a, t] = L
+    # swings: only pairs some legal sequence of steps can use
+    reach = np.zeros(Nn, dtype=np.bool_)
+    reach[0] = True
+    reach[1] = True
+    for t in range(Ns):  # steps are ordered by depth
+        if reason[a, t] == 0 and reach[step_stance[t]]:
+            reach[step_front[t]] = True
+    behind = (-trailing[a] - lo[a]) / delta[a]
+    on_grid = (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
+               and behind < intervals + 0.5)
+    rest = np.zeros(Np, dtype=np.bool_)
+    rest_lo, rest_hi = np.inf, -np.inf
+    reused = 0
+    for q in range(Np):
+        rounds[a, q] = -1
+        bk, fr = swing_back[q], swing_front[q]
+        if prune:
+            through = False
+            for jp in range(J):
+                if (pair_valid[q, jp] and reason[a, pair_first[q, jp]] == 0
+                        and reason[a, pair_second[q, jp]] == 0):
+                    through = True
+                    break
+            if not (through and reach[bk]):
+                continue
+        elif support[fr] != 0 or support[bk] != 0:
+            continue
+        start, end = b0 + node_s[a, bk], b0 + node_s[a, fr]
+        z0, z1 = node_z[a, bk], node_z[a, fr]
+        stride = swing_stride[q]
+        if stride < 0 and on_grid:
+            stride = np.int64(np.rint(behind)) + node_m[fr]
+        vertices = _left(s, end + toe_off) - _right(s, start - heel_off)
+        grade = (z1 - z0) / (end - start)
+        nominal = 2 * lo[a] + max(stride, 0) * delta[a]
+        flat = (stride >= 0 and vertices == 0 and abs(grade) <= max_slope
+                and abs(end - start - nominal) <= 1e-9)
+        if flat:
+            c = 0 if grade == 0 else 1
+            if flat_ok[a, c, stride] and (abs(grade) * max(heel_off, toe_off)
+                                          <= flat_slack[a, c, stride]):
+                for i in range(4):
+                    c0 = flat_ctrl[a, c, stride, i, 0]
+                    controls[a, q, i, 1] = flat_ctrl[a, c, stride, i, 1] + (z0 + grade
+                                                                            * c0)
+                    controls[a, q, i, 0] = c0 + node_s[a, bk]
+                rounds[a, q] = 0
+                swing_ok[a, q] = True
+                reused += 1
+                continue
+        rest[q] = True
+        rest_lo = min(rest_lo, start)
+        rest_hi = max(rest_hi, end)
+    built = 0
+    adjustments = 0
+    if rest_hi >= rest_lo:
+        span = 2 * leg[2]
+        r_start = np.floor((rest_lo - span) / cell) * cell
+        count = max(1, int(np.ceil((rest_hi + span - r_start) / cell)))
+        table, vertex_cum = _raster(s, z, slope, r_start, cell, count,
+                                    min(levels, _bit_length(count)))
+        scratch = np.empty((3, T))
+        summit = np.empty(2)
+        for q in range(Np):
+            if not rest[q]:
+                continue
+            bk, fr = swing_back[q], swing_front[q]
+            ok, used = adjust_one(b0 + node_s[a, bk], node_z[a, bk], b0 + node_s[a, fr],
+                                  node_z[a, fr], heel_off, toe_off, ankle, leg[2],
+                                  r_start, cell, table, vertex_cum, basis, influence,
+                                  clearance, fparams[4], max_lift, max_slope,
+                                  max_adjustments, controls[a, q], summit, scratch)
+            for i in range(4):
+                controls[a, q, i, 0] -= b0
+            swing_ok[a, q] = ok
+            rounds[a, q] = used
+            built += 1
+            adjustments += used
+    work[a, 0] = key_frames
+    work[a, 1] = built
+    work[a, 2] = reused
+    work[a, 3] = adjustments
+
+
+@_jit
+def _bit_length(c):
+    k = 0
+    while c > 0:
+        c >>= 1
+        k += 1
+    return k
