@@ -9,7 +9,12 @@ with the ``best_first_multistart`` planner,
 
 the share of planning, steering, poses and writing, and how the cost grows with n.
 
-Usage: ``python benchmarks/bench_crowd.py [--agents 100 1000 5000] [--seconds S]``
+``--workers 0 auto`` runs each case in one process and with the run's worker processes
+(:mod:`crowdwalk.workers`; ``auto``: one per further core from 500 walkers), alternately,
+``--repeats`` times each; the table gives the median and, in brackets, the range.
+
+Usage: ``python benchmarks/bench_crowd.py [--agents 100 1000 5000] [--seconds S]
+[--workers auto] [--repeats 1]``
 """
 
 from __future__ import annotations
@@ -50,7 +55,7 @@ def stadium(n: int, out: Path) -> Path:
     return path
 
 
-def measure(path: Path, out: Path, seconds: float, poses: bool) -> dict:
+def measure(path: Path, out: Path, seconds: float, poses: bool, workers: int | None) -> dict:
     started: list[float] = []
 
     def first_frame(*_):  # CPU time when the loop starts (after the setup)
@@ -59,7 +64,7 @@ def measure(path: Path, out: Path, seconds: float, poses: bool) -> dict:
 
     summary = run_scenario(path, out, progress=first_frame, overrides=RunOverrides(
         planner="best_first_multistart", duration=seconds, poses=poses,
-        fps=25.0 if poses else 10.0))
+        fps=25.0 if poses else 10.0, workers=workers))
     cpu = time.process_time() - started[0]
     tm = summary["timing"]
     steps = sum(a["steps"] for a in summary["agents"])
@@ -79,7 +84,13 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=None,
                         help="simulated seconds per run (default: 20, 20, 10 without poses; "
                              "10, 6, 2 with poses)")
+    parser.add_argument("--workers", nargs="+", default=["auto"],
+                        help="worker processes per run: a number or 'auto' (alternated)")
+    parser.add_argument("--repeats", type=int, default=1)
+    parser.add_argument("--outputs", nargs="+", default=["traj+steps", "poses"],
+                        choices=["traj+steps", "poses"])
     args = parser.parse_args()
+    variants = [None if w == "auto" else int(w) for w in args.workers]
     plain = {100: 20.0, 1000: 20.0, 5000: 10.0}
     posed = {100: 10.0, 1000: 6.0, 5000: 2.0}
     tmp = Path(tempfile.mkdtemp(prefix="bench_crowd_"))
@@ -88,17 +99,28 @@ def main() -> None:
         for n in args.agents:
             path = stadium(n, tmp)
             for poses in (False, True):
+                if ("poses" if poses else "traj+steps") not in args.outputs:
+                    continue
                 seconds = args.seconds or (posed if poses else plain).get(n, 5.0)
-                out = tmp / f"run_{n}_{int(poses)}"
-                r = measure(path, out, seconds, poses)
-                r.update(n=n, output="full poses 25 fps" if poses else "traj+steps")
-                rows.append(r)
-                shutil.rmtree(out)
-                print(f"  done: {n} agents, {r['output']}", flush=True)
+                runs: dict = {w: [] for w in range(len(variants))}
+                for k in range(args.repeats):  # variants alternately, in both orders
+                    order = range(len(variants)) if k % 2 == 0 else reversed(range(len(variants)))
+                    for w in order:
+                        out = tmp / f"run_{n}_{int(poses)}_{w}"
+                        runs[w].append(measure(path, out, seconds, poses, variants[w]))
+                        shutil.rmtree(out)
+                for w, rs in runs.items():
+                    rates = [r["sim"] / (r["wall"] - r["setup"]) for r in rs]
+                    r = dict(rs[int(np.argsort(rates)[len(rates) // 2])])
+                    r.update(n=n, output="full poses 25 fps" if poses else "traj+steps",
+                             workers=args.workers[w], low=min(rates), high=max(rates))
+                    rows.append(r)
+                print(f"  done: {n} agents, {'poses' if poses else 'traj+steps'}", flush=True)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
-    head = (f"{'agents':>6} {'output':<18} {'sim s':>6} {'wall s':>7} {'sim/wall':>8} "
+    head = (f"{'agents':>6} {'output':<18} {'workers':>7} {'sim s':>6} {'wall s':>7} "
+            f"{'sim/wall (range)':>18} "
             f"{'sim/CPU':>8} {'plan':>5} {'steer':>5} {'poses':>5} {'write':>5} "
             f"{'plans run/asked':>16} {'µs/agent-step':>13} {'MB':>7}")
     print()
@@ -107,20 +129,22 @@ def main() -> None:
     for r in rows:
         run = r["wall"] - r["setup"]
         share = {k: 100 * r[k] / run for k in ("planning", "steering", "poses", "writing")}
-        print(f"{r['n']:>6} {r['output']:<18} {r['sim']:>6.1f} {r['wall']:>7.1f} "
-              f"{r['sim'] / run:>8.2f} {r['sim'] / max(r['cpu'], 1e-9):>8.2f} "
+        rng = f"{r['sim'] / run:.2f} ({r['low']:.2f}-{r['high']:.2f})"
+        print(f"{r['n']:>6} {r['output']:<18} {r['workers']:>7} {r['sim']:>6.1f} "
+              f"{r['wall']:>7.1f} {rng:>18} {r['sim'] / max(r['cpu'], 1e-9):>8.2f} "
               f"{share['planning']:>4.0f}% {share['steering']:>4.0f}% {share['poses']:>4.0f}% "
               f"{share['writing']:>4.0f}% {r['runs']:>7}/{r['requests']:<8} "
               f"{1e6 * run / max(r['steps'], 1):>13.0f} {r['size']:>7.1f}")
-    print("\nsim/wall and sim/CPU exclude setup (world, population, distance field); 'poses'"
-          " includes the Animator's step commands.")
-    for output in ("traj+steps", "full poses 25 fps"):
-        sel = [r for r in rows if r["output"] == output]
+    print("\nsim/wall and sim/CPU exclude setup (world, population, distance field); sim/CPU"
+          " counts this process only (not its workers); 'poses' includes the Animator's step"
+          " commands, or with workers the wait for the worker that poses.")
+    for output, w in ((o, w) for o in ("traj+steps", "full poses 25 fps") for w in args.workers):
+        sel = [r for r in rows if r["output"] == output and r["workers"] == w]
         if len(sel) >= 2:
             n = np.array([r["n"] for r in sel], float)
             cost = np.array([(r["wall"] - r["setup"]) / r["sim"] for r in sel])
             slope = np.polyfit(np.log(n), np.log(cost), 1)[0]
-            print(f"{output}: wall seconds per simulated second grow as n^{slope:.2f} "
+            print(f"{output}, workers {w}: wall seconds per simulated second grow as n^{slope:.2f} "
                   f"({', '.join(f'{c:.2f} s at {int(k)}' for k, c in zip(n, cost, strict=True))})")
 
 

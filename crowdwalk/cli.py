@@ -195,6 +195,8 @@ def run(
     planner: str = typer.Option(None, "--planner", help="Override every group's planner."),
     duration: float = typer.Option(None, "--duration", help="Override the duration [s]."),
     seed: int = typer.Option(None, "--seed", help="Override the scenario's random seed."),
+    workers: int = typer.Option(None, "--workers", help="Worker processes beside this one "
+                                "(default: one per further core from 500 walkers; 0: none)."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
     """Simulate a scenario and write trajectories, footsteps, poses and a summary."""
@@ -203,7 +205,7 @@ def run(
 
     _term_as_interrupt()
     check_out_folder(out, overwrite, "run")
-    overrides = RunOverrides(planner=planner, duration=duration, seed=seed)
+    overrides = RunOverrides(planner=planner, duration=duration, seed=seed, workers=workers)
     _check_before_running(scenario, overrides)
     with _sim_progress(quiet, scenario.stem) as bar:
         update = None

@@ -428,7 +428,10 @@ class RouteGraph:
         """This graph with the corridors in ``walls`` closed: each key, a frozenset of the
         corridor's two nodes, maps to the wall (shapely polygon [m]) that blocks it. Their
         edges leave the routing graph (both directions) and the walls are cut out of the
-        walkable area; the corridors' costs and geometry are shared, not recomputed."""
+        walkable area; the corridors' costs and geometry are shared, not recomputed. No
+        walls: this graph (``self``, with every corridor open)."""
+        if not walls:
+            return self
         new = copy.copy(self)
         for cached in ("walkable_area", "_walkable_tolerant", "_inner", "_corner_legs"):
             new.__dict__.pop(cached, None)

@@ -455,8 +455,8 @@ class Scenario(_Model):
     simulation: Simulation
     outputs: Outputs = Outputs()
     obstacles: list[ObstacleSpec] = []
-    events: list[EventSpec] = []
-    waiting_areas: list[WaitingAreaSpec] = []
+    events: list[EventSpec] = Field([], max_length=1000)
+    waiting_areas: list[WaitingAreaSpec] = Field([], max_length=MAX_ROUTE_NODES)
     measurement: MeasurementSpec = MeasurementSpec()
     _source: str = PrivateAttr("<scenario>")
     _root: object = PrivateAttr(None)  # the YAML node graph it was read from

@@ -4,18 +4,22 @@
 ``run_scenario`` calls, for every sink in its list and in this order:
 
 1. ``begin(info)`` once, before the first frame (:class:`RunInfo`: the agents);
-2. ``frame(time, snapshot, poses)`` for frame 0 (the start, ``poses`` None), then for
-   every tick, ``steps(batch)`` with the steps decided in it (when there are any), and at
-   every output frame ``frame(time, snapshot, poses)``;
+2. ``frame(time, snapshot, poses)`` for frame 0 (the start, ``poses`` None), then at
+   every output frame ``steps(batch)`` with the steps decided since the last one (when
+   there are any) and ``frame(time, snapshot, poses)``; after the last frame, the steps
+   decided after it;
 3. ``end(summary)`` once, also after an interruption (the summary says so).
 
 The simulation knows no output format: :class:`crowdwalk.record.RunWriter` (the run
 folder), :class:`OverlapMonitor` and ``scripts/foot_clearance_report.py``'s step log
-are sinks.
+are sinks. :class:`BackgroundSink` runs a sink's calls in a thread of their own.
 """
 
 from __future__ import annotations
 
+import queue
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
@@ -28,7 +32,7 @@ if TYPE_CHECKING:
     from crowdwalk.crowd.shape import BodyShape
     from crowdwalk.gait.engine import PoseFrame
 
-__all__ = ["RunInfo", "Snapshot", "RunSink", "OverlapMonitor"]
+__all__ = ["RunInfo", "Snapshot", "RunSink", "OverlapMonitor", "BackgroundSink"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,3 +134,59 @@ class OverlapMonitor:
 
     def end(self, summary: dict) -> None:
         pass
+
+
+class BackgroundSink:
+    """The sink ``factory()`` builds, called in order in a thread of its own, so that its
+    work overlaps the simulation (SQLite and file writes release the GIL).
+
+    The sink is built in that thread (an SQLite connection belongs to the thread that
+    opens it). A failure there is raised here by the next call; :meth:`end` returns when
+    every call before it is done. At most ``backlog`` calls wait at a time [-].
+    """
+
+    def __init__(self, factory: Callable[[], RunSink], *, backlog: int = 32) -> None:
+        self._calls: queue.Queue = queue.Queue(maxsize=backlog)
+        self._error: BaseException | None = None
+        self._ready = threading.Event()
+        self._thread = threading.Thread(target=self._serve, args=(factory,), daemon=True,
+                                        name="crowdwalk-sink")
+        self._thread.start()
+        self._ready.wait()
+        self._raise()  # the sink could not be built
+
+    def begin(self, info: RunInfo) -> None:
+        self._put("begin", info)
+
+    def steps(self, batch: StepBatch) -> None:
+        self._put("steps", batch)
+
+    def frame(self, time: float, snapshot: Snapshot, poses) -> None:
+        self._put("frame", time, snapshot, poses)
+
+    def end(self, summary: dict) -> None:
+        self._put("end", summary)
+        self._calls.put(None)
+        self._thread.join()
+        self._raise()
+
+    def _serve(self, factory) -> None:
+        try:
+            sink = factory()
+        except BaseException as exc:  # noqa: BLE001 - raised in the calling thread
+            self._error = exc
+        self._ready.set()
+        while (call := self._calls.get()) is not None:
+            if self._error is None:
+                try:
+                    getattr(sink, call[0])(*call[1])
+                except BaseException as exc:  # noqa: BLE001 - raised in the calling thread
+                    self._error = exc
+
+    def _put(self, name: str, *args) -> None:
+        self._raise()
+        self._calls.put((name, args))
+
+    def _raise(self) -> None:
+        if self._error is not None:
+            raise self._error

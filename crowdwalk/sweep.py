@@ -195,7 +195,8 @@ def run_trial(spec: SweepSpec, trial: Trial, out: str | Path) -> dict:
     if not (final / "summary.json").exists():
         tmp = final.parent / f".tmp-{trial.name}-{uuid.uuid4().hex[:8]}"
         overrides = RunOverrides(planner=trial.planner, duration=spec.duration,
-                                 poses=spec.poses, max_agents=spec.max_agents)
+                                 poses=spec.poses, max_agents=spec.max_agents,
+                                 workers=0)  # one trial per core already
         run_scenario(scenario_of(spec, trial), tmp, overrides=overrides)
         try:
             os.replace(tmp, final)

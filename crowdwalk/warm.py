@@ -42,7 +42,6 @@ def warm_kernels() -> float:
 
     from crowdwalk.crowd.run import run_scenario
     from crowdwalk.scenario import parse_scenario
-
     from planners import PLANNERS, GroundProfile, Leg, plan_batch
     from planners.lattice import PARALLEL_AGENTS
 

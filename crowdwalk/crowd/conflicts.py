@@ -38,7 +38,7 @@ def clashes_with_neighbours(neighbours: Neighbours, rows: np.ndarray, *, start: 
                      a_shape=shape, b_now=neighbours.now[nb, nr], b_yaw_now=yaw_now[nb, nr],
                      b_end=neighbours.end[nb, nr], b_yaw_end=yaw_end_nb[nb, nr],
                      b_remaining=neighbours.remaining[nb, nr],
-                     b_shape=neighbours.outlines()[nb, nr])[:, 0]
+                     b_shape=neighbours.outlines()[nb, nr])[0][:, 0]
     np.logical_or.at(clash, pa, gaps < 0.0)
     return clash
 
@@ -71,7 +71,7 @@ def same_tick_yielders(*, agent: np.ndarray, start: np.ndarray, end: np.ndarray,
                     a_yaw1=yaw_end[:, None], a_duration=duration[:, None], a_elapsed=elapsed,
                     a_shape=shape, b_now=now[j], b_yaw_now=yaw_now[j], b_end=end[j],
                     b_yaw_end=yaw_end[j], b_remaining=(duration - gone)[j],
-                    b_shape=shape[j])[:, 0]
+                    b_shape=shape[j])[0][:, 0]
     bad = gap < 0.0
     if not bad.any():
         return np.zeros(0, dtype=np.int64)

@@ -34,6 +34,7 @@ nothing runs per tick in between.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,11 +78,18 @@ def door_wall(routes, corridor: tuple[str, str], at: float, *, owner: str = "Eve
     h, t = width / 2 + 0.5, DOOR_THICKNESS / 2
     wall = shapely.Polygon([p - h * across - t * along, p + h * across - t * along,
                             p + h * across + t * along, p - h * across + t * along])
-    others = [e["geometry"].buffer(e["width"] / 2) for u, v, e in g.edges(data=True)
+    reach = shapely.Point(p).buffer(h + t)  # what the wall could touch
+    others = [e["geometry"] for u, v, e in g.edges(data=True)
               if frozenset((u, v)) != frozenset(corridor)]
-    others += [routes.node_area(v) for v in g.nodes]
+    widths = np.array([e["width"] for u, v, e in g.edges(data=True)
+                       if frozenset((u, v)) != frozenset(corridor)])
+    near = shapely.distance(np.array(others, dtype=object), reach) < widths / 2 \
+        if others else np.zeros(0, bool)
+    cut = [o.buffer(w / 2) for o, w, k in zip(others, widths, near, strict=True) if k]
+    areas = [routes.node_area(v) for v in g.nodes]
+    cut += [a for a in areas if a.distance(reach) <= 0.0]
     wall = wall.intersection(line.buffer(width / 2 + 1e-3, cap_style="flat"))
-    wall = wall.difference(shapely.union_all(others)) if others else wall
+    wall = wall.difference(shapely.union_all(cut)) if cut else wall
     cross = shapely.LineString([p - (width / 2 - 1e-3) * across,
                                 p + (width / 2 - 1e-3) * across])
     if not wall.buffer(1e-9).covers(cross):
@@ -119,12 +127,14 @@ def with_walls(field: ClearanceField, walls: list) -> ClearanceField:
 @dataclass(frozen=True)
 class AppliedEvent:
     """An event carried out: ``time`` [s] it acted, ``action``, the ``corridor`` or
-    ``group`` it concerned, and the walkers it gave a new route (``walkers``)."""
+    ``group`` it concerned, the walkers it gave a new route (``walkers``) and the wall
+    time it took (``wall`` [s])."""
 
     time: float
     action: str
     target: str
     walkers: int
+    wall: float
 
 
 class EventTimeline:
@@ -150,6 +160,7 @@ class EventTimeline:
         self.walls: dict[frozenset, object] = {}  # closed corridors: their doors
         self.applied: list[AppliedEvent] = []
         self._open_field = None  # the clearance field with every corridor open
+        self._graphs: dict[frozenset, object] = {}  # route graph per set of closed corridors
         self._next = 0
 
     def apply(self, sim, t: float) -> None:
@@ -162,6 +173,7 @@ class EventTimeline:
             if door is not None and not _clear(sim, door, t):
                 return  # a door shuts once nobody stands in it (tried again next tick)
             self._next += 1
+            w0 = time.perf_counter()
             before = sim.state.route.copy()
             if e.action == "redirect":
                 self._redirect(sim, e, t)
@@ -172,16 +184,21 @@ class EventTimeline:
                     self.walls[key] = door
                 else:
                     self.walls.pop(key, None)
-                graph = self.base.with_closed(self.walls)
+                shut = frozenset(self.walls)
+                if shut not in self._graphs:  # walkable area, walks: computed once each
+                    self._graphs[shut] = self.base.with_closed(self.walls)
+                old, graph = sim.routes.graph, self._graphs[shut]
                 sim.routes.use_graph(graph)
                 if self._open_field is None:
                     self._open_field = sim.clearance
                 sim.clearance = sim.footsteps.clearance = with_walls(
                     self._open_field, list(self.walls.values()))
-                self._reroute(sim, t, through=key if e.action == "close" else None)
+                self._reroute(sim, t, through=key if e.action == "close" else None,
+                              before=old)
                 target = "-".join(e.corridor)
             changed = int(np.count_nonzero(sim.state.route != before))
-            self.applied.append(AppliedEvent(float(t), e.action, target, changed))
+            self.applied.append(AppliedEvent(float(t), e.action, target, changed,
+                                             time.perf_counter() - w0))
 
     def _options(self, i: int, ahead: list[str]) -> list[tuple] | None:
         """The destination sequences walker ``i`` may take on (None: it keeps its
@@ -193,21 +210,29 @@ class EventTimeline:
         rest = tuple(d for d in g.destinations if d in ahead[1:])
         return [(*rest, e) for e in g.exit_choice.among]
 
-    def _reroute(self, sim, t: float, *, through) -> None:
-        """Re-route the walkers (all, or those whose way ahead runs ``through`` a corridor)
-        from where they stand, an exit-choosing walker to its cheapest exit now; give the
-        unspawned ones the cheapest route from their origin."""
+    def _reroute(self, sim, t: float, *, through, before) -> None:
+        """Re-route walkers from where they stand, an exit-choosing walker to its cheapest
+        exit now: after a close those whose way ahead runs ``through`` the corridor, after
+        an open those whose way on from the node they passed last is cheaper on the new
+        graph than on the graph ``before``. Unspawned walkers get the cheapest route from
+        their origin."""
         st, routes = sim.state, sim.routes
         active = np.flatnonzero(st.status == ACTIVE)
         follow = []
         for i in active:  # event time only: the walkers' node lists
             nodes, at = routes.nodes_of(st.route[i])
+            if not nodes:
+                continue
             passed = max(int(np.searchsorted(at, st.progress[i], side="right")) - 1, 0)
             ahead = nodes[passed:]
-            if through is not None and not any(frozenset(p) == through for p in zip(
-                    ahead[:-1], ahead[1:], strict=True)):
-                continue
             options = self._options(int(i), ahead)
+            if through is not None:
+                if not any(frozenset(p) == through for p in zip(ahead[:-1], ahead[1:],
+                                                                   strict=True)):
+                    continue
+            elif _best_cost(routes.graph, ahead[0], options or [(nodes[-1],)]) >= \
+                    _best_cost(before, ahead[0], options or [(nodes[-1],)]) - 1e-6:
+                continue  # the opened corridor shortens nothing for this walker
             if options is None:
                 follow.append(i)
             else:
@@ -232,9 +257,7 @@ class EventTimeline:
             if key not in made:
                 made[key] = self._cheapest_start(routes, origin, options, start)
             if made[key] >= 0:
-                st.route[i] = made[key]
-                st.segment[i] = routes.table.start[made[key]]
-                st.progress[i] = routes.table.s0[made[key]]
+                routes.assign(st, i, made[key])
 
     @staticmethod
     def _cheapest_start(routes, origin: str, options: list[tuple], start) -> int:
@@ -273,18 +296,24 @@ class EventTimeline:
                      len(nodes) - 1)
         near = dict.fromkeys([nodes[passed], *nodes[passed + 1:passed + 2],
                               *graph.graph.successors(nodes[passed])])
-        walks = routes.walks_from(st.pos1[i], list(near))
-        best, way = np.inf, None
+        here = st.pos1[i]
+        bounds = []  # (a lower bound of the cost: the straight line, entry node, destinations)
         for dests in options:
             try:
                 tail = _sequence_cost(graph, dests[0], dests)
             except InfeasibleError:
                 continue
             first = graph.distances_to(dests[0])
-            for v, walk in walks.items():
-                cost = _length(walk) + first.get(v, np.inf) + tail
-                if cost < best:
-                    best, way = cost, (v, dests)
+            bounds += [(float(np.linalg.norm(graph.node_xy(v) - here)) + first[v] + tail,
+                        first[v] + tail, v, dests) for v in near if v in first]
+        best, way, walks = np.inf, None, {}
+        for bound, rest, v, dests in sorted(bounds, key=lambda b: b[0]):
+            if bound >= best:
+                break  # no walk is shorter than the straight line
+            if v not in walks:
+                walks[v] = routes.walks_from(here, [v]).get(v)
+            if walks[v] is not None and _length(walks[v]) + rest < best:
+                best, way = _length(walks[v]) + rest, (v, dests)
         if way is None:
             return
         v, dests = way
@@ -295,17 +324,13 @@ class EventTimeline:
                 here = d
         if keep_same and seq == nodes[passed + 1:]:
             return
-        rid = routes.add(np.vstack([walks[v], graph.raw_path(seq)[1:]]), seq)
-        st.route[i] = rid
-        st.segment[i] = routes.table.start[rid]
-        st.progress[i] = routes.table.s0[rid]
-        st.best_progress[i] = -np.inf
+        routes.assign(st, i, routes.add(np.vstack([walks[v], graph.raw_path(seq)[1:]]), seq))
         st.progress_time[i] = t
 
     def summary(self) -> list[dict]:
         """The events carried out, for ``summary.json`` (units in the key names)."""
         return [{"time_s": e.time, "action": e.action, "target": e.target,
-                 "walkers_rerouted": e.walkers} for e in self.applied]
+                 "walkers_rerouted": e.walkers, "wall_s": e.wall} for e in self.applied]
 
 
 def _sequence_cost(graph, origin: str, dests: tuple) -> float:
@@ -320,7 +345,7 @@ def _sequence_cost(graph, origin: str, dests: tuple) -> float:
 
 
 def _clear(sim, door, t: float) -> bool:
-    """True when no walking body (radius [m]) overlaps ``door`` now or at the end of
+    """True when no walking body (its holding disc) overlaps ``door`` now or at the end of
     its current step."""
     st = sim.state
     idx = np.flatnonzero(st.status == ACTIVE)
@@ -328,5 +353,17 @@ def _clear(sim, door, t: float) -> bool:
         return True
     now, _ = st.position(t, idx)
     xy = np.concatenate([now, st.pos1[idx]])
-    gap = shapely.distance(door, shapely.points(xy)) - np.tile(sim.radius[idx], 2)
+    gap = shapely.distance(door, shapely.points(xy)) - np.tile(sim.shape.bound[idx], 2)
     return bool(np.all(gap >= 0.0))
+
+
+def _best_cost(graph, node: str, options: list[tuple]) -> float:
+    """The least route cost [m] from ``node`` through one of the destination sequences
+    ``options`` (inf: none can be reached)."""
+    best = np.inf
+    for dests in options:
+        try:
+            best = min(best, _sequence_cost(graph, node, dests))
+        except InfeasibleError:
+            pass
+    return best

@@ -76,7 +76,7 @@ class _Area:
     interval: float  # [s] between releases (nan: by time)
     queue: list  # agents in the order they entered
     last_release: float = -np.inf
-    held: int = 0  # walkers who stood here
+    entered: int = 0  # walkers who entered while it held walkers
     released: int = 0
     first_release: float = np.nan
     last_release_time: float = np.nan
@@ -163,7 +163,7 @@ class WaitingAreas:
             st.stuck[idx[held]] = 0.0
         return held
 
-    # -- events -----------------------------------------------------------------------
+    # -- entering and leaving ------------------------------------------------------------
 
     def _closed(self, areas: np.ndarray, t: float) -> np.ndarray:
         """(...) bool: areas still holding walkers at time ``t`` (not yet released by
@@ -208,12 +208,12 @@ class WaitingAreas:
         if np.isnan(a.release_time) and not a.queue \
                 and t >= a.last_release + a.interval - 1e-9:
             a.last_release = t  # an empty queue, the service free: walk on
-            a.held += 1
+            a.entered += 1
             self._count_release(a, t)
             self.done[i, k] = True
             return False
         a.queue.append(i)
-        a.held += 1
+        a.entered += 1
         self.area[i] = k
         self.placed[i] = st.steps[i] == 0  # spawned here: it waits where it stands
         free = np.flatnonzero(a.taken == _NONE)
@@ -249,10 +249,8 @@ class WaitingAreas:
         vs = table.xy[table.start[rid]:table.stop[rid] + 1]
         at = int(np.argmin(np.linalg.norm(vs[:len(to_spot) + 1] - spot, axis=1)))
         self.slot_s[i] = table.s[table.start[rid] + at]
-        self.route[i] = st.route[i] = rid
-        st.segment[i] = table.start[rid]
-        st.progress[i] = table.s0[rid]
-        st.best_progress[i] = -np.inf
+        self.route[i] = rid
+        routes.assign(st, i, rid)
         return False
 
     def _move_up(self, sim, k: int) -> None:
@@ -290,7 +288,7 @@ class WaitingAreas:
     def _drop(self, i: int) -> None:
         a = self.areas[self.area[i]]
         a.queue.remove(i)
-        a.held -= 1
+        a.entered -= 1
         self._free(i)
 
     def summary(self) -> list[dict]:
@@ -299,7 +297,7 @@ class WaitingAreas:
         def opt(x):
             return None if not np.isfinite(x) else float(x)
 
-        return [{"node": a.node, "positions": len(a.slots), "entered": a.held,
+        return [{"node": a.node, "positions": len(a.slots), "entered": a.entered,
                  "released": a.released, "still_waiting": len(a.queue),
                  "first_release_s": opt(a.first_release),
                  "last_release_s": opt(a.last_release_time)} for a in self.areas]

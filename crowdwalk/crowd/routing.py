@@ -77,6 +77,14 @@ class Routes:
         self._remember_nodes(rid, nodes)
         return rid
 
+    def assign(self, state, i: int, rid: int) -> None:
+        """Walker ``i`` (``state``: :class:`~crowdwalk.crowd.state.AgentState`) follows
+        route ``rid`` from its start."""
+        state.route[i] = rid
+        state.segment[i] = self.table.start[rid]
+        state.progress[i] = self.table.s0[rid]
+        state.best_progress[i] = -np.inf
+
     def route_of(self, origin: str, destinations: tuple, start) -> int:
         """The route (its id) from ``origin`` (or ``start`` (2,) [m] in its area, None: the
         node) through ``destinations`` in order."""
@@ -183,11 +191,8 @@ class Routes:
             alt = list(reversed(paths[best]))
             if alt == ahead:
                 continue
-            rid = self.add(np.vstack([walks[best], self.graph.raw_path(alt)[1:]]), alt)
-            st.route[i] = rid
-            st.segment[i] = self.table.start[rid]
-            st.progress[i] = self.table.s0[rid]
-            st.best_progress[i] = -np.inf
+            self.assign(st, i, self.add(np.vstack([walks[best],
+                                                   self.graph.raw_path(alt)[1:]]), alt))
             st.reroutes[i] += 1
 
 

@@ -8,9 +8,11 @@ readable; Ctrl-C (and SIGTERM at the CLI) still writes ``summary.json`` with
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -24,8 +26,9 @@ from crowdwalk.crowd.simulation import (
     build_parts,
 )
 from crowdwalk.errors import invalid
-from crowdwalk.sinks import OverlapMonitor, RunInfo, RunSink
+from crowdwalk.sinks import BackgroundSink, OverlapMonitor, RunInfo, RunSink
 from crowdwalk.style import summary_by_style
+from crowdwalk.workers import WorkerError, Workers, worker_count
 
 __all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
@@ -48,6 +51,9 @@ class RunOverrides:
         Output frame rate [1/s].
     seed : int or None
         The scenario's random seed (``simulation.seed``) [-].
+    workers : int or None
+        Worker processes beside this one (:func:`crowdwalk.workers.worker_count`; None:
+        one per further core for runs of at least 500 walkers, 0: one process).
     """
 
     planner: str | None = None
@@ -56,6 +62,7 @@ class RunOverrides:
     poses: bool | None = None
     fps: float | None = None
     seed: int | None = None
+    workers: int | None = None
 
 
 ProgressCallback = Callable[[float, float, int], None]
@@ -70,6 +77,8 @@ def check_overrides(overrides: RunOverrides) -> None:
         raise invalid("RunOverrides", "planner", f"one of {sorted(PLANNERS)}", o.planner)
     if o.seed is not None and not (isinstance(o.seed, int) and o.seed >= 0):
         raise invalid("RunOverrides", "seed", "an integer >= 0", o.seed)
+    if o.workers is not None and not (isinstance(o.workers, int) and o.workers >= 0):
+        raise invalid("RunOverrides", "workers", "an integer >= 0", o.workers)
     if o.max_agents is not None and o.max_agents < 1:
         raise invalid("RunOverrides", "max_agents", ">= 1", o.max_agents)
     for name in ("duration", "fps"):
@@ -80,8 +89,11 @@ def check_overrides(overrides: RunOverrides) -> None:
 
 
 def prepare(scenario, overrides: RunOverrides | None = None, *,
-            params: CrowdParams | None = None):
+            params: CrowdParams | None = None, parallel: bool = False):
     """World, population and simulation of a scenario (a path or a loaded Scenario).
+
+    With ``parallel`` the simulation gets worker processes (``overrides.workers``) for
+    its steering and posing; ``simulation.workers`` then needs closing.
 
     Returns
     -------
@@ -116,16 +128,28 @@ def prepare(scenario, overrides: RunOverrides | None = None, *,
     duration = overrides.duration if overrides.duration is not None else sc.simulation.duration
     fps = overrides.fps if overrides.fps is not None else sc.simulation.fps
     want_poses = sc.outputs.poses if overrides.poses is None else overrides.poses
-    gait, pose_note = None, "disabled (outputs.poses is false)"
-    if want_poses:
-        try:
-            gait = _make_gait(pop, world.terrain)
-            pose_note = "written"
-        except ImportError as exc:  # a build without the gait package: say so, go on
-            pose_note = f"not available in this build ({exc})"
-    parts = build_parts(world, pop, params=params)
-    sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
-                          duration=duration, params=params, gait=gait)
+    count = worker_count(len(pop), overrides.workers) if parallel else 0
+    workers = Workers(count) if count else None
+    try:
+        gait, pose_note = None, "disabled (outputs.poses is false)"
+        if want_poses:
+            try:
+                if workers is None:
+                    gait = _make_gait(pop, world.terrain)
+                else:  # posing in worker 0, beside the simulation
+                    from crowdwalk.gait.remote import RemoteEngine
+
+                    gait = RemoteEngine(partial(_make_gait, pop, world.terrain), workers)
+                pose_note = "written"
+            except ImportError as exc:  # a build without the gait package: say so, go on
+                pose_note = f"not available in this build ({exc})"
+        parts = build_parts(world, pop, params=params)
+        sim = CrowdSimulation(world, pop, parts=parts, dt=sc.simulation.dt, fps=fps,
+                              duration=duration, params=params, gait=gait, workers=workers)
+    except BaseException:
+        if workers is not None:
+            workers.close()
+        raise
     return sc, world, sim, pose_note, text
 
 
@@ -172,19 +196,26 @@ def run_scenario(
         The summary also written to ``summary.json``.
     """
     with interrupts.deferred():
-        return _run(scenario, out, overrides=overrides, progress=progress, params=params,
-                    sinks=sinks)
+        wall0 = time.perf_counter()
+        sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params,
+                                                  parallel=True)
+        try:
+            return _run(sc, world, sim, pose_note, text, out=out, wall0=wall0,
+                        progress=progress, sinks=sinks)
+        finally:
+            if sim.workers is not None:
+                sim.workers.close()
 
 
-def _run(scenario, out, *, overrides, progress, params, sinks) -> dict:
+def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dict:
     """The body of :func:`run_scenario`, within deferred interrupts."""
     from crowdwalk.record import RunWriter
 
-    wall0 = time.perf_counter()
-    sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params)
     skeleton = sim.gait.skeleton if sim.gait is not None else None
-    writer = RunWriter(out, scenario_text=text, walkable_wkt=world.routes.walkable_area.wkt,
-                       fps=sim.fps, skeleton=skeleton)
+    # the run folder is written in a thread of its own, beside the simulation
+    writer = BackgroundSink(partial(RunWriter, out, scenario_text=text, fps=sim.fps,
+                                    walkable_wkt=world.routes.walkable_area.wkt,
+                                    skeleton=skeleton))
     overlap = OverlapMonitor()
     everyone: list[RunSink] = [writer, overlap, *sinks]
     pop = sim.pop
@@ -197,39 +228,49 @@ def _run(scenario, out, *, overrides, progress, params, sinks) -> dict:
     timing = {"setup_s": setup, "poses_s": 0.0, "writing_s": 0.0}
     interrupted = False
 
-    def deliver_steps() -> None:
-        batch = sim.take_steps()
-        if batch is not None:
+    def deliver(frame) -> None:
+        """The steps decided up to an output frame, then the frame (its poses awaited)."""
+        t, snapshot, steps, poses_later = frame
+        w0 = time.perf_counter()
+        poses = poses_later()
+        w1 = time.perf_counter()
+        if steps is not None:
             for sink in everyone:
-                sink.steps(batch)
+                sink.steps(steps)
+        if snapshot is not None:
+            for sink in everyone:
+                sink.frame(t, snapshot, poses)
+        timing["poses_s"] += w1 - w0
+        timing["writing_s"] += time.perf_counter() - w1
 
+    # a frame is delivered when the next one has been asked for: a gait engine in a
+    # worker process (crowdwalk.gait.remote) poses it while the next ticks are simulated
+    waiting = None
     try:
-        snapshot = sim.snapshot()
-        for sink in everyone:
-            sink.frame(sim.time, snapshot, None)
+        deliver((sim.time, sim.snapshot(), None, lambda: None))
         while not sim.finished:
             interrupts.check()
-            on_frame = sim.step()
-            w0 = time.perf_counter()
-            deliver_steps()
-            timing["writing_s"] += time.perf_counter() - w0
-            if not on_frame:
+            if not sim.step():
                 continue
             w0 = time.perf_counter()
-            poses = sim.poses()
-            w1 = time.perf_counter()
-            snapshot = sim.snapshot()
-            for sink in everyone:
-                sink.frame(sim.time, snapshot, poses)
-            timing["poses_s"] += w1 - w0
-            timing["writing_s"] += time.perf_counter() - w1
+            frame = (sim.time, sim.snapshot(), sim.take_steps(), sim.poses_later())
+            timing["poses_s"] += time.perf_counter() - w0
+            if waiting is not None:
+                deliver(waiting)
+            waiting = frame
             if progress is not None:
                 progress(sim.time, sim.duration, sim.remaining)
     except KeyboardInterrupt:
         interrupted = True
         raise
     finally:
-        deliver_steps()
+        if waiting is not None:
+            try:
+                deliver(waiting)
+            except WorkerError:  # lost with its worker: keep the error already raised
+                if sys.exc_info()[0] is None:
+                    raise
+        deliver((sim.time, None, sim.take_steps(), lambda: None))  # steps after the last frame
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
                       step_commands_s=sim.wall_commands)

@@ -115,68 +115,78 @@ _SIDE = (0.0, 1.0, -1.0)
 
 @nb.njit(cache=True, nogil=True)
 def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, b_yaw_now,
-          b_end, b_yaw_end, b_remaining, b_shape, out):
+          b_end, b_yaw_end, b_remaining, b_shape, out, out_centre):
     npairs, nj = out.shape
+    bx = np.empty(3)
+    by = np.empty(3)
+    bvx = np.empty(3)
+    bvy = np.empty(3)
     for p in range(npairs):
         i = pa[p]
-        bx0, by0 = b_now[p, 0], b_now[p, 1]
-        tb = b_remaining[p]
-        bvx = bvy = 0.0
-        if tb > 1e-9:
-            bvx, bvy = (b_end[p, 0] - bx0) / tb, (b_end[p, 1] - by0) / tb
-        else:
-            tb = 0.0
-        rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
-        bound_b = max(rb, sb + rbs)
         ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
-        bound_a = max(ra, sa + ras)
+        rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
+        bound = max(ra, sa + ras) + max(rb, sb + rbs)
+        # B's three discs now and their velocities (the same for every candidate of A)
+        tb = b_remaining[p]
+        if tb <= 1e-9:
+            tb = 0.0
         yb0, yb1 = b_yaw_now[p], b_yaw_end[p]
+        c0, s0, c1, s1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
         bend_b = sb * (1.0 - np.cos(0.5 * (yb1 - yb0))) + 1e-12
+        for v in range(3):
+            k = _SIDE[v]
+            bx[v] = b_now[p, 0] - k * sb * s0
+            by[v] = b_now[p, 1] + k * sb * c0
+            bvx[v] = bvy[v] = 0.0
+            if tb > 0.0:
+                bvx[v] = (b_end[p, 0] - k * sb * s1 - bx[v]) / tb
+                bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
+        sx, sy = a_start[i, 0], a_start[i, 1]
         for j in range(nj):
             dur = a_dur[i, j]
             gone = min(a_elapsed[i], dur)
             ta = dur - gone
             f = gone / dur if dur > 0.0 else 1.0
             ex, ey = a_end[i, j, 0], a_end[i, j, 1]
-            sx, sy = a_start[i, 0], a_start[i, 1]
             ax0, ay0 = sx + f * (ex - sx), sy + f * (ey - sy)
             avx = avy = 0.0
-            if ta > 0.0:
+            if ta > 1e-9:
                 avx, avy = (ex - ax0) / ta, (ey - ay0) / ta
             else:
                 ta = 0.0
-            # the discs holding the bodies: their clearance is a lower bound, exact
-            # enough when it is positive
-            d = _approach(ax0, ay0, avx, avy, ta, bx0, by0, bvx, bvy, tb)
-            gap = d - bound_a - bound_b
-            if gap >= 0.0 or (sa == 0.0 and sb == 0.0):
-                out[p, j] = d - ra - rb if (sa == 0.0 and sb == 0.0) else gap
+            # the centres: their approach bounds the holding discs' (clear: done) and is
+            # the centre discs' (overlapping: done)
+            d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
+            out_centre[p, j] = d - ra - rb
+            if d >= bound:
+                out[p, j] = d - bound
+                continue
+            best = d - ra - rb
+            if best < 0.0 or (sa == 0.0 and sb == 0.0):
+                out[p, j] = best
                 continue
             ya0 = a_yaw0[i] + f * (a_yaw1[i, j] - a_yaw0[i])
             ya1 = a_yaw1[i, j]
             bend_a = sa * (1.0 - np.cos(0.5 * (ya1 - ya0))) + 1e-12
             cs0, sn0, cs1, sn1 = np.cos(ya0), np.sin(ya0), np.cos(ya1), np.sin(ya1)
-            cb0, sb0, cb1, sb1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
-            best = np.inf
             for u in range(3):
                 ku = _SIDE[u]
                 rad_a = ra if u == 0 else ras + bend_a
                 # disc u of A: now and at its step's end
                 cx0, cy0 = ax0 - ku * sa * sn0, ay0 + ku * sa * cs0
-                cx1, cy1 = ex - ku * sa * sn1, ey + ku * sa * cs1
                 cvx = cvy = 0.0
                 if ta > 0.0:
-                    cvx, cvy = (cx1 - cx0) / ta, (cy1 - cy0) / ta
+                    cvx = (ex - ku * sa * sn1 - cx0) / ta
+                    cvy = (ey + ku * sa * cs1 - cy0) / ta
                 for v in range(3):
-                    kv = _SIDE[v]
+                    if u == 0 and v == 0:
+                        continue
                     rad_b = rb if v == 0 else rbs + bend_b
-                    qx0, qy0 = bx0 - kv * sb * sb0, by0 + kv * sb * cb0
-                    qvx = qvy = 0.0
-                    if tb > 1e-9:
-                        qvx = (b_end[p, 0] - kv * sb * sb1 - qx0) / tb
-                        qvy = (b_end[p, 1] + kv * sb * cb1 - qy0) / tb
-                    g = _approach(cx0, cy0, cvx, cvy, ta, qx0, qy0, qvx, qvy, tb)
-                    best = min(best, g - rad_a - rad_b)
+                    g = _approach(cx0, cy0, cvx, cvy, ta, bx[v], by[v], bvx[v], bvy[v],
+                                  tb) - rad_a - rad_b
+                    best = min(best, g)
+                if best < 0.0:  # overlapping: how deep does not matter
+                    break
             out[p, j] = best
 
 
@@ -184,12 +194,13 @@ def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end:
               a_yaw1: np.ndarray, a_duration: np.ndarray, a_elapsed: np.ndarray,
               a_shape: np.ndarray, b_now: np.ndarray, b_yaw_now: np.ndarray,
               b_end: np.ndarray, b_yaw_end: np.ndarray, b_remaining: np.ndarray,
-              b_shape: np.ndarray) -> np.ndarray:
+              b_shape: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Least clearance [m] from now on between the outlines of m stepping bodies A and
     P neighbours B, for J candidate steps of each A: (P, J); negative where they would
-    overlap. A lower bound (a shoulder disc turning is widened by its chord's sagitta;
-    when the discs holding the two bodies stay clear, their clearance is returned), exact
-    for bodies that do not turn.
+    overlap (then not necessarily the least). A lower bound (a shoulder disc turning is
+    widened by its chord's sagitta; when the discs holding the two bodies stay clear,
+    their clearance is returned), exact for discs. Also returned: (P, J) the clearance
+    of the centre discs alone [m] (exact), which no facing of the outlines can exceed.
 
     Parameters
     ----------
@@ -209,11 +220,12 @@ def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end:
     """
     f = np.ascontiguousarray
     out = np.empty((pa.shape[0], a_end.shape[1]))
+    centre = np.empty_like(out)
     _gaps(f(pa, dtype=np.int64), f(a_start, float), f(a_yaw0, float), f(a_end, float),
           f(a_yaw1, float), f(a_duration, float), f(a_elapsed, float), f(a_shape, float),
           f(b_now, float), f(b_yaw_now, float), f(b_end, float), f(b_yaw_end, float),
-          f(b_remaining, float), f(b_shape, float), out)
-    return out
+          f(b_remaining, float), f(b_shape, float), out, centre)
+    return out, centre
 
 
 def shape_overlap(xy_a: np.ndarray, yaw_a: np.ndarray, shape_a: np.ndarray,

@@ -53,6 +53,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
+from crowdwalk.workers import split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -78,11 +79,14 @@ class CrowdSimulation:
     params : CrowdParams, optional
     gait : crowdwalk.gait.engine.GaitEngine or None
         Receives every decided step and answers :meth:`poses` (None: no poses).
+    workers : crowdwalk.workers.Workers or None
+        Worker processes that steer parts of a tick's deciding walkers
+        (:func:`crowdwalk.workers.split_rows`; None: all here).
     """
 
     def __init__(self, world, population: Population, *, parts: CrowdParts,
                  dt: float = 0.05, fps: float = 10.0, duration: float = 600.0,
-                 params: CrowdParams | None = None, gait=None) -> None:
+                 params: CrowdParams | None = None, gait=None, workers=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
@@ -130,6 +134,12 @@ class CrowdSimulation:
         self.holding = WaitingAreas(sc.waiting_areas, world.routes, n) \
             if sc.waiting_areas else None
         self.gait = gait
+        self.workers = workers
+        # the workers that steer parts of a tick (not the one holding a remote gait engine)
+        self._steer_on = [] if workers is None else [
+            w for w in range(len(workers)) if w != getattr(gait, "worker", None)]
+        if self._steer_on:
+            workers.share(self.clearance)
         self.time = 0.0
         self.tick = 0
         self.wall_planning = 0.0
@@ -195,14 +205,22 @@ class CrowdSimulation:
     def poses(self):
         """Poses of the walking agents that have taken a step, at the current time
         (a :class:`crowdwalk.gait.engine.PoseFrame`), or None without a gait engine."""
+        return self.poses_later()()
+
+    def poses_later(self):
+        """A function returning :meth:`poses` of now; a gait engine with ``pose_async``
+        (:class:`crowdwalk.gait.remote.RemoteEngine`) computes them meanwhile."""
         if self.gait is None:
-            return None
+            return lambda: None
         self._flush_commands()
         idx = self.active
         idx = idx[self.state.animated[idx]]
         if idx.size == 0:
-            return None
-        return self.gait.pose(self.time, idx)
+            return lambda: None
+        if hasattr(self.gait, "pose_async"):
+            return self.gait.pose_async(self.time, idx)
+        frame = self.gait.pose(self.time, idx)
+        return lambda: frame
 
     # -- one tick ----------------------------------------------------------------------
 
@@ -276,12 +294,14 @@ class CrowdSimulation:
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
                                 count=prm.neighbours, reach=prm.neighbour_range)
         outline = self.shape.packed(idx)
-        choice = choose_steps(
-            pos, st.stance[idx], heading=st.heading[idx], radius=self.radius[idx],
+        choice = split_rows(
+            self.workers, choose_steps, idx.size, pos, st.stance[idx],
+            heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
-            step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx])
+            step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
+            on=self._steer_on)
         self.wall_steering += _time.perf_counter() - w0
         if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
             v = time_gap_speed(position=pos, direction=choice.direction,

@@ -77,9 +77,12 @@ class SteeringParams:
     clog_after : float
         Standing longer than this [s] (whoever the neighbours are) adds the same cost.
     twists_deg : tuple of float
-        Shoulder twists [deg] (each to the left and to the right) a walker tries, after
-        keeping its facing, when it cannot take its preferred step facing where it walks
-        (:mod:`~crowdwalk.crowd.shape`).
+        Shoulder twists [deg] a walker tries (the way it is turned already, else to the
+        left), after keeping its facing, when it cannot take its preferred step facing
+        where it walks (:mod:`~crowdwalk.crowd.shape`).
+    keep_facing : bool
+        Whether a walker that cannot step ahead facing forward tries keeping its facing
+        (False, with no ``twists_deg``: the torso always faces the step direction).
     twist_weight : float
         Cost of walking with the shoulders twisted by φ, ``w (1 - cos φ)`` [m].
     """
@@ -102,6 +105,7 @@ class SteeringParams:
     give_way_weight: float = 0.3
     clog_after: float = 2.5
     twists_deg: tuple[float, ...] = (60.0,)
+    keep_facing: bool = True
     twist_weight: float = 0.05
 
 
@@ -266,7 +270,7 @@ def choose_steps(
     # (m, C, L, 2): body position at the end of a step of each length
     cand_heading = np.arctan2(dirs[..., 1], dirs[..., 0])  # (m, C)
 
-    def facing(turned: float) -> np.ndarray:  # (m, C) torso facing at the step's end
+    def facing(turned) -> np.ndarray:  # (m, C) torso facing at the step's end
         turn = cand_heading + turned - yaw[:, None]
         return yaw[:, None] + (turn + np.pi) % (2 * np.pi) - np.pi  # unwrapped
 
@@ -274,8 +278,8 @@ def choose_steps(
     # a step may not bring the body closer to a wall than its radius, unless it was
     # already closer (then it may not get closer still: agents can leave a wall)
     r = np.minimum(radius, clearance(position) - 1e-6)[:, None, None]
-    wall_ok = clearance(ends) >= r
-    wall_ok &= clearance(0.5 * (ends + position[:, None, None, :])) >= r
+    at_end, halfway = clearance(ends), clearance(0.5 * (ends + position[:, None, None, :]))
+    wall_ok = (at_end >= r) & (halfway >= r)
     # the new foothold itself must lie inside the walkable area
     foot = stance[:, None, None, :] + lengths[None, None, :, None] * dirs[:, :, None, :]
     wall_ok &= clearance(foot) >= params.foot_clearance
@@ -296,25 +300,29 @@ def choose_steps(
         pa, pk = np.nonzero(relevant)  # (P,), agent-major
     n_c, n_l = dirs.shape[1], lengths.size
 
-    def clear(rows: np.ndarray, yaw_end: np.ndarray) -> np.ndarray:
+    def clear(rows: np.ndarray, yaw_end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(r, C, L) bool: the steps of ``rows`` (ascending) clear of walls and
-        neighbours, the torsos turning to ``yaw_end`` (m, C)."""
-        ok = wall_ok[rows] & _shoulders_clear(position[rows], ends[rows], yaw=yaw[rows],
-                                              yaw_end=yaw_end[rows], shape=shape[rows],
-                                              clearance=clearance)
+        neighbours, the torsos turning to ``yaw_end`` (m, C); and the same for the
+        centre discs alone (no facing can do better)."""
+        centre = wall_ok[rows]
+        ok = centre & _shoulders_clear(
+            position[rows], ends[rows], yaw=yaw[rows], yaw_end=yaw_end[rows],
+            shape=shape[rows], clearance=clearance,
+            near=np.minimum(at_end[rows], halfway[rows]))
         local = np.full(m, -1)
         local[rows] = np.arange(rows.size)
         sel = np.flatnonzero(local[pa] >= 0)
         if sel.size == 0:
-            return ok
+            return ok, centre
         qa, qk = pa[sel], pk[sel]
+        centre = centre.copy()
         if timed:
             # in time: both outlines move along their sweeps from now on and then stand
             # (the candidate's body from ``position`` to ``ends`` over the step, its
             # torso turning from ``yaw`` to ``yaw_end``)
             dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])
             nb_yaw, nb_yaw_end = neighbours.yaws()
-            gaps = body_gaps(
+            gaps, centre_gaps = body_gaps(
                 qa, a_start=position, a_yaw0=yaw, a_end=ends.reshape(m, n_c * n_l, 2),
                 a_yaw1=np.repeat(yaw_end, n_l, axis=1), a_duration=np.tile(dur, (1, n_c)),
                 a_elapsed=np.zeros(m) if lag is None else lag, a_shape=shape,
@@ -322,14 +330,16 @@ def choose_steps(
                 b_end=neighbours.end[qa, qk], b_yaw_end=nb_yaw_end[qa, qk],
                 b_remaining=neighbours.remaining[qa, qk], b_shape=nb_shape[qa, qk])
             blocked = gaps.reshape(-1, n_c, n_l) < 0.0
+            centre_blocked = centre_gaps.reshape(-1, n_c, n_l) < 0.0
         else:
             q0 = neighbours.now[qa, qk][:, None, None, :]  # (P, 1, 1, 2)
             q1 = neighbours.end[qa, qk][:, None, None, :]
             d = segment_distance(position[qa][:, None, None, :], ends[qa], q0, q1)
-            blocked = d < need[qa, qk][:, None, None]  # (P, C, L)
+            blocked = centre_blocked = d < need[qa, qk][:, None, None]  # (P, C, L)
         first = np.flatnonzero(np.concatenate([[True], qa[1:] != qa[:-1]]))
         ok[local[qa[first]]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
-        return ok
+        centre[local[qa[first]]] &= ~np.logical_or.reduceat(centre_blocked, first, axis=0)
+        return ok, centre
 
     def free_lengths(ok: np.ndarray) -> np.ndarray:  # feasible lengths from the short end
         n_free = np.cumprod(ok, axis=2).sum(axis=2)
@@ -337,20 +347,25 @@ def choose_steps(
 
     everyone = np.arange(m)
     yaw_end = facing(0.0)
-    free = free_lengths(clear(everyone, yaw_end))  # (m, C)
+    ok, centre = clear(everyone, yaw_end)
+    free = free_lengths(ok)  # (m, C)
     if timed:
-        # walkers who cannot take their preferred step ahead facing forward try keeping
-        # their facing (a side step or a step back without turning: shuffling in a
-        # queue), then turning their shoulders left and right by each twist: a candidate
-        # takes the first facing that lets it step strictly further than facing forward
+        # walkers who cannot take their preferred step ahead facing forward, where a
+        # body as narrow as it is deep could, try keeping their facing (a side step or a
+        # step back without turning: shuffling in a queue), then turning their shoulders
+        # by each twist, the way they are turned already (else to the left; the outline
+        # is symmetric): a candidate takes the first facing that lets it step strictly
+        # further than facing forward
         ahead = np.abs(offsets) <= np.deg2rad(25.0) + 1e-9
         want = np.minimum(nominal_step, lengths[-1]) - 1e-9
-        rows = np.flatnonzero(np.where(ahead, free, 0.0).max(axis=1) < want)
-        options = [np.broadcast_to(yaw[:, None], (m, n_c))]
-        options += [facing(sign * phi) for phi in np.deg2rad(params.twists_deg)
-                    for sign in (1.0, -1.0)]
+        narrow = free_lengths(centre)  # no facing steps further
+        rows = np.flatnonzero((np.where(ahead, free, 0.0).max(axis=1) < want)
+                              & (narrow > free + 1e-9).any(axis=1))
+        side = np.where(((yaw - heading + np.pi) % (2 * np.pi) - np.pi) < -1e-3, -1.0, 1.0)
+        options = [np.broadcast_to(yaw[:, None], (m, n_c))] if params.keep_facing else []
+        options += [facing(side[:, None] * phi) for phi in np.deg2rad(params.twists_deg)]
         for twisted in options if rows.size else ():
-            reach_t = free_lengths(clear(rows, twisted))
+            reach_t = free_lengths(clear(rows, twisted)[0])
             r_, c_ = np.nonzero(reach_t > free[rows] + 1e-9)
             free[rows[r_], c_] = reach_t[r_, c_]
             yaw_end[rows[r_], c_] = twisted[rows[r_], c_]
@@ -427,19 +442,17 @@ def choose_steps(
     )
 
 
-def _shoulders_clear(position, ends, *, yaw, yaw_end, shape, clearance) -> np.ndarray:
+def _shoulders_clear(position, ends, *, yaw, yaw_end, shape, clearance,
+                     near) -> np.ndarray:
     """(m, C, L) bool: the shoulder discs keep their radius (widened for the turn) from
     the walls at the step's end and halfway, or do not come closer than they are now.
-    Only where the centre comes within the outline's reach of a wall are they tested."""
+    Only where the centre's clearance ``near`` (m, C, L) [m] (the smaller at the end and
+    halfway) is within the outline's reach plus the largest widening are they tested
+    (clearance grows by at most the distance moved)."""
     ok = np.ones(ends.shape[:-1], bool)
     offset = shape[:, 2]
-    if not np.any(offset > 0):
-        return ok
-    bound = np.maximum(shape[:, 0], shape[:, 1] + offset)
-    near = clearance(ends) < bound[:, None, None] + 1e-9
-    near |= clearance(0.5 * (ends + position[:, None, None, :])) < bound[:, None, None] + 1e-9
-    near &= (offset > 0)[:, None, None]
-    i, c, l = np.nonzero(near)
+    reach = shape[:, 1] + 2 * offset
+    i, c, l = np.nonzero((near < reach[:, None, None]) & (offset > 0)[:, None, None])
     if i.size == 0:
         return ok
     y0, y1 = yaw[i], yaw_end[i, c]

@@ -650,25 +650,35 @@ class ElevInterp:
     def _solve_level(self, space: _ShapeSpace, target: np.ndarray, props: np.ndarray,
                      metres: np.ndarray):
         """:meth:`_solve` with the level datum and the heel-rise closure where configured
-        (lengths in leg lengths): the request's height is moved onto the level datasets'
-        own Eq. 10 height, the blend closed by the trailing foot, and the length asked
-        again for what the closure moved it (a second solve)."""
+        (lengths in leg lengths): a level request is served by the level datasets alone
+        (:meth:`_level_line`), a low rise from the triangulation with its height moved
+        onto the level datasets' own Eq. 10 height; the blend is closed by the trailing
+        foot and the length asked again for what the closure moved it."""
         cfg = self.config
         if not (cfg.level_datum or cfg.heel_rise) or self._level.size < 2:
             return self._solve(space, target, props, metres)
         level = space.points[self._level]
-        level = level[np.argsort(level[:, 0])]
-        # level steps: low rises, and lengths no shorter than the level data's (faded)
-        fade = np.clip(1.0 - np.abs(target[:, 1]) / cfg.level_fade, 0.0, 1.0) * np.clip(
-            (target[:, 0] / level[0, 0] - _SHORT_FROM) / _SHORT_OVER, 0.0, 1.0)
+        order = np.argsort(level[:, 0])
+        level = level[order]
+        fade = np.clip(1.0 - np.abs(target[:, 1]) / cfg.level_fade, 0.0, 1.0)
         ask = target.copy()
         if cfg.level_datum:
             ask[:, 1] += fade * np.interp(target[:, 0], *level.T)
-        out = self._solve(space, ask, props, metres)
+        on_line = (fade >= 1.0) & cfg.level_datum
+
+        def serve(ask):
+            out = self._solve(space, ask, props, metres)
+            if on_line.any():
+                line = self._level_line(space, self._level[order], ask[on_line, 0], props[on_line])
+                for mine, theirs in zip(out, line, strict=True):
+                    mine[on_line] = theirs
+            return out
+
+        out = serve(ask)
         missed = out[4][:, 0] & (fade > 0.0)
         if missed.any():  # the shifted request is not servable: the paper's request
-            fade[missed], ask[missed] = 0.0, target[missed]
-            out = self._solve(space, ask, props, metres)
+            fade[missed], ask[missed], on_line[missed] = 0.0, target[missed], False
+            out = serve(ask)
         if not cfg.heel_rise:
             curves, phases, step, served, flags = out
             return curves, phases, step, served - (ask - target), flags
@@ -678,7 +688,7 @@ class ElevInterp:
                                       np.where(fade > 0.0, target[:, 1], step[:, 1]), props)
             if again:
                 ask[:, 0] += np.where(fade > 0.0, target[:, 0] - step[:, 0], 0.0)
-                out = self._solve(space, ask, props, metres)
+                out = serve(ask)
         served = served - (ask - target)
         converged = np.linalg.norm(step - served, axis=1) <= cfg.tolerance / metres
         flags = np.stack([flags[:, 0] | ~converged, flags[:, 1], converged], axis=1)
@@ -687,6 +697,34 @@ class ElevInterp:
             paper = self._solve(space, target[missed], props[missed], metres[missed])
             for mine, theirs in zip((curves, phases, step, served, flags), paper, strict=True):
                 mine[missed] = theirs
+        return curves, phases, step, served, flags
+
+    def _level_line(self, space: _ShapeSpace, level: np.ndarray, length: np.ndarray,
+                    props: np.ndarray):
+        """The level datasets ``level`` (m,) (by increasing Eq. 10 length) blended
+        piecewise linearly by their Eq. 10 step length to produce ``length`` (k,) [leg
+        lengths]: the neighbouring two, extrapolated linearly beyond the shortest and the
+        longest by at most ``_LINE_BEYOND`` of the end interval; the weight refined by
+        secant steps on Eq. 10. Returns what :meth:`_solve` returns."""
+        xs = space.points[level, 0]
+        j = np.clip(np.searchsorted(xs, length) - 1, 0, len(xs) - 2)
+        lo, hi = xs[j], xs[j + 1]
+        f = np.clip((length - lo) / (hi - lo), -_LINE_BEYOND, 1.0 + _LINE_BEYOND)
+        keys = space.keys[level]
+        for _ in range(3):
+            k = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
+            step = step_of(k[:, 0], k[:, 1], _leg_of(props))
+            f = np.clip(f + (length - step[:, 0]) / (hi - lo), -_LINE_BEYOND,
+                        1.0 + _LINE_BEYOND)
+        k = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
+        step = step_of(k[:, 0], k[:, 1], _leg_of(props))
+        curves = ((1.0 - f)[:, None, None] * space.angles[level][j]
+                  + f[:, None, None] * space.angles[level][j + 1])
+        phases = (1.0 - f)[:, None] * space.phases[level][j] + f[:, None] * space.phases[
+            level][j + 1]
+        served = np.stack([length, step[:, 1]], axis=1)
+        converged = np.abs(step[:, 0] - length) <= 1e-4  # refined once more by the caller
+        flags = np.stack([~converged, np.ones(len(f), bool), converged], axis=1)
         return curves, phases, step, served, flags
 
     def _solve(self, space: _ShapeSpace, target: np.ndarray, props: np.ndarray,
@@ -734,7 +772,7 @@ class ElevInterp:
         return curves, phases, step, target, flags
 
 
-_SHORT_FROM, _SHORT_OVER = 0.7, 0.15  # level handling fades in over 70-85 % of level_xs
+_LINE_BEYOND = 0.6  # level line: extrapolated at most this far beyond its end intervals
 _RISE_FROM, _RISE_OVER, _FALL_OVER = 0.3, 0.2, 0.1  # heel-rise window [stride fraction]
 _MAX_RISE = 0.2  # largest change of the trailing foot's elevation [rad]
 
@@ -778,9 +816,10 @@ def lift_swing_toe(angles: np.ndarray, leg: LegLike, stance_fraction: np.ndarray
     ``hip_drop`` (k,) [m] × sin(2πt), the pelvic list's drop at mid-swing) give the
     lowest point of the swing sole (heel, ball, toe tip) between foot-off
     ``stance_fraction`` (k,) and heel strike. Where the middle third of the swing comes
-    closer than ``clearance``, the swing foot's elevation is raised (toes up) by
-    Δ·sin² over the swing, Δ the least that lifts every sample there (linearised, then
-    refined twice; at most 0.2 rad) — hip and knee keep the data. An extension of §5:
+    closer than ``clearance``, the swing knee flexes more — thigh elevation up and shank
+    elevation down by Δ·sin² over the swing, Δ the least that lifts every sample there
+    (linearised, then refined twice; at most 0.2 rad); the foot keeps the data's
+    elevation. An extension of §5:
     the data's own swing, with this body's foot, can graze the floor
     (docs/architecture.md, "Level steps"). Datasets that clear are returned unchanged.
     """
@@ -808,13 +847,15 @@ def lift_swing_toe(angles: np.ndarray, leg: LegLike, stance_fraction: np.ndarray
         ankle = hip - thigh * np.cos(sw[..., 2]) - shank * np.cos(sw[..., 1])
         g, h = np.cos(sw[..., 0]), np.sin(sw[..., 0])
         z = np.minimum(np.minimum(-heel * h, ball * h), toe * h) - ankle_h * g + ankle
-        rate = toe * g + ankle_h * h  # the toe tip's rise per radian of toes-up
-        need = np.where(middle & (z < clearance),
+        # the sole's rise per radian of knee flexion (thigh forward, shank back)
+        rate = thigh * np.sin(sw[..., 2]) - shank * np.sin(sw[..., 1])
+        need = np.where(middle & (z < clearance) & (rate > 0.05),
                         (clearance - z) / np.maximum(rate * window, 1e-6), 0.0)
         delta = np.clip(need.max(axis=1), 0.0, _MAX_RISE)
         if not np.any(delta > 1e-6):
             break
-        out[:, half:2 * half, 0] += delta[:, None] * window
+        out[:, half:2 * half, 2] += delta[:, None] * window
+        out[:, half:2 * half, 1] -= delta[:, None] * window
     return out
 
 

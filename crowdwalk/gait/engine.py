@@ -23,7 +23,7 @@ from crowdwalk.errors import invalid
 from crowdwalk.steps import StepBatch
 
 __all__ = ["PoseFrame", "GaitEngine", "GroundHeight", "GAIT_ENGINES", "make_engine",
-           "MixedEngine"]
+           "MixedEngine", "join_frames"]
 
 GroundHeight = Callable[[np.ndarray], np.ndarray]
 """Ground height ``z (p,)`` [m] at points ``xy (p, 2)`` [m], e.g. ``Terrain.height``."""
@@ -147,7 +147,13 @@ class MixedEngine:
             if rows.size:
                 parts.append(engine.pose(t, agents[rows]))
                 order.append(rows)
-        back = np.argsort(np.concatenate(order), kind="stable")
-        cat = {f.name: np.concatenate([getattr(p, f.name) for p in parts])[back]
-               for f in fields(PoseFrame) if f.name != "time"}
-        return PoseFrame(time=float(t), **cat)
+        return join_frames(t, parts, order)
+
+
+def join_frames(t: float, parts: list[PoseFrame], order: list[np.ndarray]) -> PoseFrame:
+    """One frame at time ``t`` [s] of the rows of ``parts``, part i's rows going to the
+    positions ``order[i]`` of the joined frame."""
+    back = np.argsort(np.concatenate(order), kind="stable")
+    cat = {f.name: np.concatenate([getattr(p, f.name) for p in parts])[back]
+           for f in fields(PoseFrame) if f.name != "time"}
+    return PoseFrame(time=float(t), **cat)

@@ -288,8 +288,12 @@ def _swing_knee_peak(speed_blend):
     from crowdwalk.gait.elevinterp import ElevInterp, ElevInterpConfig
 
     body = Body.from_heights([1.75, 1.75])
+    from crowdwalk.gait.elevwalker import GaitStyle
+
     interp = ElevInterp(config=ElevInterpConfig(speed_blend=speed_blend))
-    animator = Animator(body, ground=_flat, interp=interp)
+    # the data's swing alone (no level toe-clearance lift, which evens the knees out)
+    animator = Animator(body, ground=_flat, interp=interp,
+                        style=GaitStyle(level_clearance=False))
     hip, knee, ankle = (JOINT_NAMES.index(n) for n in ("r_hip", "r_knee", "r_talocrural"))
     peak = np.zeros(2)
     for s in range(3):

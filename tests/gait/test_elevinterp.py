@@ -316,18 +316,20 @@ def test_heel_rise_closes_level_steps_with_the_trailing_foot():
     assert np.all(rise[:, (t > 0.45) & (t < 0.6)] < -2.0)
 
 
-def test_lift_swing_toe_raises_only_the_swing_foot_to_the_clearance():
+def test_lift_swing_toe_flexes_only_the_swing_knee_to_the_clearance():
     body = leg(np.full(2, 1.75))
     data = ElevInterp().request(body, np.array([0.58, 0.68]), 0.0)
     lifted = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
                             clearance=0.03)
     changed = lifted != data.angles
-    assert changed[:, :, 0].any() and not changed[:, :, 1:].any()  # foot only
     assert not changed[:, :50].any()  # the swing half only
-    assert np.all(lifted[:, :, 0] >= data.angles[:, :, 0])  # toes up, never down
+    assert not changed[:, :, [0, 3]].any()  # foot and pelvis keep the data
+    bend = lifted - data.angles  # the knee flexes: thigh forward, shank back, equally
+    assert np.all(bend[:, :, 2] >= 0) and bend[:, :, 2].max() > np.deg2rad(1.0)
+    np.testing.assert_allclose(bend[:, :, 1], -bend[:, :, 2], atol=1e-12)
     less = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
                           clearance=0.01)
-    assert np.all(lifted[:, :, 0] >= less[:, :, 0]) and (lifted != less).any()
+    assert np.all(lifted[:, :, 2] >= less[:, :, 2]) and (lifted != less).any()
     none = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
                           clearance=-1.0)
     np.testing.assert_array_equal(none, data.angles)  # a swing that clears is untouched

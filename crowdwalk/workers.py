@@ -1,0 +1,273 @@
+"""Worker processes for one run: the machine's other cores.
+
+A run's heavy stages are independent per walker: the steering of the walkers deciding in
+a tick, their footstep plans, their poses. :class:`Workers` starts worker processes once
+per run; :func:`split_rows` runs a function of per-walker arrays on contiguous parts of
+its rows at once (the last part here, the others in the workers) and joins the results,
+so the result is the one a single call would give. Objects many calls need (the
+clearance field) are sent once (:meth:`Workers.share`); a call refers to them by key.
+A worker also holds objects with state of their own (the run's gait engine,
+:mod:`crowdwalk.gait.remote`), driven by messages in order.
+
+Workers are spawned (not forked), ignore Ctrl-C (the run stops them) and end with the run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing as mp
+import os
+import queue
+import signal
+import sys
+import traceback
+import types
+from collections.abc import Callable, Sequence
+from itertools import count as _count
+
+import numpy as np
+
+__all__ = ["Workers", "WorkerError", "available_cores", "split_rows", "worker_count",
+           "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS"]
+
+#: A run with fewer walkers stays in one process (workers cost ~2 s to start) [-].
+MIN_PARALLEL_AGENTS = 500
+#: A call with fewer rows is not split (sending costs ~1 ms) [-].
+MIN_SPLIT_ROWS = 64
+
+
+class WorkerError(RuntimeError):
+    """A worker process failed (its traceback is the message)."""
+
+
+def available_cores() -> int:
+    """CPU cores this process may run on [-]."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def worker_count(agents: int, requested: int | None) -> int:
+    """Worker processes for a run of ``agents`` walkers: ``requested`` if given, else one
+    per core beyond this one when the run has at least :data:`MIN_PARALLEL_AGENTS` (none
+    in a daemon process, such as a Dask worker, which may not start processes)."""
+    if requested is not None:
+        return int(requested)
+    if mp.current_process().daemon:  # e.g. a Dask worker: a process per core already
+        return 0
+    return available_cores() - 1 if agents >= MIN_PARALLEL_AGENTS else 0
+
+
+class _Handle:
+    """Stands for an object shared with the workers; unpickles as that object there."""
+
+    def __init__(self, key: int) -> None:
+        self.key = key
+
+    def __reduce__(self):
+        return _shared_object, (self.key,)
+
+
+_SHARED: dict[int, object] = {}  # in a worker: key -> object sent by Workers.share
+
+
+def _shared_object(key: int):
+    return _SHARED[key]
+
+
+def _serve(inbox, outbox) -> None:
+    """A worker's loop: ``(seq, target, method, args, kwargs)`` messages in order. A failed
+    call answers its traceback; a failed message without reply (seq None) breaks the
+    worker's state, so every later reply is that traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    broken = None
+    while True:
+        msg = inbox.get()
+        if msg is None:
+            return
+        seq, target, method, args, kwargs = msg
+        failed = broken
+        if broken is None:
+            try:
+                result = _handle(target, method, args, kwargs)
+            except BaseException:  # noqa: BLE001 - the main process raises it
+                failed = traceback.format_exc()
+                if seq is None:
+                    broken = failed
+        if seq is not None:
+            outbox.put((seq, failed, None if failed else result))
+
+
+def _handle(target, method, args: tuple, kwargs: dict):
+    if target is None:  # a function call
+        return method(*args, **kwargs)
+    if method is None:  # keep an object: args = (key, object or factory)
+        obj = args[1]
+        _SHARED[target] = obj() if kwargs.get("build") else obj
+        return None
+    attr = getattr(_SHARED[target], method)  # a method (or an attribute) of a kept object
+    return attr(*args, **kwargs) if callable(attr) else attr
+
+
+class Workers:
+    """``count`` worker processes (spawned now) that call functions and keep objects.
+
+    Messages to one worker are handled in the order sent. Use as a context manager, or
+    call :meth:`close`.
+    """
+
+    def __init__(self, count: int) -> None:
+        ctx = mp.get_context("spawn")
+        self._inbox = [ctx.Queue() for _ in range(count)]
+        self._outbox = [ctx.Queue() for _ in range(count)]
+        self._procs = [ctx.Process(target=_serve, args=(i, o), daemon=True,
+                                   name=f"crowdwalk-worker-{k}")
+                       for k, (i, o) in enumerate(zip(self._inbox, self._outbox, strict=True))]
+        # a worker needs nothing of the caller's script: without this, spawning imports
+        # it again (and re-runs a script that lacks an ``if __name__ == "__main__"`` guard)
+        main = sys.modules["__main__"]
+        sys.modules["__main__"] = types.ModuleType("__main__")
+        try:
+            for p in self._procs:
+                p.start()
+        finally:
+            sys.modules["__main__"] = main
+        self._seq = _count()
+        self._replies: list[dict[int, tuple]] = [{} for _ in range(count)]
+        self._shared: dict[int, object] = {}  # id(object) -> object (kept alive)
+
+    def __len__(self) -> int:
+        return len(self._procs)
+
+    def __enter__(self) -> Workers:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def send(self, worker: int, target, method, /, *args, **kwargs) -> None:
+        """Queue ``method(*args, **kwargs)`` on ``worker`` without waiting for it: ``target``
+        None calls the function ``method``, else the method of the object kept as
+        ``target``. Shared objects among the arguments travel as their keys."""
+        self._inbox[worker].put((None, target, method, *self._pack(args, kwargs)))
+
+    def call(self, worker: int, target, method, /, *args, **kwargs) -> Callable[[], object]:
+        """Like :meth:`send`; returns a function that waits for the result and returns it."""
+        seq = next(self._seq)
+        self._inbox[worker].put((seq, target, method, *self._pack(args, kwargs)))
+        return lambda: self._result(worker, seq)
+
+    def keep(self, key, obj, *, build: bool = False, worker: int | None = None) -> None:
+        """Keep ``obj`` (or what the picklable factory ``obj()`` builds, ``build``) as
+        ``key`` in ``worker`` (default every worker), for :meth:`send` / :meth:`call` with
+        ``target=key``."""
+        for w in range(len(self)) if worker is None else (worker,):
+            self._inbox[w].put((None, key, None, (key, obj), {"build": build}))
+
+    def share(self, obj) -> None:
+        """Send ``obj`` to every worker once; later arguments that are ``obj`` travel as its
+        key."""
+        if id(obj) not in self._shared:
+            self._shared[id(obj)] = obj
+            self.keep(("shared", id(obj)), obj)
+
+    def is_shared(self, obj) -> bool:
+        """True when ``obj`` was sent by :meth:`share`."""
+        return id(obj) in self._shared
+
+    def close(self) -> None:
+        """Stop the workers (waits briefly, then terminates)."""
+        for box in self._inbox:
+            box.put(None)
+        for p in self._procs:
+            p.join(timeout=5.0)
+            if p.is_alive():
+                p.terminate()
+                p.join()
+        for box in (*self._inbox, *self._outbox):
+            box.cancel_join_thread()  # the workers are gone: what they did not read is moot
+            box.close()
+        self._procs = []
+
+    def _pack(self, args: tuple, kwargs: dict) -> tuple[tuple, dict]:
+        def swap(v):
+            return _Handle(("shared", id(v))) if id(v) in self._shared else v
+
+        return tuple(swap(a) for a in args), {k: swap(v) for k, v in kwargs.items()}
+
+    def _result(self, worker: int, seq: int):
+        got = self._replies[worker]
+        while seq not in got:
+            try:
+                s, failed, value = self._outbox[worker].get(timeout=1.0)
+            except queue.Empty:
+                if not self._procs[worker].is_alive():
+                    raise WorkerError(f"worker {worker} ended (exit code "
+                                      f"{self._procs[worker].exitcode})") from None
+                continue
+            got[s] = (failed, value)
+        failed, value = got.pop(seq)
+        if failed:
+            raise WorkerError(failed)
+        return value
+
+
+def _part(value, rows: slice, m: int):
+    """``value`` restricted to ``rows`` when it has m rows (arrays, lists, dataclasses of
+    them); anything else unchanged."""
+    if isinstance(value, np.ndarray):
+        return value[rows] if value.ndim and value.shape[0] == m else value
+    if isinstance(value, list) and len(value) == m:
+        return value[rows]
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        parts = {f.name: _part(getattr(value, f.name), rows, m)
+                 for f in dataclasses.fields(value) if f.init}
+        if any(parts[k] is not getattr(value, k) for k in parts):
+            return type(value)(**parts)
+    return value
+
+
+def _join(parts: list):
+    """The results of the parts joined as one call's: arrays and lists concatenated,
+    dataclasses field by field."""
+    first = parts[0]
+    if isinstance(first, np.ndarray):
+        return np.concatenate(parts)
+    if isinstance(first, list):
+        return [x for p in parts for x in p]
+    if dataclasses.is_dataclass(first):
+        return type(first)(**{f.name: _join([getattr(p, f.name) for p in parts])
+                              for f in dataclasses.fields(first) if f.init})
+    raise TypeError(f"cannot join results of type {type(first).__name__}")
+
+
+def split_rows(workers: Workers | None, fn: Callable, m: int, /, *args,
+               on: Sequence[int] | None = None, **kwargs):
+    """``fn(*args, **kwargs)`` computed on contiguous parts of its m rows at once, one part
+    per worker (those listed in ``on``, default all) and the last here, joined in order.
+
+    Every argument with m rows (an array's first axis, a list, a dataclass's fields) is
+    split; everything else goes whole (shared objects by key, :meth:`Workers.share`).
+    ``fn`` must be row-independent (row i of the result depends only on row i of the
+    arguments) and importable by name; the result an array, a list or a dataclass of
+    them. Without workers, or with fewer than :data:`MIN_SPLIT_ROWS` rows, one call here.
+    """
+    on = list(range(len(workers))) if workers is not None and on is None else on
+    if workers is None or not on or m < MIN_SPLIT_ROWS:
+        return fn(*args, **kwargs)
+    bounds = np.linspace(0, m, len(on) + 2).round().astype(int)
+    cuts = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+    def part(rows):
+        def cut(v):
+            return v if workers.is_shared(v) else _part(v, rows, m)
+
+        return tuple(cut(a) for a in args), {k: cut(v) for k, v in kwargs.items()}
+
+    waits = []
+    for w, rows in zip(on, cuts[:-1], strict=True):
+        a, k = part(rows)
+        waits.append(workers.call(w, None, fn, *a, **k))
+    a, k = part(cuts[-1])
+    here = fn(*a, **k)
+    return _join([wait() for wait in waits] + [here])

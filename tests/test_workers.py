@@ -1,0 +1,113 @@
+"""Worker processes: split calls give one call's result, failures surface, and a run with
+workers writes the same run folder as one in a single process."""
+
+from __future__ import annotations
+
+import sqlite3
+from contextlib import closing
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import crowdwalk.workers as W
+from crowdwalk.crowd.run import RunOverrides, run_scenario
+from crowdwalk.workers import WorkerError, Workers, split_rows, worker_count
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclass(frozen=True)
+class Pair:
+    total: np.ndarray
+    rows: list
+
+
+def weighted(x: np.ndarray, labels: list, *, table: np.ndarray, scale: float) -> Pair:
+    """Row-independent: row i of the result from row i of x and labels."""
+    return Pair(total=scale * (x @ table[: x.shape[1]]), rows=[f"{s}:{len(s)}" for s in labels])
+
+
+def fail_on_ones(x: np.ndarray) -> np.ndarray:
+    if x[0, 0] == 1.0:
+        raise ValueError(f"bad rows: {len(x)}")
+    return x
+
+
+@pytest.fixture(scope="module")
+def workers():
+    with Workers(2) as w:
+        yield w
+
+
+def test_split_rows_equals_one_call_and_sends_shared_objects_once(workers):
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(200, 3))
+    labels = [f"a{i}" for i in range(200)]
+    table = rng.normal(size=(200, 2))  # 200 rows too: a shared object is never split
+    workers.share(table)
+    whole = weighted(x, labels, table=table, scale=2.0)
+    split = split_rows(workers, weighted, 200, x, labels, table=table, scale=2.0)
+    assert np.array_equal(split.total, whole.total)
+    assert split.rows == whole.rows
+    only_one = split_rows(workers, weighted, 200, x, labels, table=table, scale=2.0, on=[1])
+    assert np.array_equal(only_one.total, whole.total)
+
+
+def test_a_failure_in_a_worker_is_raised_here_with_its_traceback(workers):
+    x = np.zeros((200, 1))
+    x[:67] = 1.0  # the first worker's part
+    with pytest.raises(WorkerError, match="bad rows: 67"):
+        split_rows(workers, fail_on_ones, 200, x)
+    # the worker goes on serving after a failed call
+    assert workers.call(0, None, len, [1, 2, 3])() == 3
+
+
+def test_a_dead_worker_is_reported_not_waited_for():
+    with Workers(1) as w:
+        w._procs[0].kill()
+        w._procs[0].join()
+        w.keep("big", np.zeros(1_000_000))  # more than a pipe holds: nobody reads it
+        with pytest.raises(WorkerError, match="ended"):
+            w.call(0, None, len, [1])()
+    # and closing did not wait for the dead worker to read it
+
+
+def test_worker_count_follows_cores_and_run_size():
+    assert worker_count(10, None) == 0
+    assert worker_count(10, 3) == 3
+    assert worker_count(10_000, None) == W.available_cores() - 1
+
+
+def _rows(path: Path, table: str) -> list:
+    with closing(sqlite3.connect(path)) as con:
+        return con.execute(f"SELECT * FROM {table} ORDER BY rowid").fetchall()
+
+
+def test_a_run_with_workers_writes_the_same_run_folder(tmp_path, monkeypatch):
+    """Steering split over worker 1 (every tick, however few decide) and posing in
+    worker 0 give the run folder of a run in one process."""
+    monkeypatch.setattr(W, "MIN_SPLIT_ROWS", 2)
+    scenario = ROOT / "scenarios" / "bottleneck.yaml"
+    runs = {}
+    for workers in (0, 2):
+        out = tmp_path / f"w{workers}"
+        summary = run_scenario(scenario, out, overrides=RunOverrides(
+            duration=4.0, poses=True, fps=10.0, workers=workers))
+        runs[workers] = out
+        assert summary["poses"] == "written"
+    a, b = runs[0], runs[2]
+    assert (a / "footsteps.csv").read_bytes() == (b / "footsteps.csv").read_bytes()
+    assert len((a / "footsteps.csv").read_bytes().splitlines()) > 50
+    assert _rows(a / "trajectories.sqlite", "trajectory_data") == \
+        _rows(b / "trajectories.sqlite", "trajectory_data")
+    assert _rows(a / "poses.sqlite", "pose_frame") == _rows(b / "poses.sqlite", "pose_frame")
+
+
+def test_a_negative_worker_count_is_bad_input():
+    from crowdwalk.crowd.run import check_overrides
+    from crowdwalk.errors import InputError
+
+    with pytest.raises(InputError, match="workers must be an integer >= 0"):
+        check_overrides(RunOverrides(workers=-1))
