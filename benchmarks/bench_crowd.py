@@ -20,6 +20,7 @@ Usage: ``python benchmarks/bench_crowd.py [--agents 100 1000 5000] [--seconds S]
 from __future__ import annotations
 
 import argparse
+import resource
 import shutil
 import tempfile
 import time
@@ -62,14 +63,21 @@ def measure(path: Path, out: Path, seconds: float, poses: bool, workers: int | N
         if not started:
             started.append(time.process_time())
 
+    def children() -> float:  # CPU time of ended child processes (the run's workers)
+        r = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return r.ru_utime + r.ru_stime
+
+    kids = children()
     summary = run_scenario(path, out, progress=first_frame, overrides=RunOverrides(
         planner="best_first_multistart", duration=seconds, poses=poses,
         fps=25.0 if poses else 10.0, workers=workers))
     cpu = time.process_time() - started[0]
+    worker_cpu = children() - kids
     tm = summary["timing"]
     steps = sum(a["steps"] for a in summary["agents"])
     return {
         "sim": summary["simulated_time_s"], "wall": tm["wall_s"], "cpu": cpu,
+        "worker_cpu": worker_cpu,
         "setup": tm["setup_s"], "planning": tm["planning_s"], "steering": tm["steering_s"],
         "poses": tm["poses_s"], "writing": tm["writing_s"],
         "steps": steps,
@@ -121,7 +129,7 @@ def main() -> None:
 
     head = (f"{'agents':>6} {'output':<18} {'workers':>7} {'sim s':>6} {'wall s':>7} "
             f"{'sim/wall (range)':>18} "
-            f"{'sim/CPU':>8} {'plan':>5} {'steer':>5} {'poses':>5} {'write':>5} "
+            f"{'sim/CPU':>8} {'wkr CPU':>7} {'plan':>5} {'steer':>5} {'poses':>5} {'write':>5} "
             f"{'plans run/asked':>16} {'µs/agent-step':>13} {'MB':>7}")
     print()
     print(head)
@@ -132,12 +140,14 @@ def main() -> None:
         rng = f"{r['sim'] / run:.2f} ({r['low']:.2f}-{r['high']:.2f})"
         print(f"{r['n']:>6} {r['output']:<18} {r['workers']:>7} {r['sim']:>6.1f} "
               f"{r['wall']:>7.1f} {rng:>18} {r['sim'] / max(r['cpu'], 1e-9):>8.2f} "
-              f"{share['planning']:>4.0f}% {share['steering']:>4.0f}% {share['poses']:>4.0f}% "
+              f"{r['worker_cpu']:>7.1f} {share['planning']:>4.0f}% "
+              f"{share['steering']:>4.0f}% {share['poses']:>4.0f}% "
               f"{share['writing']:>4.0f}% {r['runs']:>7}/{r['requests']:<8} "
               f"{1e6 * run / max(r['steps'], 1):>13.0f} {r['size']:>7.1f}")
     print("\nsim/wall and sim/CPU exclude setup (world, population, distance field); sim/CPU"
-          " counts this process only (not its workers); 'poses' includes the Animator's step"
-          " commands, or with workers the wait for the worker that poses.")
+          " counts this process only; 'wkr CPU' is its workers' CPU seconds (set-up included);"
+          " 'poses' includes the Animator's step commands, or with workers the wait for the"
+          " worker that poses.")
     for output, w in ((o, w) for o in ("traj+steps", "full poses 25 fps") for w in args.workers):
         sel = [r for r in rows if r["output"] == output and r["workers"] == w]
         if len(sel) >= 2:

@@ -70,11 +70,13 @@ def located(scenario, exc: InputError, default: tuple = ()) -> InputError:
 
 # --- memory ---------------------------------------------------------------------------
 
-# Bytes a run holds per agent: `python benchmarks/bench_memory.py` measures ~3 kB of peak-RSS
-# growth per agent (stadium_egress, 100 -> 1,000 agents, poses on, 4 s); budgeted at 20 kB for
-# the planner cache and buffers a long run accumulates. Per terrain grid node: heights, the
-# noise field and the filter's work arrays (8 float64 arrays).
-BYTES_PER_AGENT = 20_000
+# Bytes a run holds per agent, the run's worker process included (crowdwalk.workers):
+# `python benchmarks/bench_memory.py --agents 500 750 1000` measures ~39 kB of peak-RSS
+# growth per agent with poses (4 s; ~10 kB in the run's process, ~29 kB in the worker that
+# holds the gait engine) and `--agents 1000 5000 10000 --no-poses --seconds 2` ~19 kB
+# (~6 kB here, ~13 kB of steering work arrays in the worker). Per terrain grid node:
+# heights, the noise field and the filter's work arrays (8 float64 arrays).
+BYTES_PER_AGENT = 40_000
 BYTES_PER_GRID_NODE = 64
 MAX_AGENTS = 20_000  # 4x the largest crowd benchmarked (bench_crowd.py); setup grows beyond
 MAX_ROUTE_NODES = 10_000  # route nodes (and edges) per scenario: validation within seconds

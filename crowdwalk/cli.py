@@ -341,12 +341,24 @@ def verify(
     full: bool = typer.Option(False, "--full", help="Every case at full size (minutes)."),
     out: Path = typer.Option(Path("docs/verification.md"), "--out", help="Markdown table."),
     only: str = typer.Option("", "--only", help="Comma-separated case names."),
+    seeds: int = typer.Option(0, "--seeds", min=0, help="Seeds of the counterflow case "
+                              "(0: 1 fast, 5 full)."),
+    speed_model: str = typer.Option("", "--speed-model", help="Crowd speed model: free "
+                                    "(the default), time_gap or contact_gap."),
 ) -> None:
     """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
+    from dataclasses import replace
+
+    from crowdwalk.crowd import CrowdParams
+    from crowdwalk.errors import invalid
     from crowdwalk.verify import run_verification
 
+    models = ("free", "time_gap", "contact_gap")
+    if speed_model and speed_model not in models:
+        raise invalid("verify", "speed_model", f"one of {', '.join(models)}", speed_model)
+    params = replace(CrowdParams(), speed_model=speed_model) if speed_model else None
     run_verification(full=full, out=out, only=[s for s in only.split(",") if s],
-                     echo=typer.echo)
+                     seeds=seeds or None, params=params, echo=typer.echo)
 
 
 # --- gait export (issue 4): export-bvh ----------------------------------------------

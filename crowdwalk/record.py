@@ -144,6 +144,13 @@ class RunWriter:
         """Append the footsteps of a :class:`~crowdwalk.steps.StepBatch`."""
         self.write_footsteps(batch.footstep_columns())
 
+    def set_walkable(self, walkable_wkt: str) -> None:
+        """From the next frame on, the walkable area is ``walkable_wkt`` (a door shut or
+        opened): JuPedSim v2's ``frame_data`` names each frame's geometry."""
+        self._geometry_hash = zlib.crc32(walkable_wkt.encode())
+        self._traj.execute("INSERT OR IGNORE INTO geometry(hash, wkt) VALUES (?, ?)",
+                           (self._geometry_hash, walkable_wkt))
+
     def frame(self, time: float, snapshot, poses) -> None:
         """Append one output frame (a ``crowdwalk.sinks.Snapshot``) and its poses (a
         ``crowdwalk.gait.engine.PoseFrame`` or None); commit once per simulated second."""

@@ -164,6 +164,10 @@ class BackgroundSink:
     def frame(self, time: float, snapshot: Snapshot, poses) -> None:
         self._put("frame", time, snapshot, poses)
 
+    def call(self, name: str, *args) -> None:
+        """Call the sink's method ``name`` with ``args``, in order with the others."""
+        self._put(name, *args)
+
     def end(self, summary: dict) -> None:
         self._put("end", summary)
         self._calls.put(None)

@@ -36,7 +36,9 @@ from __future__ import annotations
 import math
 import tempfile
 from collections.abc import Callable
+from contextvars import ContextVar
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -112,13 +114,18 @@ class _Run:
     traj: object  # crowdwalk.record.Trajectories
 
 
+#: The crowd model every case runs (``run_verification(params=...)``; None: the default).
+_PARAMS: ContextVar = ContextVar("crowd_params", default=None)
+
+
 def _run(data: dict, folder: Path, params=None) -> _Run:
     from crowdwalk.crowd.run import RunOverrides, run_scenario
     from crowdwalk.record import open_run
     from crowdwalk.scenario import Scenario
 
     sc = Scenario.model_validate(data)
-    summary = run_scenario(sc, folder, overrides=RunOverrides(poses=False), params=params)
+    summary = run_scenario(sc, folder, overrides=RunOverrides(poses=False),
+                           params=params or _PARAMS.get())
     return _Run(folder, summary, open_run(folder).trajectories())
 
 
@@ -652,11 +659,12 @@ def _lane_order(traj, group_of: dict, x0: float, x1: float, rng) -> tuple[float,
     return observed, (float(np.percentile(null, 2.5)), float(np.percentile(null, 97.5)))
 
 
-def counterflow(fast: bool, tmp: Path) -> list[Check]:
+def counterflow(fast: bool, tmp: Path, *, seeds: int | None = None) -> list[Check]:
     """2 × 50 walkers in a 4 m wide corridor (issue target): lanes form (adjacent walkers
     walk the same way more often than randomly relabelled walkers, 95 % interval), no
-    walker stands ≥ 10 s, trips within 1.5 × the free walk."""
-    seeds = (1,) if fast else (1, 2, 3, 4, 5)
+    walker stands ≥ 10 s, trips within 1.5 × the free walk. ``seeds``: run seeds 1 to
+    that (default 1 fast, 5 full)."""
+    seeds = range(1, (seeds or (1 if fast else 5)) + 1)
     n = 50
     rng = np.random.default_rng(0)
     checks = []
@@ -713,9 +721,11 @@ def table(checks: list[Check]) -> str:
 
 
 def run_verification(*, full: bool = False, out: Path | None = None, only=(),
-                     echo=print) -> list[Check]:
+                     seeds: int | None = None, params=None, echo=print) -> list[Check]:
     """Run the cases (``only``: their names; default all), print each row as it comes
-    and write the Markdown table to ``out``."""
+    and write the Markdown table to ``out``. ``seeds``: how many seeds the counterflow
+    case runs (default 1 fast, 5 full); ``params``: the
+    :class:`~crowdwalk.crowd.CrowdParams` every case runs with (None: the default)."""
     from crowdwalk.errors import invalid
 
     names = list(only) or list(CASES)
@@ -723,18 +733,25 @@ def run_verification(*, full: bool = False, out: Path | None = None, only=(),
         if name not in CASES:
             raise invalid("verify", "only", f"case names among {sorted(CASES)}", name)
     checks: list[Check] = []
-    with tempfile.TemporaryDirectory(prefix="crowdwalk-verify-") as tmp:
-        for name in names:
-            rows = CASES[name](not full, Path(tmp))
-            for c in rows:
-                echo(f"{c.case:<30} {_mark(c.passed):<4}  {c.figure}  [{c.criterion}]")
-            checks += rows
+    token = _PARAMS.set(params)
+    try:
+        with tempfile.TemporaryDirectory(prefix="crowdwalk-verify-") as tmp:
+            for name in names:
+                case = partial(counterflow, seeds=seeds) if name == "counterflow" else CASES[name]
+                rows = case(not full, Path(tmp))
+                for c in rows:
+                    echo(f"{c.case:<30} {_mark(c.passed):<4}  {c.figure}  [{c.criterion}]")
+                checks += rows
+    finally:
+        _PARAMS.reset(token)
     if out is not None:
         size = "full" if full else "fast"
         Path(out).parent.mkdir(parents=True, exist_ok=True)
         Path(out).write_text(
             "# Verification\n\nWritten by `crowdwalk verify"
-            f"{' --full' if full else ''}{' --only ' + ','.join(only) if only else ''}` "
+            f"{' --full' if full else ''}{' --only ' + ','.join(only) if only else ''}"
+            f"{f' --seeds {seeds}' if seeds else ''}"
+            f"{f' --speed-model {params.speed_model}' if params else ''}` "
             f"({size} sizes). Cases, sources and the RiMEA tests that do not apply: "
             "`crowdwalk/verify.py`.\n\n" + table(checks) + "\n")
     return checks

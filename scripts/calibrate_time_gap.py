@@ -9,8 +9,9 @@ the speed measured with PedPy against SFPE, and the root-mean-square error per T
 Weidmann's (1993) diagram and Seyfried et al.'s (2009) bottleneck flows are then the
 validation (``crowdwalk verify``, tests), never used here.
 
-Usage: ``python scripts/calibrate_time_gap.py [--gaps 0.6 0.7 0.8 0.9]
-[--densities 0.75 1.5 2.5]`` (about a minute per run on a free core).
+Usage: ``python scripts/calibrate_time_gap.py [--model contact_gap] [--gaps 0.6 0.7 0.8
+0.9] [--densities 0.75 1.5 2.5]`` (about a minute per run on a free core); ``--model``
+is the speed model whose T is fitted (``time_gap`` or ``contact_gap``).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from crowdwalk.verify import ring_corridor_speed, sfpe_speed
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--model", choices=["time_gap", "contact_gap"], default="contact_gap")
     ap.add_argument("--gaps", type=float, nargs="+", default=[0.6, 0.7, 0.8, 0.9])
     ap.add_argument("--densities", type=float, nargs="+", default=[0.75, 1.5, 2.5])
     args = ap.parse_args()
@@ -36,7 +38,9 @@ def main() -> None:
     rms = {}
     with tempfile.TemporaryDirectory() as tmp:
         for gap in args.gaps:
-            params = replace(CrowdParams(), speed_model="time_gap", time_gap=gap)
+            params = replace(CrowdParams(), speed_model=args.model,
+                             **{"time_gap" if args.model == "time_gap"
+                                else "contact_time_gap": gap})
             err = []
             for rho in args.densities:
                 d, v = ring_corridor_speed(rho, Path(tmp) / f"T{gap}_{rho}", params=params)

@@ -2,6 +2,7 @@
 measured on what ``crowdwalk run`` writes (trajectories and summary)."""
 
 import re
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -81,6 +82,14 @@ def test_reopened_door_lets_the_waiting_walkers_through(tmp_path):
     assert summary["agents_arrived"] == 12 and summary["max_overlap_m"] == 0.0
     # they stood at the door: without the events the first is through within 4 s
     assert summary["agents"][0]["waiting_s"] > 0.0
+    # the trajectory file names each frame's walkable area (JuPedSim v2 frame_data)
+    with sqlite3.connect(tmp_path / "trajectories.sqlite") as con:
+        rows = con.execute("SELECT f.frame, g.wkt FROM frame_data f JOIN geometry g "
+                           "ON f.geometry_hash = g.hash ORDER BY f.frame").fetchall()
+    door = shapely.Point(DOOR_X, 4.0)
+    shut = [f / 10 for f, wkt in rows if not shapely.from_wkt(wkt).covers(door)]
+    assert shut[0] <= 0.1 and shut[-1] == pytest.approx(7.9)  # frames 0.1-7.9 s (10 fps)
+    assert len(shut) == 79 and shapely.from_wkt(rows[-1][1]).covers(door)
 
 
 def test_event_schema_errors_name_file_line_and_field(tmp_path):

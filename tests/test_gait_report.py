@@ -43,6 +43,9 @@ def test_lone_walker_at_natural_speed(natural):
     assert f.pelvis_d2_max <= 0.02
     assert f.toe_drag_fraction == 0.0
     assert "agent 0" in report_table([f])
+    # Winter 1991 is validation only (the curves are Bovi's): issue 11's joint targets
+    assert np.all(f.joint_rms[:2] <= 5.0)
+    assert f.toe_off_plantarflexion >= 15.0  # Winter: 18-20 deg (was 11 before the heel rise)
 
 
 @pytest.mark.parametrize(("speed", "height"), [(1.0, 1.75), (1.7, 1.75), (1.33, 1.50)])
@@ -53,6 +56,11 @@ def test_lone_walker_steps_follow_speed_and_size(tmp_path, speed, height):
     assert abs(f.speed / f.free_speed - 1) <= 0.05
     assert abs(f.step_length_z) <= 2 and abs(f.cadence_z) <= 2
     assert f.heel_slide_max <= 0.010 and f.pelvis_d2_max <= 0.02
+    # level steps from level data (docs/architecture.md "Level steps"): hip and knee
+    # within issue 11's RMS against Winter, and no toe grazing the floor (short slow
+    # steps used to blend the stair datasets, then to graze at 0-1 mm)
+    assert np.all(f.joint_rms[:2] <= 5.0) and np.all(f.joint_r[:2] >= 0.95)
+    assert f.toe_drag_fraction == 0.0
 
 
 def test_winter_reference_interpolates_by_cadence():

@@ -56,16 +56,26 @@ class CrowdParams:
     replan_turn_deg : float
         A walker that turns by more than this at a heel strike re-plans; otherwise it
         takes the next step of its current plan [deg].
-    speed_model : "free" or "time_gap"
+    speed_model : "free", "time_gap" or "contact_gap"
         ``free``: a step goes at the walker's free speed (stairs and slopes scaled);
         ``time_gap``: limited by the gap to the walker ahead (Tordeux et al. 2016,
-        :func:`crowdwalk.crowd.speed.time_gap_speed`).
+        :func:`crowdwalk.crowd.speed.time_gap_speed`); ``contact_gap``: limited by the
+        distance to the first contact along the walking line (Moussaïd et al. 2011),
+        to the neighbours' committed step ends, not counting walkers that face or
+        come towards the walker, and steering scores each direction at the step this
+        allows (:func:`crowdwalk.crowd.speed.contact_gap_speed`).
     time_gap : float
         T of the time-gap model [s]: 0.8, calibrated on the SFPE handbook's corridor
-        speeds (``scripts/calibrate_time_gap.py``; single-seed runs are noisy: RMS
-        against SFPE 0.083 m/s at 0.8 s against 0.093-0.096 at 0.6-0.7 s in the first
-        runs, 0.135 against 0.099 at 0.7 s on the final version); validated on Weidmann
-        (1993).
+        speeds (``scripts/calibrate_time_gap.py --model time_gap``; single-seed runs are
+        noisy: RMS against SFPE 0.083 m/s at 0.8 s against 0.093-0.096 at 0.6-0.7 s in
+        the first runs, 0.135 against 0.099 at 0.7 s on the final version); validated
+        on Weidmann (1993).
+    contact_time_gap : float
+        T of the contact-gap model [s]: 1.2, calibrated on the SFPE handbook's
+        corridor speeds as ``time_gap`` (``scripts/calibrate_time_gap.py --model
+        contact_gap``: RMS 0.129 / 0.114 / 0.117 / 0.109 m/s at 0.9 / 1.0 / 1.1 / 1.2 s,
+        flat within single-seed noise; most of it is the 0.75 /m² point, 0.16 m/s above
+        SFPE at every T); validated on Weidmann (1993).
     steering : SteeringParams
     """
 
@@ -83,6 +93,7 @@ class CrowdParams:
     planning_horizon: int = 3
     min_step_ratio: float = 0.15
     replan_turn_deg: float = 3.0
-    speed_model: Literal["free", "time_gap"] = "free"
+    speed_model: Literal["free", "time_gap", "contact_gap"] = "free"
     time_gap: float = 0.8
+    contact_time_gap: float = 1.2
     steering: SteeringParams = field(default_factory=SteeringParams)

@@ -246,6 +246,7 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
     # a frame is delivered when the next one has been asked for: a gait engine in a
     # worker process (crowdwalk.gait.remote) poses it while the next ticks are simulated
     waiting = None
+    walkable = sim.routes.graph
     try:
         deliver((sim.time, sim.snapshot(), None, lambda: None))
         while not sim.finished:
@@ -257,6 +258,9 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
             timing["poses_s"] += time.perf_counter() - w0
             if waiting is not None:
                 deliver(waiting)
+            if sim.routes.graph is not walkable:  # an event shut or opened a door: the
+                walkable = sim.routes.graph  # frames from this one on have the new area
+                writer.call("set_walkable", walkable.walkable_area.wkt)
             waiting = frame
             if progress is not None:
                 progress(sim.time, sim.duration, sim.remaining)

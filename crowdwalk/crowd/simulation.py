@@ -43,7 +43,7 @@ from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.shape import BodyShape
 from crowdwalk.crowd.spawning import free_to_spawn, place
-from crowdwalk.crowd.speed import step_durations, time_gap_speed
+from crowdwalk.crowd.speed import GapSteps, step_durations
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
@@ -256,6 +256,25 @@ class CrowdSimulation:
                                                      self.min_step_time[a], 0.0),
                               stair_rise=self.params.stair_rise)
 
+    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs) -> GapSteps | None:
+        """The gap speed model's steps for the deciders ``idx`` at ``pos`` (k, 2) [m]
+        among ``nbs`` (None for ``speed_model="free"``)."""
+        prm = self.params
+        if prm.speed_model == "free" or not nbs.valid.shape[1]:
+            return None
+        free, leg = self.pop.free_speed[idx], self.leg_length[idx]
+        if prm.speed_model == "time_gap":  # Tordeux et al.: everybody ahead, now
+            return GapSteps(pos, self.radius[idx], nbs.now, nbs.radius, nbs.valid,
+                            nbs.valid, free, leg, prm.time_gap, contact=False)
+        # the contact gap to where the neighbours' committed steps end; the step's speed
+        # does not count walkers that come towards this one (steering avoids them, which
+        # anticipates their motion; they are not followed)
+        h = self.state.heading[idx]
+        own = np.stack([np.cos(h), np.sin(h)], axis=-1)
+        followed = nbs.valid & (np.einsum("kmj,kj->km", nbs.velocity, own) >= -0.1)
+        return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
+                        free, leg, prm.contact_time_gap)
+
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
         te = st.t1[idx].copy()  # heel-strike (or wait-end) times, within this tick
@@ -294,6 +313,7 @@ class CrowdSimulation:
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
                                 count=prm.neighbours, reach=prm.neighbour_range)
         outline = self.shape.packed(idx)
+        gap = self._gap_steps(idx, pos, nbs)
         choice = split_rows(
             self.workers, choose_steps, idx.size, pos, st.stance[idx],
             heading=st.heading[idx], radius=self.radius[idx],
@@ -301,20 +321,12 @@ class CrowdSimulation:
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            on=self._steer_on)
+            on=self._steer_on, gap=gap if prm.speed_model == "contact_gap" else None)
         self.wall_steering += _time.perf_counter() - w0
-        if prm.speed_model == "time_gap" and nbs.valid.shape[1]:
-            v = time_gap_speed(position=pos, direction=choice.direction,
-                               radius=self.radius[idx], others=nbs.now,
-                               others_radius=nbs.radius, valid=nbs.valid,
-                               free_speed=self.pop.free_speed[idx], time_gap=prm.time_gap)
+        if gap is not None:
+            v, reach = gap.along(choice.direction)
             self.step_speed[idx] = np.maximum(v, 0.05)
-            # a slower step is a shorter one: what that speed covers in one step at the
-            # normal-mode step frequency for it (WBDS relation)
-            reach = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[idx])
-            choice = replace(choice, free_length=np.where(
-                v < self.pop.free_speed[idx], np.minimum(choice.free_length, reach),
-                choice.free_length))
+            choice = replace(choice, free_length=np.minimum(choice.free_length, reach))
         plan = StepPlan.standing(idx.size)
         mv = np.flatnonzero(choice.move)
         if mv.size:

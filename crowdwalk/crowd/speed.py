@@ -18,13 +18,22 @@ shorter than the WBDS step length at that speed; without it 1.000).
 ``CrowdParams.speed_model = "time_gap"`` adds :func:`time_gap_speed` (Tordeux et al.
 2016): the step's speed is limited by the gap to the walker ahead, and its length to what
 that speed covers in one step at the measured cadence for it.
+``speed_model = "contact_gap"`` (:func:`contact_gap_speed`) measures the gap as the
+distance to the first contact along the walking line (Moussaïd et al. 2011's d_h), so a
+walker beside-ahead counts by how far one can walk before touching it, and steering
+scores every candidate direction at the step it allows.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["STAIR_UP_FACTOR", "STAIR_DOWN_FACTOR", "step_durations", "time_gap_speed"]
+from planners import normal_mode
+
+__all__ = ["STAIR_UP_FACTOR", "STAIR_DOWN_FACTOR", "step_durations", "time_gap_speed",
+           "contact_gap_speed", "GapSteps"]
 
 #: Weidmann (1993): horizontal speed on stairs, up and down, over level speed 1.34 m/s.
 STAIR_UP_FACTOR = 0.610 / 1.34
@@ -79,3 +88,77 @@ def time_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.nd
     ahead = valid & (along > 0) & (lateral < reach)
     gap = np.where(ahead, np.linalg.norm(rel, axis=-1) - reach, np.inf).min(axis=1)
     return np.minimum(free_speed, np.maximum(gap, 0.0) / time_gap)
+
+
+def contact_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.ndarray,
+                      others: np.ndarray, others_radius: np.ndarray, valid: np.ndarray,
+                      free_speed: np.ndarray, time_gap: float) -> np.ndarray:
+    """Speed [m/s] that keeps ``time_gap`` [s] to the first contact along the walking
+    line: v = min(v0, d / T), d the distance the body can walk along ``direction`` before
+    it touches a neighbour standing where it is (the distance to the first collision,
+    d_h, of Moussaïd et al. 2011, PNAS 108:6884, heuristic 2). For a neighbour straight
+    ahead d = s − ℓ, Tordeux et al.'s gap; for one off the line by b < ℓ = r_i + r_j,
+    d = a − √(ℓ² − b²), a its distance along the line, so that a walker in the next lane
+    of a zipper, beside-ahead, does not count as if straight ahead.
+
+    ``direction`` is (k, 2) or (k, C, 2) (C candidate directions each); the result is
+    (k,) or (k, C). Other arguments as :func:`time_gap_speed`.
+    """
+    d = direction if direction.ndim == 3 else direction[:, None, :]
+    rel = (others - position[:, None, :])[:, None, :, :]  # (k, 1, m, 2)
+    along = np.einsum("kcmj,kcj->kcm", rel, d)
+    lateral = rel[..., 0] * d[:, :, None, 1] - rel[..., 1] * d[:, :, None, 0]
+    reach = (radius[:, None] + others_radius)[:, None, :]
+    ahead = valid[:, None, :] & (along > 0) & (np.abs(lateral) < reach)
+    contact = along - np.sqrt(np.maximum(reach**2 - lateral**2, 0.0))
+    gap = np.where(ahead, contact, np.inf).min(axis=2)  # (k, C)
+    v = np.minimum(free_speed[:, None], np.maximum(gap, 0.0) / time_gap)
+    return v if direction.ndim == 3 else v[:, 0]
+
+
+@dataclass(frozen=True, eq=False)
+class GapSteps:
+    """A gap speed model's step for m deciding walkers (struct-of-arrays).
+
+    Attributes
+    ----------
+    position, radius : (m, 2), (m,)
+        The walkers [m].
+    others, others_radius : (m, K, 2), (m, K)
+        Their neighbours where the gap is measured to [m], and radii [m].
+    valid, followed : (m, K) bool
+        The real neighbours (counted along candidate directions), and those the step's
+        own speed counts.
+    free_speed, leg_length : (m,)
+        [m/s], [m].
+    time_gap : float
+        T [s].
+    contact : bool
+        :func:`contact_gap_speed` (else :func:`time_gap_speed`, one direction each).
+    """
+
+    position: np.ndarray
+    radius: np.ndarray
+    others: np.ndarray
+    others_radius: np.ndarray
+    valid: np.ndarray
+    followed: np.ndarray
+    free_speed: np.ndarray
+    leg_length: np.ndarray
+    time_gap: float
+    contact: bool = True
+
+    def along(self, direction: np.ndarray, *, everyone: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Speed [m/s] and longest step [m] along unit ``direction`` (m, 2) or (m, C, 2),
+        each (m,) or (m, C): the step is what that speed covers in one step at the
+        normal-mode cadence for it (WBDS relation), unlimited at the free speed.
+        ``everyone``: count every neighbour, not only the followed ones."""
+        speed = contact_gap_speed if self.contact else time_gap_speed
+        v = speed(position=self.position, direction=direction, radius=self.radius,
+                  others=self.others, others_radius=self.others_radius,
+                  valid=self.valid if everyone else self.followed,
+                  free_speed=self.free_speed, time_gap=self.time_gap)
+        col = (slice(None),) + (None,) * (v.ndim - 1)
+        short = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[col])
+        return v, np.where(v < self.free_speed[col], short, np.inf)

@@ -39,6 +39,7 @@ import numpy as np
 from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.geometry import point_segment_distance, segment_distance
 from crowdwalk.crowd.shape import body_gaps, disc_centres
+from crowdwalk.crowd.speed import GapSteps
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -203,6 +204,7 @@ def choose_steps(
     lag: np.ndarray | None = None,
     shape: np.ndarray | None = None,
     yaw: np.ndarray | None = None,
+    gap: GapSteps | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -245,6 +247,11 @@ def choose_steps(
         default: discs of ``radius``). Used by the in-time test and the walls.
     yaw : (m,), optional
         Torso facing now [rad] (default: ``heading``).
+    gap : crowdwalk.crowd.speed.GapSteps, optional
+        The contact-gap model's steps: the utility then scores each candidate direction
+        at the step the model allows along it (every neighbour counted), so that a
+        walker falls in beside-behind the one ahead (the zipper) or steps round an
+        oncoming one rather than close up behind.
 
     Returns
     -------
@@ -373,6 +380,8 @@ def choose_steps(
 
     # utility at the end point of the preferred (or longest clear) step
     use = np.minimum(free, nominal_step[:, None])  # (m, C)
+    if gap is not None:
+        use = np.minimum(use, gap.along(dirs, everyone=True)[1])
     end = stance[:, None, :] + 0.5 * use[..., None] * dirs  # (m, C, 2)
     cand = np.concatenate([end, position[:, None, :]], axis=1)  # (m, C+1, 2); last = wait
     utility = np.linalg.norm(target[:, None, :] - cand, axis=-1)

@@ -773,7 +773,7 @@ class ElevInterp:
 
 
 _LINE_BEYOND = 0.6  # level line: extrapolated at most this far beyond its end intervals
-_RISE_FROM, _RISE_OVER, _FALL_OVER = 0.3, 0.2, 0.1  # heel-rise window [stride fraction]
+_RISE_FROM, _RISE_OVER, _FALL_OVER = 0.3, 0.2, 0.2  # heel-rise window [stride fraction]
 _MAX_RISE = 0.2  # largest change of the trailing foot's elevation [rad]
 
 
@@ -786,8 +786,8 @@ def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray
     raises it by the missing height ``height − step[:, 1]`` is closed form. The foot
     elevation changes by f' − f over a window: 0 until t = 0.3 (foot flat), smoothly 1
     at t = 0.5 (the other heel strikes), kept through push-off to the dataset's foot-off
-    ``stance_fraction`` (k,) and gone 0.1 later (the foot is off the ground: swing
-    clearance is untouched). Lengths in leg lengths; elevations [rad].
+    ``stance_fraction`` (k,) and gone 0.2 later (early swing; the toe clearance of the
+    middle third is :func:`lift_swing_toe`'s). Lengths in leg lengths; elevations [rad].
     """
     k, n = curves.shape[:2]
     ankle_h, ball = props[:, 2], props[:, 4]

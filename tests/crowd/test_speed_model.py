@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from crowdwalk.crowd import CrowdParams
-from crowdwalk.crowd.speed import time_gap_speed
+from crowdwalk.crowd.speed import contact_gap_speed, time_gap_speed
 from crowdwalk.verify import free_speed, ring_corridor_speed, weidmann_speed
 
 
@@ -37,3 +37,38 @@ def test_time_gap_model_follows_weidmann_at_1_5_per_m2(tmp_path):
     density, speed = ring_corridor_speed(1.5, tmp_path, params=params)
     assert 1.0 < density < 2.2
     assert speed == pytest.approx(float(weidmann_speed(density)), abs=0.15)
+
+
+def test_contact_gap_speed_counts_the_distance_to_first_contact():
+    me = np.zeros((3, 2))
+    ahead = np.array([[1.0, 0.0]] * 3)
+    others = np.array([[[1.2, 0.0]],     # straight ahead: Tordeux's s − ℓ
+                       [[0.5, 0.3]],     # beside-ahead, 0.3 m off the line
+                       [[0.5, 0.4]]])    # 0.4 m off the line: never touched
+    v = contact_gap_speed(position=me, direction=ahead, radius=np.full(3, 0.18),
+                          others=others, others_radius=np.full((3, 1), 0.18),
+                          valid=np.ones((3, 1), bool), free_speed=np.full(3, 1.34),
+                          time_gap=0.8)
+    contact = 0.5 - np.sqrt(0.36**2 - 0.3**2)
+    np.testing.assert_allclose(v, [(1.2 - 0.36) / 0.8, contact / 0.8, 1.34])
+    # candidate directions (k, C, 2): turning away from the one ahead frees the way
+    fan = np.array([[[1.0, 0.0], [0.0, 1.0]]] * 3)
+    vc = contact_gap_speed(position=me, direction=fan, radius=np.full(3, 0.18),
+                           others=others, others_radius=np.full((3, 1), 0.18),
+                           valid=np.ones((3, 1), bool), free_speed=np.full(3, 1.34),
+                           time_gap=0.8)
+    assert vc.shape == (3, 2)
+    np.testing.assert_allclose(vc[:, 0], v)
+    assert vc[0, 1] == 1.34
+
+
+def test_verify_names_an_unknown_speed_model_in_one_line(tmp_path):
+    from typer.testing import CliRunner
+
+    from crowdwalk.cli import app
+
+    result = CliRunner().invoke(app, ["verify", "--speed-model", "fast", "--only", "rimea1",
+                                      "--out", str(tmp_path / "v.md")])
+    assert result.exit_code == 2
+    assert "speed_model must be one of free, time_gap, contact_gap; got 'fast'" in result.output
+    assert not (tmp_path / "v.md").exists()

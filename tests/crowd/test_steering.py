@@ -136,3 +136,26 @@ def test_deciding_together_equals_deciding_alone(crowds):
         assert together.move[i] == alone.move[0]
         assert together.free_length[i] == alone.free_length[0]
         assert np.array_equal(together.direction[i], alone.direction[0])
+
+
+def test_gap_reach_makes_a_follower_fall_in_beside_the_walker_ahead():
+    # a walker 0.7 m ahead on the same line, walking on: the swept-body test lets the
+    # follower close up behind it; scored at the step the contact gap allows, the
+    # follower steps beside-behind it instead (the zipper)
+    from crowdwalk.crowd.speed import GapSteps
+
+    leader = np.array([[0.8, 0.0]])
+    nbs = Neighbours(valid=np.ones((1, 1), bool), now=leader[None], end=leader[None] + [0.3, 0.0],
+                     velocity=np.array([[[0.6, 0.0]]]), radius=np.full((1, 1), R))
+    gap = GapSteps(np.zeros((1, 2)), np.array([R]), nbs.end, nbs.radius, nbs.valid, nbs.valid,
+                   np.array([1.34]), np.array([0.9]), time_gap=1.0)
+
+    args = dict(position=np.zeros((1, 2)), stance=np.array([[0.1, 0.0]]),
+                heading=np.array([0.0]), radius=np.array([R]),
+                route_direction=np.array([[1.0, 0.0]]), target=np.array([[3.0, 0.0]]),
+                nominal_step=np.array([0.7]), neighbours=nbs, clearance=ROOM)
+    behind = choose_steps(**args)
+    beside = choose_steps(**args, gap=gap)
+    assert behind.move[0] and beside.move[0]
+    assert abs(behind.direction[0][1]) < 1e-9
+    assert abs(beside.direction[0][1]) > 0.1
