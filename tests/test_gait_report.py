@@ -8,6 +8,7 @@ import pytest
 from crowdwalk.crowd.run import RunOverrides, run_scenario
 from crowdwalk.gait_report import (
     WalkerTrack,
+    edge_clearance,
     heel_slides,
     report_table,
     run_figures,
@@ -91,3 +92,37 @@ def test_heel_slide_and_jumps_are_detected():
     jump = pos[:, 4].copy()
     jump[20] += [0.0, 0.0, 0.10]
     assert second_differences(jump, 25.0).max() == pytest.approx(0.20, abs=1e-6)
+
+
+def test_clearance_over_an_edge_and_a_foot_across_one():
+    """A swing foot carried flat 3 cm above a 17 cm step edge clears it by 3 cm (the
+    samples beyond the edge see the tread top); a planted foot overhanging the edge
+    rests across it; a foot on one tread does not."""
+    f = 30
+    step = 0.5  # edge at x = 0.5: ground 0 before, 0.17 after
+
+    def ground(xy):
+        return np.where(xy[:, 0] >= step, 0.17, 0.0)
+
+    pos = np.zeros((f, 20, 3))
+    pos[:, 2] = [0.0, 0.1, 1.1]
+    pos[:, 7] = [0.0, -0.1, 1.1]
+    x = np.linspace(-0.2, 1.2, f)
+    pos[:, 4] = np.column_stack([x, np.full(f, 0.1), np.full(f, 0.20 + 0.06825)])
+    pos[:, 6] = pos[:, 4] + [0.12775, 0.0, -0.06825]
+    pos[:, 9] = [0.55 - 0.12775, -0.1, 0.17 + 0.06825]  # right ball on the upper tread,
+    pos[:, 11] = [0.55, -0.1, 0.17]                    # its heel over the drop
+    contact = np.ones((f, 2), bool)
+    contact[3:f - 3, 0] = False
+    track = WalkerTrack(agent=0, body_height=1.75, time=np.arange(f) / 25, positions=pos,
+                        contact=contact, fps=25.0)
+    over, across = edge_clearance(track, 0, ground)
+    assert over.shape == (1,) and over[0] == pytest.approx(0.03, abs=1e-6)
+    assert edge_clearance(track, 1, ground)[1].tolist() == [True]
+    lower = pos.copy()
+    lower[:, 4, 2] -= 0.05  # now 2 cm into the tread
+    lower[:, 6, 2] -= 0.05
+    track = WalkerTrack(agent=0, body_height=1.75, time=track.time, positions=lower,
+                        contact=contact, fps=25.0)
+    assert edge_clearance(track, 0, ground)[0][0] == pytest.approx(-0.02, abs=1e-6)
+    assert edge_clearance(track, 0, ground)[1].tolist() == [False, False]

@@ -31,6 +31,10 @@ Around the walker the Animator adds what a crowd needs:
   and over the last tenth, so the feet leave and land where the stance feet are).
   Every frame, a swing sole still below the ground is lifted by its depth (IK again),
   re-checked and lifted further, up to three times.
+- **Level steps (docs/architecture.md, "Level steps").** The step asked of ElevInterp
+  is shortened by the swing hip's lead at heel strike under the style's pelvic
+  rotation (Eq. 10's pelvis term), and over level ground the swing knee flexes until the
+  sole clears the floor by ``GaitStyle.toe_clearance`` mid-swing.
 - **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
   the stance hip starts where the previous step left the root and rejoins the data over
   the first half of the step (sagittal two-link IK of the stance leg).
@@ -67,6 +71,7 @@ __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
 _CLEARANCE = 0.002  # swing foot closer to the ground than this [m] → follow the Bezier
 _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off → 0.95
 _PHASE_END = 0.5 - 1e-6
+_BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
 _MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
@@ -491,9 +496,9 @@ class Animator:
         return body.hip_separation * np.sin(self.attributes.pelvic_rotation[a])
 
     def _cleared(self, a: np.ndarray, body: Body, data, height: np.ndarray) -> np.ndarray:
-        """The step's datasets (k, N, 4) with the swing sole lifted to the walker's toe
-        clearance over level ground (``elevinterp.lift_swing_toe``; the swing hip drops
-        by the pelvic list); steps up or down keep ElevInterp's dataset."""
+        """The step's datasets (k, N, 4) with the swing sole lifted to
+        ``GaitStyle.toe_clearance`` over level ground (``elevinterp.lift_swing_toe``; the
+        swing hip drops by the pelvic list); steps up or down keep ElevInterp's dataset."""
         if not self.style.level_clearance:
             return data.angles
         level = np.abs(height) < _LEVEL_RISE
@@ -501,12 +506,11 @@ class Animator:
         if not level.any():
             return out
         at = self.attributes
-        tilt = self.style.pelvic_list if at is None else at.pelvic_list[a[level]]
-        clearance = self.style.toe_clearance
+        pelvic_list = self.style.pelvic_list if at is None else at.pelvic_list[a[level]]
         lb = body.take(np.flatnonzero(level))
         out[level] = lift_swing_toe(data.angles[level], lb, data.stance_fraction[level],
-                                    hip_drop=lb.hip_separation * np.sin(tilt),
-                                    clearance=clearance)
+                                    hip_drop=lb.hip_separation * np.sin(pelvic_list),
+                                    clearance=self.style.toe_clearance)
         return out
 
     def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
@@ -822,7 +826,9 @@ class Animator:
             t_off = self._swing.toe_off[a]
             s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
-            ramp = _smoothstep((tau - t_off) / 0.15) * _smoothstep((1.0 - tau) / 0.15)
+            swing = np.maximum(1.0 - t_off, 1e-9)
+            ramp = (_smoothstep((tau - t_off) / (_BEZIER_IN * swing))
+                    * _smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
             blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
             target = _bezier(self._swing.bezier[a], tau)
             pinned = self._swing.has_trail[a] & (tau < t_off)

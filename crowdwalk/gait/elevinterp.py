@@ -33,6 +33,13 @@ Implementation notes (deviations and choices, each measured in the tests/benchma
   reach is retried in the neighbouring triangles, then with weights ≥ −1. What still
   misses (a few % of the hull area, errors ≤ 1.5 cm) keeps its best blend and is
   flagged (``clamped``, ``converged`` False).
+- Level steps (extensions, switches ``ElevInterpConfig.level_datum`` and
+  ``heel_rise``, on by default; docs/architecture.md "Level steps"). Eq. 10 puts this
+  body's level datasets 0.7–2 cm below the stance foot, so the paper's SH = 0 request
+  blends in a stair dataset. A level request is served by the level datasets alone
+  (the "level line"), a low rise with its height measured from theirs; the blend is
+  then closed by the trailing foot (a higher heel through push-off, closed form on the
+  ball's circle) and the length solved again, so the swing foot lands on the floor.
 - Speed blend (extension, switch ``ElevInterpConfig.speed_blend``; the paper blends by
   step length and height only). Given each step's walking speed, the level datasets
   (Bovi's xs … l) blended by *speed* replace, in mid-stance and mid-swing, the level
@@ -243,10 +250,11 @@ class ElevInterpConfig:
     speed_fade : float
         The speed residual fades linearly to zero at this |step height| [leg lengths].
     level_datum : bool
-        Level requests are served from the level datasets (an extension of §5, module
-        notes): step heights are measured from the height Eq. 10 gives the level datasets
-        for the body at that length, so SH = 0 does not blend in the stair datasets.
-        False: the paper's Height/Length space.
+        Level requests are served from the level datasets alone (an extension of §5,
+        module notes): SH = 0 by the two level datasets whose Eq. 10 lengths bracket the
+        request (extrapolated a little beyond the slowest and fastest), a low rise by
+        the triangulation with its height measured from the level datasets' own Eq. 10
+        height, so neither blends in the stair datasets. False: the paper's space.
     heel_rise : bool
         Near-level datasets are closed by the trailing foot (an extension of §5, module
         notes): the foot elevation is lowered (heel raised, rolling on the ball) from
@@ -819,9 +827,9 @@ def lift_swing_toe(angles: np.ndarray, leg: LegLike, stance_fraction: np.ndarray
     closer than ``clearance``, the swing knee flexes more — thigh elevation up and shank
     elevation down by Δ·sin² over the swing, Δ the least that lifts every sample there
     (linearised, then refined twice; at most 0.2 rad); the foot keeps the data's
-    elevation. An extension of §5:
-    the data's own swing, with this body's foot, can graze the floor
-    (docs/architecture.md, "Level steps"). Datasets that clear are returned unchanged.
+    elevation. An extension of §5: the data's own swing, with this body's foot, can
+    graze the floor (docs/architecture.md, "Level steps"). Datasets that clear are
+    returned unchanged.
     """
     out = np.array(angles, dtype=float, copy=True)
     k, n = out.shape[:2]

@@ -99,8 +99,8 @@ class GaitStyle:
     max_iterations : int
         Gauss–Newton iterations before a solve counts as not converged.
     toe_clearance : float
-        Least height of the swing sole over level ground [m] (KLAW's default
-        ``toe_clearance``; walkers with a style use their own).
+        Least height of the swing sole over level ground in the middle of the swing [m]
+        (Winter 1992: minimum toe clearance 1.29 ± 0.45 cm).
     level_clearance : bool
         The Animator lifts the data's swing sole to ``toe_clearance`` over level ground
         (an extension, docs/architecture.md "Level steps"); False: the data's swing.

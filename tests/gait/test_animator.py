@@ -8,6 +8,7 @@ import pytest
 
 from crowdwalk.body import (
     JOINT_NAMES,
+    LEG_JOINTS,
     PARENTS,
     Body,
     forward_kinematics,
@@ -122,6 +123,25 @@ def test_swing_follows_the_planner_bezier_over_a_block():
         lowest = min(lowest, gap.min())
     assert lowest > -1e-3
 
+
+
+def test_the_swing_joins_the_planner_bezier_without_a_jump():
+    """The swing ankle blends onto the Bezier (30 cm over a block) over half the swing and
+    off it over the last 0.3 (issue 11 item 5): at 25 fps its second difference stays
+    under 15 cm (a blend over 0.15 of the step, two frames, made 36 cm)."""
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_block)
+    a = float(body.ankle_height[0])
+    animator.command(_command([0], -0.6, 1, [[-0.75, 0.045, 0.0]], [[0.0, -0.045, 0.0]]))
+    bezier = np.array([[[0.0, -0.045, a], [0.15, -0.045, a + 0.3], [0.6, -0.045, a + 0.3],
+                        [0.75, -0.045, a]]])  # fmt: skip
+    animator.command(_command([0], 0.0, 1, [[0.0, 0.045, 0.0]], [[0.75, -0.045, 0.0]],
+                              bezier=bezier))  # fmt: skip
+    ankle = np.array([animator.pose(f / 25.0).positions[0, LEG_JOINTS[1, 2]]
+                      for f in range(16)])  # fmt: skip
+    d2 = np.linalg.norm(ankle[2:] - 2 * ankle[1:-1] + ankle[:-2], axis=1)
+    assert animator.stats["bezier_steps"] == 1
+    assert d2.max() < 0.15
 
 def test_non_converged_solves_fall_back_to_the_previous_pose_and_are_flagged():
     body = Body.from_heights([1.7, 1.7])
