@@ -180,12 +180,13 @@ def second_differences(points: np.ndarray, fps: float) -> np.ndarray:
 
 
 def heel_slides(track: WalkerTrack, side: int, *, tolerance: float = 0.005
-                ) -> tuple[np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per stance of one foot: horizontal slide [m] of the planted heel or ball (the larger)
-    while it is within ``tolerance`` [m] of its lowest height in that stance, and the foot's
-    yaw change [deg] while the ball is planted. Shapes (n_stances,)."""
+    while it is within ``tolerance`` [m] of its lowest height in that stance, the foot's
+    yaw change [deg] while the ball is planted, and while the heel is (a turn that is not
+    on the ball). Shapes (n_stances,)."""
     pts = foot_points(track, side)
-    slides, turns = [], []
+    slides, turns, heel_turns = [], [], []
     for a, b in stance_runs(track.contact[:, side]):
         worst = 0.0
         for name in ("heel", "ball"):
@@ -195,10 +196,12 @@ def heel_slides(track: WalkerTrack, side: int, *, tolerance: float = 0.005
             worst = max(worst, float(np.linalg.norm(q - q[0], axis=1).max()))
         f = (pts["toe"] - pts["heel"])[a:b]
         down = pts["ball"][a:b, 2] <= pts["ball"][a:b, 2].min() + tolerance
-        yaw = np.unwrap(np.arctan2(f[down, 1], f[down, 0]))
+        yaw = np.unwrap(np.arctan2(f[:, 1], f[:, 0]))
+        heel = pts["heel"][a:b, 2] <= pts["heel"][a:b, 2].min() + tolerance
         slides.append(worst)
-        turns.append(float(np.rad2deg(yaw.max() - yaw.min())))
-    return np.asarray(slides), np.asarray(turns)
+        turns.append(float(np.rad2deg(np.ptp(yaw[down]))))
+        heel_turns.append(float(np.rad2deg(np.ptp(yaw[heel]))))
+    return np.asarray(slides), np.asarray(turns), np.asarray(heel_turns)
 
 
 def swing_clearance(track: WalkerTrack, side: int, ground) -> tuple[np.ndarray, np.ndarray]:
@@ -320,6 +323,8 @@ class GaitFigures:
     heel_slide_max: float
     stances_over_10mm: int
     stances_turning_over_10deg: int
+    heel_down_turn_max: float
+    spins_over_10deg: int
     stances: int
     pelvis_d2_max: float
     foot_d2_level: float
@@ -408,8 +413,9 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
         else:
             stair[kind] = (nan, nan, nan)
 
-    slides, turns = (np.concatenate(v) for v in zip(*(heel_slides(track, s) for s in (0, 1)),
-                                                    strict=True))
+    slides, turns, heel_turns = (np.concatenate(v) for v in zip(
+        *(heel_slides(track, s) for s in (0, 1)), strict=True))
+    spins = np.abs(steps["spin"]) if "spin" in steps else np.zeros(0)
     toe, lift = (np.concatenate(v) for v in zip(*(swing_clearance(track, s, ground)
                                                   for s in (0, 1)), strict=True))
     over, across = (np.concatenate(v) for v in zip(*(edge_clearance(track, s, ground)
@@ -431,7 +437,9 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
         pelvis_excursion=excursion,
         heel_slide_max=float(slides.max()) if slides.size else nan,
         stances_over_10mm=int((slides > 0.010).sum()),
-        stances_turning_over_10deg=int((turns > 10.0).sum()), stances=int(slides.size),
+        stances_turning_over_10deg=int((turns > 10.0).sum()),
+        heel_down_turn_max=float(heel_turns.max()) if heel_turns.size else nan,
+        spins_over_10deg=int((spins > np.deg2rad(10.0)).sum()), stances=int(slides.size),
         pelvis_d2_max=float(second_differences(pelvis, track.fps).max()),
         foot_d2_level=float(d2_feet[inner].max()) if inner.any() else nan,
         foot_d2_other=float(d2_feet[~inner].max()) if (~inner).any() else nan,
@@ -495,8 +503,11 @@ _ROWS = (  # (figure, target, values of one walker, format of those values)
      lambda f: (f.pelvis_excursion * 100,), "{:.1f}"),
     ("heel slide max [mm]; stances > 10 mm", "<= 10; 0",
      lambda f: (f.heel_slide_max * 1000, f.stances_over_10mm, f.stances), "{:.0f}; {:.0f}/{:.0f}"),
-    ("stances turning > 10 deg", "spin turns only",
-     lambda f: (f.stances_turning_over_10deg, f.stances), "{:.0f}/{:.0f}"),
+    ("stances turning > 10 deg; spin turns > 10 deg", "spin turns only",
+     lambda f: (f.stances_turning_over_10deg, f.stances, f.spins_over_10deg),
+     "{:.0f}/{:.0f}; {:.0f}"),
+    ("stance turn with the heel down max [deg]", "0 (on the ball)",
+     lambda f: (f.heel_down_turn_max,), "{:.1f}"),
     ("pelvis 2nd difference max [cm]", "<= 2", lambda f: (f.pelvis_d2_max * 100,), "{:.1f}"),
     ("foot 2nd diff level / elsewhere [cm] (x)", "elsewhere <= 1.5 x level",
      lambda f: (f.foot_d2_level * 100, f.foot_d2_other * 100,

@@ -18,7 +18,9 @@ __all__ = ["FOOTSTEP_COLUMNS", "StepBatch"]
 #: strike that ends the step); x, y, z [m] (ankle foothold, world frame); step_length,
 #: step_height [m]; energy [J/kg, per step]; heading [rad]; kind is the
 #: :class:`~crowdwalk.terrain.TerrainKind` value under the foothold; on_obstacle is 1 when
-#: the foothold is on an obstacle that could have been stepped over.
+#: the foothold is on an obstacle that could have been stepped over; toe_out [rad] (the
+#: landing foot's, outward positive) and spin [rad] (the stance foot's spin turn about its
+#: ball, counter-clockwise positive) are MetaGait's (Sun & Metaxas 2001, §6.1).
 FOOTSTEP_COLUMNS = (
     "agent",
     "step",
@@ -35,6 +37,8 @@ FOOTSTEP_COLUMNS = (
     "heading",
     "kind",
     "on_obstacle",
+    "toe_out",
+    "spin",
 )
 
 
@@ -82,6 +86,12 @@ class StepBatch:
         :class:`~crowdwalk.terrain.TerrainKind` under the new foothold.
     on_obstacle : (k,) bool
         The new foothold is on an obstacle short enough to have been stepped over.
+    toe_out : (k,) float
+        Toe-out of the landing (swing) foot from the walking direction, outward positive
+        [rad] (MetaGait, :func:`crowdwalk.gait.metagait.orient_steps`).
+    spin : (k,) float
+        Spin turn of the stance foot about its ball during this step, counter-clockwise
+        positive [rad] (MetaGait; 0 for most steps).
     """
 
     agent: np.ndarray
@@ -101,6 +111,8 @@ class StepBatch:
     swing_bezier: np.ndarray
     kind: np.ndarray
     on_obstacle: np.ndarray
+    toe_out: np.ndarray
+    spin: np.ndarray
 
     def __len__(self) -> int:
         return int(self.agent.shape[0])
@@ -131,4 +143,5 @@ class StepBatch:
             "step_length": self.length, "step_height": self.rise, "energy": self.energy,
             "planner": self.planner, "group": self.group, "heading": self.heading,
             "kind": self.kind, "on_obstacle": self.on_obstacle.astype(int),
+            "toe_out": self.toe_out, "spin": self.spin,
         }

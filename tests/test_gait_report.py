@@ -86,12 +86,35 @@ def test_heel_slide_and_jumps_are_detected():
     pos[:, 6, 0] += np.linspace(0, 0.03, f)
     track = WalkerTrack(agent=0, body_height=1.75, time=np.arange(f) / 25,
                         positions=pos, contact=np.ones((f, 2), bool), fps=25.0)
-    slides, turns = heel_slides(track, 0)
+    slides, turns, heel_turns = heel_slides(track, 0)
     assert slides[0] == pytest.approx(0.03, abs=1e-6) and turns[0] == pytest.approx(0.0)
+    assert heel_turns[0] == pytest.approx(0.0)
     assert heel_slides(track, 1)[0][0] == pytest.approx(0.0, abs=1e-9)
     jump = pos[:, 4].copy()
     jump[20] += [0.0, 0.0, 0.10]
     assert second_differences(jump, 25.0).max() == pytest.approx(0.20, abs=1e-6)
+
+
+def test_a_foot_turning_on_its_heel_is_reported():
+    """A planted foot whose toes swing 20 degrees round the heel: a turn with the heel
+    down (not a spin on the ball) and a ball that slides."""
+    f = 30
+    pos = np.zeros((f, 20, 3))
+    pos[:, 2, :] = [0.0, 0.1, 0.9]
+    pos[:, 7, :] = [0.0, -0.1, 0.9]
+    yaw = np.deg2rad(np.linspace(0.0, 20.0, f))
+    heel = np.array([-0.05, 0.1])
+    for i, y in enumerate(yaw):
+        d = np.array([np.cos(y), np.sin(y)])
+        pos[i, 4] = [*(heel + 0.05 * d), 0.068]
+        pos[i, 6] = [*(heel + 0.178 * d), 0.0]
+    pos[:, 9] = [0.0, -0.1, 0.068]
+    pos[:, 11] = [0.128, -0.1, 0.0]
+    track = WalkerTrack(agent=0, body_height=1.75, time=np.arange(f) / 25,
+                        positions=pos, contact=np.ones((f, 2), bool), fps=25.0)
+    slides, turns, heel_turns = heel_slides(track, 0)
+    assert heel_turns[0] == pytest.approx(20.0, abs=0.5)
+    assert slides[0] > 0.03  # the ball swings round the heel
 
 
 def test_clearance_over_an_edge_and_a_foot_across_one():

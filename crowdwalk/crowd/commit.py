@@ -39,12 +39,13 @@ def swing_bezier(swing: np.ndarray, *, stance: np.ndarray, stance_z: np.ndarray,
 
 def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
                direction: np.ndarray, yaw: np.ndarray, plan, duration: np.ndarray, terrain,
-               legs, population, foot_half_width) -> StepBatch:
+               legs, population, foot_half_width, turn) -> StepBatch:
     """Start the steps ``plan`` (a :class:`~crowdwalk.crowd.stepping.StepPlan` of k rows)
     of ``agents`` (k,) at ``start_time`` (k,) [s] along unit ``direction`` (k, 2), lasting
     ``duration`` (k,) [s], the torso turning to face ``yaw`` (k,) [rad] (unwrapped against
-    its facing now): ``state`` moves on (in place; the plan queue's anchor is the new
-    stance) and the steps are returned."""
+    its facing now), oriented by MetaGait's ``turn``
+    (:class:`~crowdwalk.gait.metagait.StepTurn`): ``state`` moves on (in place; the plan
+    queue's anchor is the new stance) and the steps are returned."""
     st, a, d = state, agents, direction
     L, H = plan.length, plan.rise
     new_c = st.stance[a] + L[:, None] * d
@@ -86,4 +87,4 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
         group=np.asarray(pop.group_names, dtype=object)[pop.group[a]].astype(str),
         swing_bezier=swing_bezier(plan.swing, stance=st.trail[a], stance_z=st.trail_z[a],
                                   direction=d, lateral=side * foot_half_width),
-        kind=kind, on_obstacle=on_obstacle)
+        kind=kind, on_obstacle=on_obstacle, toe_out=turn.toe_out, spin=turn.spin)

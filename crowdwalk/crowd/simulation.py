@@ -20,7 +20,9 @@ pure functions over arrays, one module each:
    duration from the speed model (:mod:`~crowdwalk.crowd.speed`);
 5. the agents that do not step stand (:mod:`~crowdwalk.crowd.waiting`); those without
    progress for a while re-route (:class:`~crowdwalk.crowd.routing.Routes`); the others
-   take their steps (:mod:`~crowdwalk.crowd.commit`), which leave as one
+   take their steps (:mod:`~crowdwalk.crowd.commit`), oriented by MetaGait (Sun &
+   Metaxas 2001 §6.1, :meth:`crowdwalk.gait.metagait.MetaGait.orient`: the landing
+   foot's toe-out for the turn ahead, spin turns on the stance foot), which leave as one
    :class:`~crowdwalk.steps.StepBatch` for the gait engine (batched per output frame) and
    for the run's sinks (:meth:`CrowdSimulation.take_steps`).
 Ticks are aligned with output frames so frames are exact interpolations.
@@ -49,6 +51,7 @@ from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
 from crowdwalk.errors import invalid
+from crowdwalk.gait.metagait import MetaGait
 from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
@@ -124,6 +127,7 @@ class CrowdSimulation:
         self.footsteps, self.routes = parts.footsteps, parts.routes
         self.setting = self._style_settings()
         self.state = AgentState(n)
+        self.metagait = MetaGait(n)  # orientation of every step (§6.1)
         self.queue = PlanQueue(n, self.footsteps.horizon)
         table = self.routes.table
         self.state.route = self.routes.of_agent.copy()
@@ -380,16 +384,33 @@ class CrowdSimulation:
         if go.size == 0:
             return
         a, steps = idx[go], plan.take(go)
+        turn = self._orient(a, direction[go], steps.length)
         batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
                            yaw=yaw[go], plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
-                           foot_half_width=self.half_width[a])
+                           foot_half_width=self.half_width[a], turn=turn)
         self._decided.append(batch)
         if self.gait is not None:
             if self._pending and np.isin(a, np.concatenate([b.agent for b in self._pending])).any():
                 self._flush_commands()  # an agent's earlier step must reach the engine first
             self._pending.append(batch)
             st.animated[a] = True
+
+    def _orient(self, a: np.ndarray, direction: np.ndarray, length: np.ndarray):
+        """MetaGait's toe-out and spin turns (:class:`~crowdwalk.gait.metagait.StepTurn`)
+        of the steps of agents ``a`` (k,) along ``direction`` (k, 2), ``length`` (k,) [m]:
+        ψ is the step's direction; the next step's, d', is where the steering rule would
+        head from the new foothold one step further along the route (neighbours aside)."""
+        st = self.state
+        heading = np.arctan2(direction[:, 1], direction[:, 0])
+        body = st.stance[a] + (0.5 * length)[:, None] * direction
+        _, ahead = steering_targets(
+            self.routes.table, route=st.route[a], progress=st.progress[a] + length, xy=body,
+            heading=heading, radius=self.radius[a], clearance=self.clearance,
+            params=self.params)
+        return self.metagait.orient(a, swing_foot=st.foot[a], heading=heading,
+                                    heading_next=np.arctan2(ahead[:, 1], ahead[:, 0]),
+                                    base_toe_out=self.pop.style.foot_angle[a])
 
     def _flush_commands(self) -> None:
         """Send the buffered steps to the gait engine in one batch (an engine has a fixed

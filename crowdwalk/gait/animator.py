@@ -46,8 +46,10 @@ Around the walker the Animator adds what a crowd needs:
   :attr:`PoseFrame.fallback`; no NaN reaches the output.
 
 Curved paths turn the sagittal plane ψ smoothly from the previous heading to the
-commanded one over the step (§4.4); a commanded spin turn rotates the stance foot about
-its ball early in the step (§6.1).
+commanded one over the step (§4.4). Toe-out and spin turns are MetaGait's (§6.1, in the
+crowd :meth:`crowdwalk.gait.metagait.MetaGait.orient`): a commanded spin turn rotates
+the stance foot about its ball once the heel has risen off the ground (the data's heel
+rise, :func:`_spin_start`), and the body with it; nothing else turns a planted foot.
 """
 
 from __future__ import annotations
@@ -73,7 +75,8 @@ _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off �
 _PHASE_END = 0.5 - 1e-6
 _BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
-_MAX_STANCE_TWIST = np.radians(30.0)  # stance foot yaw vs heading beyond which it spins
+_SPIN_HEEL_LIFT = 0.008  # heel height above its ground at which a spin turn starts [m]
+_SPIN_GRID = np.linspace(0.0, 1.0, 41)  # step phases searched for the heel rise
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
 _SOLE_SAMPLES = 8  # ground samples along the sole, heel to toe tip
@@ -88,6 +91,7 @@ _LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the la
 _LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
 _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
 _LEVEL_RISE = 0.02  # steps rising or falling less than this are level [m]
+_YAW_ROUNDS = 2  # corrections of the swing foot's yaw per frame
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
 
 
@@ -101,6 +105,23 @@ def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:
     u = 1.0 - tau
     w = np.stack([u**3, 3 * u * u * tau, 3 * u * tau * tau, tau**3], axis=1)
     return np.einsum("kc,kcd->kd", w, ctrl)
+
+
+def _spin_start(body: Body, angles: np.ndarray, yaw_off: np.ndarray,
+                slope: np.ndarray) -> np.ndarray:
+    """Step phase τ (m,) [1] at which the stance foot's heel has risen ``_SPIN_HEEL_LIFT``
+    off the ground, rolling on its ball (§4.1: the foot pitch of the data ``angles``
+    (m, S, 4) below the ground ``slope`` (m,) [rad], seen ``yaw_off`` (m,) [rad] from the
+    sagittal plane); 1 where it never does (a spin then turns nothing)."""
+    m = slope.size
+    phases = np.tile(0.5 * np.minimum(_SPIN_GRID, 1.0 - 1e-6), m)
+    rows = np.repeat(np.arange(m), _SPIN_GRID.size)
+    phi = sample(angles, phases, rows=rows)[:, 0].reshape(m, -1)
+    pitch = np.arctan(np.tan(phi) * np.cos(yaw_off)[:, None])
+    hb = (body.heel_offset + body.ball_offset)[:, None]
+    up = hb * np.sin(np.maximum(slope[:, None] - pitch, 0.0)) >= _SPIN_HEEL_LIFT
+    up &= _SPIN_GRID[None, :] > 0.3  # the rise of late stance, not the heel strike
+    return np.where(up.any(axis=1), _SPIN_GRID[np.argmax(up, axis=1)], 1.0)
 
 
 def _column(values, m: int, owner: str, name: str, constraint: str, dtype=float) -> np.ndarray:
@@ -156,7 +177,8 @@ class StepCommand:
                    swing_foot=steps.foot.astype(int), start=steps.start, target=steps.target,
                    heading=steps.heading, step_length=np.maximum(steps.length, _MIN_STEP),
                    step_height=steps.rise, swing_bezier=steps.swing_bezier,
-                   speed=np.maximum(steps.length, _MIN_STEP) / steps.duration)
+                   speed=np.maximum(steps.length, _MIN_STEP) / steps.duration,
+                   toe_out=steps.toe_out, spin=steps.spin)
 
     def __post_init__(self) -> None:
         owner = "StepCommand"
@@ -214,11 +236,13 @@ class _StepState:
     stance_left: np.ndarray  # (n,) bool
     psi0: np.ndarray  # (n,) heading at the start of the step [rad]
     psi1: np.ndarray  # (n,) ... at its end [rad]
+    spin_start: np.ndarray  # (n,) step phase τ at which a spin turn starts [1]
 
     @classmethod
     def zeros(cls, n: int, samples: int) -> _StepState:
         return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.full(n, 0.6),
-                   np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n))
+                   np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n),
+                   np.ones(n))
 
 
 @dataclass(eq=False)
@@ -351,7 +375,7 @@ class Animator:
         self._warm = _SolverWarmth.zeros(n)
         self._last = _LastPose.zeros(n, nj)
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
-                      "lifted": 0, "lift_steps": 0}  # fmt: skip
+                      "lifted": 0, "lift_steps": 0, "yaw_fixes": 0}  # fmt: skip
 
     # -- public -----------------------------------------------------------------------
     @property
@@ -448,7 +472,6 @@ class Animator:
         must produce is the one between the footholds the feet really use (the stance
         foot where it landed, the commanded target); corrections start from zero."""
         a = cmd.agent
-        side_sw = np.where(cmd.swing_foot == 0, 1.0, -1.0)
         d = direction(stance.yaw, stance.slope)
         stance_foothold = stance.ball - body.ball_offset[:, None] * d
         rel = cmd.target - stance_foothold
@@ -466,12 +489,11 @@ class Animator:
         step.duration[a] = cmd.duration
         step.stance_left[a] = cmd.swing_foot != 0
         st.ball[a], st.yaw[a], st.slope[a] = stance.ball, stance.yaw, stance.slope
-        # Spin turn (§6.1): the stance foot pivots on its ball when the heading would
-        # otherwise twist the stance hip by more than _MAX_STANCE_TWIST.
-        spin = np.zeros(a.size) if cmd.spin is None else cmd.spin.copy()
-        twist = wrap_angle(cmd.heading - side_sw * self._own_toe(a) - (stance.yaw + spin))
-        excess = np.sign(twist) * np.maximum(np.abs(twist) - _MAX_STANCE_TWIST, 0.0)
-        st.spin[a] = spin + excess
+        # Spin turn (§6.1, MetaGait's): on the ball of the stance foot, once its heel is up
+        st.spin[a] = 0.0 if cmd.spin is None else cmd.spin
+        # (ψ before the spin is at most the hips' twist from the foot)
+        step.spin_start[a] = _spin_start(body, data.angles,
+                                         cmd.heading - st.spin[a] - stance.yaw, stance.slope)
         st.toe_out[a] = toe_out
         st.start[a], st.target[a] = cmd.start, cmd.target
         sw.d0[a] = 0.0
@@ -645,7 +667,17 @@ class Animator:
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
         walked = self._walk(a, phase, corrected=True)
-        walked, lifted = self._lift_swing_foot(a, phase, walked)
+        toe_fix = np.zeros(a.size)
+        for _ in range(_YAW_ROUNDS):
+            more = self._swing_yaw_fix(a, phase, walked)
+            fix = np.flatnonzero(np.abs(more) > np.radians(0.5))
+            if fix.size == 0:
+                break
+            toe_fix[fix] += more[fix]
+            self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
+                                                toe_fix=toe_fix[fix]))
+            self.stats["yaw_fixes"] += fix.size
+        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix)
         self.stats["lifted"] += int(lifted)
 
         ok = walked.converged
@@ -707,9 +739,20 @@ class Animator:
                 phase)  # fmt: skip
 
     # -- internals --------------------------------------------------------------------
+    def _spin_progress(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """How much of its spin turn (k,) [0, 1] the stance foot of agents a has made at
+        step phases tau (k,): none until the heel is up, all by the step's end."""
+        t0 = self._step.spin_start[a]
+        return _smoothstep((tau - t0) / np.maximum(1.0 - t0, 1e-9))
+
     def _heading(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
-        s = _smoothstep(2.0 * phase)
-        return self._step.psi0[a] + wrap_angle(self._step.psi1[a] - self._step.psi0[a]) * s
+        """ψ (k,) [rad] at stance phases (k,): from the previous heading to the commanded
+        one over the step (§4.4); the part a spin turn makes turns with the spin."""
+        tau = 2.0 * phase
+        spin = self._stance.spin[a]
+        turn = wrap_angle(self._step.psi1[a] - self._step.psi0[a])
+        return (self._step.psi0[a] + (turn - spin) * _smoothstep(tau)
+                + spin * self._spin_progress(a, tau))
 
     def _contact(self, body: Body, heel_xy: np.ndarray, z: np.ndarray, yaw: np.ndarray):
         """How a foot with its heel at ``heel_xy`` (m, 2) [m] and ``yaw`` (m,) [rad] rests
@@ -796,17 +839,59 @@ class Animator:
         local_hip = self._last.local[ah, hip]
         self._warm.hip[ah] = Rotation.from_matrix(local_hip).as_euler("YXZ")
 
+    def _swing_toe(self, a: np.ndarray, tau: np.ndarray, psi: np.ndarray) -> np.ndarray:
+        """The swing foot's toe-out (k,) [rad] of agents a at step phases tau, heading psi:
+        the trailing foot keeps its world yaw while pinned in push-off (its toe-out
+        follows ψ), then turns to the commanded toe-out over the swing."""
+        toe1, t_off = self._stance.toe_out[a], self._swing.toe_off[a]
+        side_sw = np.where(self._step.stance_left[a], -1.0, 1.0)
+        held = np.clip(side_sw * wrap_angle(self._swing.trail_yaw[a] - psi), -_MAX_TOE_START,
+                       _MAX_TOE_START)
+        toe0 = np.where(self._swing.has_trail[a], held, self._stance.toe_start[a])
+        return toe0 + (toe1 - toe0) * _smoothstep((tau - t_off) / np.maximum(1.0 - t_off,
+                                                                              1e-9))
+
+    def _swing_yaw_fix(self, a: np.ndarray, phase: np.ndarray, walked) -> np.ndarray:
+        """Toe-out corrections (k,) [rad] that turn the trailing foot of agents a, pinned
+        in push-off, to the yaw :meth:`_swing_toe` asks for (the swing leg's IK toward the
+        pinned ankle and the skew talocrural axis turn it: by 20° in push-off after a 15°
+        turn)."""
+        rows = np.arange(a.size)
+        sw = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)]
+        along = walked.rotations[rows, sw[:, 3]][:, :, 0]
+        psi = self._heading(a, phase)
+        side_sw = np.where(self._step.stance_left[a], -1.0, 1.0)
+        want = psi + side_sw * self._swing_toe(a, 2.0 * phase, psi)
+        err = wrap_angle(np.arctan2(along[:, 1], along[:, 0]) - want)
+        # a steep foot's yaw is ill-conditioned: the correction fades out beyond 45° pitch;
+        # it is for the trailing foot on the ground, and fades out over the early swing
+        err *= np.clip((np.hypot(along[:, 0], along[:, 1]) - 0.5) / 0.2, 0.0, 1.0)
+        t_off = self._swing.toe_off[a]
+        err *= self._swing.has_trail[a] * (1.0 - _smoothstep((2.0 * phase - t_off) / 0.4))
+        return -side_sw * err
+
+    @staticmethod
+    def _merge(walked, rows: np.ndarray, again) -> None:
+        """Put the re-solved poses ``again`` of ``rows`` into ``walked`` (in place; the
+        walker's arrays are fresh per call)."""
+        for name in ("root_position", "root_rotation", "local", "positions", "rotations",
+                     "contact", "converged", "solves"):  # fmt: skip
+            getattr(walked, name)[rows] = getattr(again, name)
+        for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
+            getattr(walked.warm, name)[rows] = getattr(again.warm, name)
+
     def _walk(self, a: np.ndarray, phase: np.ndarray, corrected: bool,
-              lift: np.ndarray | None = None):  # fmt: skip
+              lift: np.ndarray | None = None, toe_fix: np.ndarray | None = None):  # fmt: skip
         """ElevWalker for agents a (k,) at stance phases (k,), with the step corrections
-        (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal)."""
+        (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal, a correction
+        ``toe_fix`` (k,) [rad] of the swing foot's toe-out)."""
         body = self.body.take(a)
         k = a.size
         legs = sample(self._step.angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
         st, sw = legs[:k], legs[k:]  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
         tau = 2.0 * phase
-        spin = self._stance.spin[a] * _smoothstep(tau / 0.3)
+        spin = self._stance.spin[a] * self._spin_progress(a, tau)
         foot = StanceFoot(self._stance.ball[a], self._stance.yaw[a] + spin, self._stance.slope[a])
         spinning = np.flatnonzero(spin != 0.0)
         if spinning.size and self.ground is not None:
@@ -850,8 +935,9 @@ class Animator:
             hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
-        toe0, toe1 = self._stance.toe_start[a], self._stance.toe_out[a]
-        toe_out = toe0 + (toe1 - toe0) * _smoothstep(tau)
+        toe_out = self._swing_toe(a, tau, psi)
+        if toe_fix is not None:
+            toe_out = toe_out + toe_fix
         return elevwalker_pose(
             body, self._step.stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
             self.style, self._step.stance_fraction[a], swing_offset=offset, swing_target=target,
@@ -949,7 +1035,8 @@ class Animator:
         np.maximum.at(depth, r, gap.max(axis=1))
         return depth
 
-    def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked):
+    def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked,
+                         toe_fix: np.ndarray | None = None):
         """Re-solve agents whose swing sole (heel to toe tip, sampled) dips below the
         ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
         is checked again and raised further (the swing leg's IK does not translate the
@@ -962,13 +1049,9 @@ class Animator:
         lift = np.zeros(a.size)
         for _ in range(_LIFT_ROUNDS):
             lift[sink] += depth[sink] + _LIFT_MARGIN
-            again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink])
-            # the walker's arrays are fresh per call: merge in place
-            for name in ("root_position", "root_rotation", "local", "positions", "rotations",
-                         "contact", "converged", "solves"):  # fmt: skip
-                getattr(walked, name)[sink] = getattr(again, name)
-            for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
-                getattr(walked.warm, name)[sink] = getattr(again.warm, name)
+            again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink],
+                               toe_fix=None if toe_fix is None else toe_fix[sink])
+            self._merge(walked, sink, again)
             depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]
             if sink.size == 0:

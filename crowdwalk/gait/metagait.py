@@ -17,6 +17,12 @@ toe-out, spin turn, step length and step height, and returns them as a
   level step length), cap it at the maximum, and repeat.
 - **With a footstep planner** the planner's step length and height are used as given
   (they are legal footholds); heading, toe-out and spin still follow the path.
+- **In the crowd** (:meth:`MetaGait.orient`, called by the simulation for every step it
+  decides) the planner and the steering own where each foot lands, so ψ is the step's
+  direction (p0 the stance foot, p1 the planned foothold); MetaGait decides the landing
+  foot's toe-out from the turn predicted for the next step and the spin turn of the
+  stance foot (:func:`orient_steps`). Of a turn ahead the inside foot takes the toe-out
+  and the outside foot steps straight (Chen & Li 2003, §5.4).
 
 Paths are batched as (n, m, 2) polylines [m] (resample per agent to a common m).
 """
@@ -29,12 +35,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.errors import invalid
-from crowdwalk.gait.animator import StepCommand
 from crowdwalk.gait.foot import wrap_angle
 
 __all__ = [
     "MetaGaitConfig",
     "MetaGait",
+    "StepTurn",
+    "orient_steps",
     "preferred_step_for_slope",
     "path_point",
     "closest_arc_length",
@@ -90,6 +97,65 @@ class MetaGaitConfig:
             raise invalid(owner, "terrain_iterations", ">= 1", self.terrain_iterations)
         if not (np.isfinite(self.step_width) and self.step_width >= 0):
             raise invalid(owner, "step_width", "finite and >= 0 [1]", self.step_width)
+
+
+@dataclass(frozen=True, eq=False)
+class StepTurn:
+    """MetaGait's orientation of k steps (§6.1).
+
+    Attributes
+    ----------
+    toe_out : (k,) toe-out of the landing (swing) foot from the step's heading ψ,
+        outward positive [rad].
+    spin : (k,) spin turn of the stance foot about its ball during the step,
+        counter-clockwise positive [rad].
+    landing_yaw : (k,) direction the landing foot points, from +x [rad].
+    """
+
+    toe_out: np.ndarray
+    spin: np.ndarray
+    landing_yaw: np.ndarray
+
+
+def orient_steps(*, heading: np.ndarray, heading_next: np.ndarray, stance_yaw: np.ndarray,
+                 swing_left: np.ndarray, base_toe_out: np.ndarray,
+                 config: MetaGaitConfig) -> StepTurn:
+    """Toe-out and spin turn of k steps from their headings (§6.1, with §5.4 of Chen & Li).
+
+    Parameters
+    ----------
+    heading : (k,) ψ of this step (direction of d = p1 − p0) [rad].
+    heading_next : (k,) ψ expected for the step after it (d') [rad].
+    stance_yaw : (k,) direction the stance foot points now [rad].
+    swing_left : (k,) bool, the left foot swings.
+    base_toe_out : (k,) the walker's toe-out on a straight path [rad].
+    config : MetaGaitConfig
+
+    Notes
+    -----
+    - *Spin turn*, when the step begins: ψ may turn at most T from the stance foot's own
+      walking direction (its yaw less its toe-out); the rest, ``|twist| − T``, is spun on
+      the ball of the stance foot. With the toe-out rule below this is the paper's
+      ``Δ − T − T2``: the toe-out of the previous step took ``T2`` of a turn ``Δ`` and the
+      spin the rest beyond ``T``. Here Δ is the turn the crowd actually decided (known
+      when the step begins) rather than the one predicted a step earlier.
+    - *Toe-out* for the next step: with Δ' the turn from ψ to ψ', beyond T the swing foot
+      points ``min(|Δ'| − T, T2)`` toward the turn — when it is the inside foot; the
+      outside foot steps straight and the inside foot turns with the next placement
+      (Chen & Li §5.4, :func:`planners.split_turn`).
+    """
+    side_sw = np.where(np.asarray(swing_left, bool), 1.0, -1.0)
+    base = np.asarray(base_toe_out, dtype=float)
+    own = np.asarray(stance_yaw, dtype=float) + side_sw * base  # stance side = -side_sw
+    twist = wrap_angle(np.asarray(heading, float) - own)
+    spin = np.sign(twist) * np.maximum(np.abs(twist) - config.toe_out_threshold, 0.0)
+    delta = wrap_angle(np.asarray(heading_next, float) - np.asarray(heading, float))
+    inside = np.sign(delta) == side_sw
+    adjust = np.where(inside, np.minimum(np.maximum(np.abs(delta) - config.toe_out_threshold,
+                                                    0.0), config.toe_out_limit), 0.0)
+    toe_out = base + adjust
+    return StepTurn(toe_out=toe_out, spin=spin,
+                    landing_yaw=wrap_angle(np.asarray(heading, float) + side_sw * toe_out))
 
 
 def preferred_step_for_slope(level_step: np.ndarray, slope: np.ndarray) -> np.ndarray:
@@ -173,6 +239,28 @@ class MetaGait:
         self.config = config or MetaGaitConfig()
         self.base_toe_out = float(base_toe_out)
         self._pending_spin = np.zeros(n)
+        self.foot_yaw = np.full((n, 2), np.nan)  # left, right foot's direction [rad]
+
+    def orient(self, agents: np.ndarray, *, swing_foot: np.ndarray, heading: np.ndarray,
+               heading_next: np.ndarray, base_toe_out: np.ndarray) -> StepTurn:
+        """Toe-out and spin turn of the steps the crowd decided for ``agents`` (k,)
+        (:func:`orient_steps`); remembers where each foot then points.
+
+        ``swing_foot`` (k,) 0 left / 1 right; ``heading`` (k,) the steps' directions,
+        ``heading_next`` (k,) the direction expected one step later, ``base_toe_out``
+        (k,) the walkers' own toe-out [rad]. An agent's first step starts from its feet
+        pointing along its heading with their own toe-out.
+        """
+        a = np.asarray(agents)
+        sw = np.asarray(swing_foot, dtype=np.intp)
+        side_sw = np.where(sw == 0, 1.0, -1.0)
+        stance = self.foot_yaw[a, 1 - sw]
+        stance = np.where(np.isfinite(stance), stance, heading - side_sw * base_toe_out)
+        turn = orient_steps(heading=heading, heading_next=heading_next, stance_yaw=stance,
+                            swing_left=sw == 0, base_toe_out=base_toe_out, config=self.config)
+        self.foot_yaw[a, 1 - sw] = wrap_angle(stance + turn.spin)
+        self.foot_yaw[a, sw] = turn.landing_yaw
+        return turn
 
     # -- the rules, each batched ------------------------------------------------------
     def heading(self, path: np.ndarray, position: np.ndarray, step_length: np.ndarray):
@@ -250,8 +338,9 @@ class MetaGait:
         planned_length: np.ndarray | None = None,
         planned_height: np.ndarray | None = None,
         swing_bezier: np.ndarray | None = None,
-    ) -> StepCommand:
-        """The next step of m agents at their heel strikes (§6.1–6.3).
+    ):
+        """The next step of m agents at their heel strikes (§6.1–6.3), a
+        :class:`~crowdwalk.gait.animator.StepCommand`.
 
         Parameters
         ----------
@@ -269,6 +358,8 @@ class MetaGait:
         swing_bezier : (m, 4, 3), optional
             The planner's swing-ankle Bezier control points, passed on [m].
         """
+        from crowdwalk.gait.animator import StepCommand
+
         agents = np.atleast_1d(np.asarray(agents))
         m = agents.size
         stance = np.asarray(stance, dtype=float).reshape(m, 3)

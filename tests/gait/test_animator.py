@@ -344,3 +344,70 @@ def test_speed_blend_changes_swing_knee_with_speed():
     assert fast - slow > 0.5 * gap
     slow0, fast0 = _swing_knee_peak(False)
     assert abs(fast0 - slow0) < 0.1
+
+
+def test_a_spin_turn_pivots_on_the_ball_with_the_heel_up():
+    """MetaGait's spin (§6.1) of 45 degrees on a 90-degree turn: the stance foot turns
+    only once its heel is off the ground, about a ball that stays put, and has made the
+    whole spin by the end of the step, a few degrees per frame."""
+    from crowdwalk.gait.foot import foot_points as points
+
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_flat)
+    animator.command(_command([0], 0.0, 1, [[0, 0.045, 0]], [[0.65, -0.045, 0]], duration=0.5))
+    animator.command(_command([0], 0.5, 0, [[0.65, -0.045, 0]], [[1.3, 0.045, 0]],
+                              duration=0.5))
+    h = np.radians(90.0)
+    target = np.array([[1.3 + 0.09, 0.045 + 0.65, 0.0]])
+    step = _command([0], 1.0, 1, [[1.3, 0.045, 0]], target, duration=0.5, heading=h)
+    animator.command(StepCommand(**{**step.__dict__, "spin": np.array([np.radians(45.0)])}))
+    yaw, heel, ball = [], [], []
+    for f in range(26):
+        frame = animator.pose(1.0 + f / 50.0)
+        assert not frame.fallback.any()
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        p = points(body, frame.positions, rot)[0, 0]  # the left (stance) foot
+        yaw.append(np.degrees(np.arctan2(*(p[2] - p[0])[1::-1])))
+        heel.append(p[0, 2])
+        ball.append(p[1])
+    yaw, heel, ball = np.array(yaw), np.array(heel), np.array(ball)
+    turning = np.abs(np.diff(yaw)) > 0.05
+    assert yaw[-1] - yaw[0] == pytest.approx(45.0, abs=1.0)
+    assert heel[1:][turning].min() > 0.005  # the heel is up whenever the foot turns
+    assert np.abs(np.diff(yaw)).max() < 12.0
+    moving = ball[1:][turning]
+    assert np.linalg.norm(moving[:, :2] - moving[0, :2], axis=1).max() < 0.002
+
+
+def test_the_trailing_foot_keeps_its_yaw_in_push_off_in_a_turn():
+    """After a 15-degree turn the trailing foot, pinned on its toes in push-off, does not
+    turn with the body (the swing leg's IK used to yaw it by 20 degrees)."""
+    from crowdwalk.gait.foot import foot_points as points
+
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_flat)
+    turn = np.radians(15.0)
+    d = np.array([np.cos(turn), np.sin(turn), 0.0])
+    n = np.array([-d[1], d[0], 0.0])
+    s1 = np.array([0.65, -0.045, 0.0])
+    t1 = s1 + 0.65 * d + 0.09 * n
+    animator.command(_command([0], 0.0, 1, [[0, 0.045, 0]], [s1], duration=0.5))
+    animator.command(_command([0], 0.5, 0, [s1], [t1], duration=0.5, heading=turn))
+    animator.command(_command([0], 1.0, 1, [t1], [t1 + 0.65 * d - 0.09 * n], duration=0.5,
+                              heading=turn))
+    yaw = []
+    for f in range(12):
+        frame = animator.pose(1.0 + f / 50.0)
+        if not frame.contact[0, 1]:
+            break
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        p = points(body, frame.positions, rot)[0, 1]  # the right (trailing) foot
+        if p[1, 2] > 0.06:  # the ball well up: the foot stands on its toes
+            break
+        yaw.append(np.degrees(np.arctan2(*(p[2] - p[0])[1::-1])))
+    assert len(yaw) >= 3
+    assert np.ptp(yaw) <= 4.0

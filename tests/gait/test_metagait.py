@@ -137,3 +137,57 @@ def test_bad_input_is_rejected():
     with pytest.raises(InputError, match=r"^MetaGait\.path must be"):
         MetaGait(1).next_step(np.array([0]), [0.0], np.zeros((1, 3)), [1],
                               np.zeros((1, 1, 2)), [0.7], [1.3], [1.75], _flat)  # fmt: skip
+
+
+# --- in the crowd: MetaGait.orient / orient_steps (§6.1 with Chen & Li §5.4) ------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(turn=st.floats(-3.0, 3.0), ahead=st.floats(-3.0, 3.0), left=st.booleans(),
+       base=st.floats(0.0, 0.3))
+def test_orient_spins_only_what_the_hips_cannot_take(turn, ahead, left, base):
+    """After the spin the heading is at most T from the stance foot's own direction, and
+    nothing is spun when it already is; toe-out beyond the walker's own is at most T2,
+    toward the turn ahead and only on the inside foot (the outside foot steps straight)."""
+    from crowdwalk.gait.foot import wrap_angle
+    from crowdwalk.gait.metagait import orient_steps
+    from planners import split_turn
+
+    cfg = MetaGaitConfig()
+    side_sw = 1.0 if left else -1.0
+    stance_yaw = np.array([-side_sw * base])  # stance foot along +x with its toe-out
+    r = orient_steps(heading=np.array([turn]), heading_next=np.array([turn + ahead]),
+                     stance_yaw=stance_yaw, swing_left=np.array([left]),
+                     base_toe_out=np.array([base]), config=cfg)
+    twist = wrap_angle(turn - (stance_yaw + r.spin + side_sw * base))
+    assert abs(twist[0]) <= cfg.toe_out_threshold + 1e-9
+    if abs(wrap_angle(turn)) <= cfg.toe_out_threshold:
+        assert r.spin[0] == 0.0
+    extra = r.toe_out[0] - base
+    assert 0.0 <= extra <= cfg.toe_out_limit + 1e-12
+    first = split_turn(float(wrap_angle(ahead)), cfg.toe_out_threshold,
+                       "left" if left else "right")[0]
+    if extra > 0:  # the inside foot: §5.4 turns it with this placement
+        assert first.size and first[0] != 0.0 and np.sign(first[0]) == side_sw
+        assert extra == pytest.approx(min(abs(wrap_angle(ahead)) - cfg.toe_out_threshold,
+                                          cfg.toe_out_limit))
+    assert r.landing_yaw[0] == pytest.approx(float(wrap_angle(turn + side_sw * r.toe_out[0])))
+
+
+def test_orient_remembers_each_foot():
+    """A 100-degree left turn in one step: the right stance foot spins 55 degrees (its
+    hip takes T = 45), the left foot lands along the new heading with its toe-out; the
+    next step starts from the feet where MetaGait left them."""
+    mg = MetaGait(1)
+    base = np.array([np.radians(7.0)])
+    first = mg.orient([0], swing_foot=np.array([0]), heading=np.array([0.0]),
+                      heading_next=np.array([0.0]), base_toe_out=base)
+    assert first.spin[0] == 0.0
+    turn = mg.orient([0], swing_foot=np.array([1]), heading=np.array([np.radians(100.0)]),
+                     heading_next=np.array([np.radians(100.0)]), base_toe_out=base)
+    # the left foot (stance) pointed at +7 deg: twist 100 - 0 = 100 -> spin 55
+    assert np.degrees(turn.spin[0]) == pytest.approx(55.0)
+    assert np.degrees(mg.foot_yaw[0]) == pytest.approx([7.0 + 55.0, 100.0 - 7.0])
+    on = mg.orient([0], swing_foot=np.array([0]), heading=np.array([np.radians(100.0)]),
+                   heading_next=np.array([np.radians(100.0)]), base_toe_out=base)
+    assert on.spin[0] == 0.0  # the right foot landed along the new heading
