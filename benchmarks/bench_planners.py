@@ -1,8 +1,8 @@
 """Planner benchmark: a Table-2-style timing table with the work done, batch throughput,
 the speed targets and the quality of each search against ``optimal``.
 
-Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N] [--agents N]``.
-Prints:
+Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N] [--agents N]
+[--targets-only ROUNDS]``. Prints:
 
 1. per terrain and grid resolution (13/11/7 intervals, n = 4), for each planner: median,
    p95 and min wall time per plan and the counted work (``Plan.stats``): nodes expanded,
@@ -13,6 +13,12 @@ Prints:
 3. the speed targets of issue 15 against what was measured;
 4. on random terrain profiles, how often each search is within 1 % of ``optimal``
    (``best_first_multistart`` for several numbers of starts).
+
+``--targets-only ROUNDS`` measures the target cells alone (single plans on flat ground and
+stairs, the batch), ROUNDS times in turn, and prints each cell's median over the rounds
+and the spread (lowest and highest round): run it alternately against another checkout
+(``PYTHONPATH=OTHER python benchmarks/bench_planners.py --targets-only 5``) for a
+comparison in the same minutes on a shared machine.
 """
 
 from __future__ import annotations
@@ -135,23 +141,35 @@ def table_2(repeat: int) -> dict:
     return medians
 
 
+def batch_runs(profiles, legs, speeds, planner: str, agents: int):
+    """Time ``plan_batch`` of the walkers twice (ms per plan, amortised): first with every
+    walker's leg new to the planners' per-leg caches, then again (as a crowd re-plans)."""
+    warm = [Leg.from_body_height(1.6 + 0.01 * i) for i in range(16)]  # compiles, not legs
+    plan_batch(profiles[:16], warm, speeds[:16], planner)
+    runs = []
+    for label in (f"batch of {agents}, random terrain, new legs",
+                  f"batch of {agents}, random terrain, again"):
+        t0, c0 = time.perf_counter(), time.process_time()
+        plan_batch(profiles, legs, speeds, planner)
+        runs.append((label, 1e3 * (time.perf_counter() - t0) / agents,
+                     1e3 * (time.process_time() - c0) / agents))
+    return runs
+
+
 def batch(agents: int) -> dict:
-    """Prints the batch table; returns ms per plan (amortised) per planner."""
+    """Prints the batch table; returns ms per plan (amortised) per planner and run."""
     rng = np.random.default_rng(7)
     profiles = [random_terrain(rng) for _ in range(agents)]
     legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
     speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
-    print(f"\nplan_batch: {agents} walkers on random terrain (per plan, amortised)")
-    print(f"{'planner':<22}{'total [ms]':>12}{'per plan [ms]':>15}{'ok':>6}")
+    print(f"\nplan_batch: {agents} walkers on random terrain (per plan, amortised; first "
+          "with every leg new to the per-leg caches, then the same walkers again)")
+    print(f"{'planner':<22}{'new legs [ms]':>15}{'again [ms]':>12}")
     per_plan = {}
     for planner in SEARCHES:
-        plan_batch(profiles[:4], legs[:4], speeds[:4], planner)
-        t0 = time.perf_counter()
-        plans = plan_batch(profiles, legs, speeds, planner)
-        total = 1e3 * (time.perf_counter() - t0)
-        ok = sum(p.ok for p in plans)
-        per_plan[planner] = total / agents
-        print(f"{planner:<22}{total:>12.1f}{total / agents:>15.3f}{ok:>6}")
+        runs = batch_runs(profiles, legs, speeds, planner, agents)
+        per_plan.update({(label, planner): wall for label, wall, _ in runs})
+        print(f"{planner:<22}{runs[0][1]:>15.3f}{runs[1][1]:>12.3f}")
     return per_plan
 
 
@@ -163,8 +181,8 @@ def targets(medians: dict, per_plan: dict, agents: int) -> None:
             ("single plan, upstairs (median)", 1.5, [medians["upstairs", p] for p in SEARCHES]),
             ("single plan, downstairs (median)", 1.5, [medians["downstairs", p]
                                                        for p in SEARCHES]),
-            (f"batch of {agents} on random terrain (amortised)", 0.1,
-             [per_plan[p] for p in SEARCHES])]
+            *((label, 0.1, [per_plan[label, p] for p in SEARCHES])
+              for label in dict.fromkeys(key[0] for key in per_plan))]
     for label, limit, values in rows:
         print(f"{label:<44}{limit:>7.2f}" + "".join(
             f"{v:>17.3f} {'met' if v <= limit else 'NOT':>5}" for v in values))
@@ -200,19 +218,58 @@ def quality(count: int) -> None:
     print(f"optimal found a legal plan on {sum(o.ok for o in optimal)} of {count}")
 
 
+def targets_only(rounds: int, repeat: int, agents: int) -> None:
+    """The target cells, ``rounds`` times in turn; median and spread over the rounds."""
+    leg = Leg.from_body_height(1.75)
+    grounds = terrains()
+    rng = np.random.default_rng(7)
+    profiles = [random_terrain(rng) for _ in range(agents)]
+    legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
+    speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+    cells: dict = {}
+    for _ in range(rounds):
+        for name in ("flat ground", "upstairs", "downstairs"):
+            for planner in SEARCHES:
+                wall, cpu, _ = timed(grounds[name], leg, planner, PlannerConfig(), repeat)
+                cells.setdefault((f"single plan, {name} (median)", planner), []).append(
+                    (float(np.median(wall)), float(np.median(cpu))))
+        for planner in SEARCHES:
+            for label, wall, cpu in batch_runs(profiles, legs, speeds, planner, agents):
+                cells.setdefault((label, planner), []).append((wall, cpu))
+    limits = {"flat ground": 0.5, "upstairs": 1.5, "downstairs": 1.5, "batch": 0.1}
+    print(f"Speed targets (issue 15) [ms per plan]: wall time, median of {rounds} rounds "
+          f"[lowest, highest round], and CPU time (all threads; median); {repeat} plans "
+          "per single-plan round")
+    print(f"{'target':<42}{'limit':>6}" + "".join(f"{p:>32}" for p in SEARCHES))
+    for label in dict.fromkeys(key[0] for key in cells):
+        limit = next(v for k, v in limits.items() if k in label)
+        row = ""
+        for planner in SEARCHES:
+            v = np.array(cells[label, planner])
+            row += (f"{np.median(v[:, 0]):>8.3f} [{v[:, 0].min():.3f}, {v[:, 0].max():.3f}]"
+                    f" cpu {np.median(v[:, 1]):.3f}")
+        print(f"{label:<42}{limit:>6.2f}{row}")
+    print(f"(machine load average {os.getloadavg()[0]:.1f})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30, help="timed plans per cell")
     parser.add_argument("--profiles", type=int, default=200, help="random profiles")
     parser.add_argument("--agents", type=int, default=1000, help="walkers in the batch")
+    parser.add_argument("--targets-only", type=int, default=0, metavar="ROUNDS",
+                        help="only the target cells, ROUNDS times in turn")
     args = parser.parse_args()
+    if args.targets_only:
+        targets_only(args.targets_only, args.repeat, args.agents)
+        return
     start = time.perf_counter()
     medians = table_2(args.repeat)
     per_plan = batch(args.agents)
     targets(medians, per_plan, args.agents)
     quality(args.profiles)
     print(f"\n(total {time.perf_counter() - start:.0f} s; machine load average "
-          f"{statistics.mean(__import__('os').getloadavg()):.1f})")
+          f"{statistics.mean(os.getloadavg()):.1f})")
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
-from planners.search import SearchResult
+from planners.search import SearchResult, evaluate_one
 
 __all__ = ["best_first", "bfp", "fifo_order", "find_init"]
 
@@ -56,7 +56,8 @@ def find_init(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, tables.struct.n, tables.struct.J
     centres = tables.neutral.astype(np.int64)
     distinct, which = np.unique(centres, return_inverse=True)
-    orders = np.stack([fifo_order(int(c), n, J) for c in distinct])
+    orders = (fifo_order(int(distinct[0]), n, J)[None] if distinct.size == 1
+              else np.stack([fifo_order(int(c), n, J) for c in distinct]))
     configs = np.repeat(centres[:, None], n, axis=1)
     found = np.zeros(A, dtype=np.bool_)
     expanded = np.zeros(A, dtype=np.int64)
@@ -93,31 +94,6 @@ def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
     looked up. Agents not ``init.found`` keep their configuration.
     """
     return _run(_bfp, tables, init.configs.copy(), init.found.copy())
-
-
-@nb.njit(cache=True, nogil=True)
-def _evaluate(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
-    """Legality and rounded efficiency of configuration ``q`` (n,) for agent ``a``."""
-    n = q.size
-    m_prev = 0  # lattice index of the stance foothold f_{k-1}
-    m_prev2 = 0  # of the lift-off foothold f_{k-2}
-    j_prev = 0
-    legal = True
-    energy = 0.0
-    length = 0.0
-    for k in range(n):
-        step = step_off[k] + m_prev * J + q[k]
-        stride = q[k] + (j_prev if k > 0 else 0)
-        swing = swing_off[k] + m_prev2 * strides[k] + stride
-        if not (step_legal[a, step] and swing_ok[a, swing]):
-            legal = False
-        energy += cost[a, step]
-        length += progress[a, step]
-        if k > 0:
-            m_prev2 += j_prev
-        m_prev += q[k]
-        j_prev = q[k]
-    return legal, np.rint(length / energy * 1e12) / 1e12
 
 
 @nb.njit(cache=True, nogil=True)
@@ -222,7 +198,7 @@ def _bfp(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
         visited[:] = False
         init = _code(configs[a], J)
         visited[init] = True
-        _, e0 = _evaluate(a, configs[a], step_legal, swing_ok, cost, progress, J, step_off,
+        _, e0 = evaluate_one(a, configs[a], step_legal, swing_ok, cost, progress, J, step_off,
                           swing_off, strides)
         open_code[0] = init
         open_eff[0] = e0
@@ -252,7 +228,7 @@ def _bfp(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
                     r[:] = q
                     r[k] = v
                     checks[a] += 1
-                    legal, e2 = _evaluate(a, r, step_legal, swing_ok, cost, progress, J,
+                    legal, e2 = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
                                           step_off, swing_off, strides)
                     if not legal:
                         continue

@@ -71,10 +71,22 @@ class EnergyWeights:
         al. 2002 (slopes). ``c_calf / c_thigh`` stays 0.1: fitted to WBDS preferred step
         lengths at the comfortable speed (Fukuchi et al. 2018: 0.375 body heights) any
         ratio from 0 to 1 gives the same flat optimum, 0.375 body heights, so the data
-        cannot fix it. Not the default: the defaults are the hand-set constants the crowd
-        was validated with; Chen & Li's printed Eq. 2 is ``EnergyWeights(vertical="paper")``.
+        cannot fix it. The default of :class:`PlannerConfig` (closer than the hand-set
+        constants to every validation figure; ``docs/architecture.md``).
         """
         return cls(beta=FITTED_BETA, down_ratio=FITTED_DOWN_RATIO, c_calf=FITTED_C_CALF)
+
+    @classmethod
+    def hand_set(cls) -> EnergyWeights:
+        """The hand-set constants (the field defaults: ``beta`` from 25 % muscle
+        efficiency, ``down_ratio`` 1/3), :class:`PlannerConfig`'s default until the fit."""
+        return cls()
+
+    @classmethod
+    def paper(cls) -> EnergyWeights:
+        """Chen & Li's Eq. 2 as printed (the concave quadratic, ``vertical="paper"``) with
+        the hand-set weights."""
+        return cls(vertical="paper")
 
     def __post_init__(self) -> None:
         if self.vertical not in ("paper", "linear"):
@@ -161,7 +173,9 @@ class PlannerConfig:
         neutral step the most efficient on flat ground, Eqs. 1-4 alone (the step is then
         the same at every speed: 0.668 m for a 1.75 m body).
     weights : EnergyWeights
-        Energy model weights.
+        Energy model weights; default :meth:`EnergyWeights.fitted` (the measured
+        constants; :meth:`EnergyWeights.hand_set` and :meth:`EnergyWeights.paper` by
+        name).
     """
 
     n_steps: int = 4
@@ -184,7 +198,7 @@ class PlannerConfig:
     snap: bool = True
     terminal_cost: bool = True
     step_model: str = "normal_mode"
-    weights: EnergyWeights = field(default_factory=EnergyWeights)
+    weights: EnergyWeights = field(default_factory=EnergyWeights.fitted)
 
     def __post_init__(self) -> None:
         ints = {"n_steps": (1, 5), "intervals": (2, 40), "bezier_samples": (4, 200),

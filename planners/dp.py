@@ -20,14 +20,15 @@ __all__ = ["DPWork", "cheapest"]
 
 
 class DPWork(NamedTuple):
-    """Work of one DP pass per agent (the same for every agent of a pass).
+    """Work of one DP pass, per agent (B,) each, counted in the pass.
 
-    ``states``: (m_{k-1}, j_{k-1}) states expanded over all depths; ``transitions``:
-    state -> j_k transitions whose legality was looked up.
+    ``states``: reachable (m_{k-1}, j_{k-1}) states expanded over all depths (a state no
+    legal sequence of steps reaches is skipped); ``transitions``: their state -> j_k
+    transitions (each step's legality looked up, then the swing of every legal one).
     """
 
-    states: int
-    transitions: int
+    states: np.ndarray
+    transitions: np.ndarray
 
 
 @lru_cache(maxsize=16)
@@ -75,25 +76,25 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     agents = np.arange(tables.neutral.size) if agents is None else agents
     B = agents.size
     step_cost = np.ascontiguousarray(np.round(step_cost, 10))  # ties broken alike
-    states = transitions = 0
-    for _, _, valid, _, _ in _depth_indices(st):
-        states += int(valid[..., 0].sum())
-        transitions += int(valid.sum())
     configs = np.zeros((B, n), dtype=np.int64)
     found = np.zeros(B, dtype=np.bool_)
+    states = np.zeros(B, dtype=np.int64)
+    transitions = np.zeros(B, dtype=np.int64)
     _cheapest(tables.step_legal, tables.swing_ok, step_cost, agents.astype(np.int64), J,
               np.asarray(st.step_offset, dtype=np.int64),
               np.asarray(st.swing_offset, dtype=np.int64),
-              np.asarray(st.swing_strides, dtype=np.int64), configs, found)
+              np.asarray(st.swing_strides, dtype=np.int64), configs, found, states,
+              transitions)
     return configs, found, DPWork(states, transitions)
 
 
 @nb.njit(cache=True, nogil=True)
 def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
-              configs, found):
+              configs, found, states, transitions):
     """The DP of :func:`cheapest`, one agent at a time: per depth k, the value of each
     state (m_{k-1}, j_{k-1}) plus each step j_k, the least over j_{k-1} (the first on
-    ties), then the way back from the least final state."""
+    ties), then the way back from the least final state. States of infinite value (no
+    legal way to them) are skipped: they cannot lower any value."""
     B, n = configs.shape
     M_last = (J - 1) * n + 1
     value = np.empty((M_last, J))
@@ -108,23 +109,34 @@ def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, s
             new[:M + J - 1, :] = np.inf
             choice[k - 1, :M + J - 1, :] = 0
             for m in range(M):
+                reachable = 0  # states (m, jp) of this depth some legal sequence reaches
+                for jp in range(P):
+                    if value[m, jp] < np.inf:
+                        reachable += 1
+                states[b] += reachable
+                if reachable == 0:
+                    continue  # new[m + j, j] stays +inf
                 for j in range(J):
+                    transitions[b] += reachable
                     step = step_off[k - 1] + m * J + j
+                    if not step_legal[a, step]:
+                        continue
                     cost = step_cost[b, step]
-                    step_ok = step_legal[a, step]
                     best = np.inf
                     arg = 0
                     for jp in range(P):
+                        v = value[m, jp]
+                        if not v < np.inf:
+                            continue
                         if k == 1:
-                            ok = step_ok and swing_ok[a, swing_off[0] + j]
+                            ok = swing_ok[a, swing_off[0] + j]
                         else:
                             m2 = m - jp
-                            ok = (step_ok and 0 <= m2 <= (J - 1) * (k - 2)
+                            ok = (0 <= m2 <= (J - 1) * (k - 2)
                                   and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
                                                + jp + j])
-                        total = value[m, jp] + cost if ok else np.inf
-                        if total < best:
-                            best = total
+                        if ok and v + cost < best:
+                            best = v + cost
                             arg = jp
                     new[m + j, j] = best
                     choice[k - 1, m + j, j] = arg

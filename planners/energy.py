@@ -204,7 +204,7 @@ def terminal_energy(profile, start, stop, owner_start, legs, speeds, per_metre, 
     owner_start : ndarray, shape (A,)
         Ascending arc lengths where each agent's part of ``profile`` begins [m].
     legs : leg arrays
-        Per-agent legs with ``take(rows)`` (``planners.lattice._LegArrays``).
+        Per-agent legs with ``take(rows)`` (:class:`planners.grids.LegArrays`).
     speeds : ndarray, shape (A,)
         Target speeds [m/s].
     per_metre : ndarray, shape (A,)

@@ -144,16 +144,27 @@ def _pelvis_between(p_s, s1, z1, s2, z2, reach):
 
 
 @_jit
-def key_frame(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b_len,
-              toe, ankle, nominal_lift, pelvis_ratio, cos_knee):
-    """Joint rotations (thigh, calf) [rad] and reachability of one step (see
-    :func:`key_frames`); compiled, for other kernels."""
+def leg_constants(a_len, b_len, toe, ankle, pelvis_ratio, cos_knee):
+    """What :func:`key_frame` needs of a leg alone: leg length, pelvis height at
+    mid-stance, shortest and double-support hip-ankle distances [m], and the toe-off
+    pivot (toe-to-ankle distance [m], cos and sin of the ankle's angle about the toe)."""
     L = a_len + b_len
-    H = pelvis_ratio * L
     min_reach = np.sqrt(a_len**2 + b_len**2 - 2 * a_len * b_len * cos_knee)
+    r_toe = np.hypot(toe, ankle)
+    pitch = TOE_OFF_FOOT_ANGLE + np.arctan2(ankle, toe)
+    return (L, pelvis_ratio * L, min_reach, DOUBLE_SUPPORT_REACH * L, r_toe, np.cos(pitch),
+            np.sin(pitch))
+
+
+@_jit
+def key_frame(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b_len,
+              toe, ankle, nominal_lift, constants):
+    """Joint rotations (thigh, calf) [rad] and reachability of one step (see
+    :func:`key_frames`; ``constants`` from :func:`leg_constants`); compiled, for other
+    kernels."""
+    L, H, min_reach, reach, r_toe, cos_pitch, sin_pitch = constants
     ss, fs = stance_s, front_s
     zs, zf = stance_z + ankle, front_z + ankle
-    reach = DOUBLE_SUPPORT_REACH * L
     # K1: mid-swing of the front-going leg F, stance leg S
     p1z = zs + H
     f1 = _angles(ss, p1z, summit_s, summit_z, a_len, b_len, L, min_reach)
@@ -165,10 +176,8 @@ def key_frame(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b
     s2 = _angles(p2s, p2z, ss, zs, a_len, b_len, L, min_reach)
     # K3: toe-off of S; its ankle rotates about the toe
     toe_s = ss + toe
-    r_toe = np.hypot(toe, ankle)
-    pitch = TOE_OFF_FOOT_ANGLE + np.arctan2(ankle, toe)
-    back_s = toe_s - r_toe * np.cos(pitch)
-    back_z = stance_z + r_toe * np.sin(pitch)
+    back_s = toe_s - r_toe * cos_pitch
+    back_z = stance_z + r_toe * sin_pitch
     p3s = ss + TOE_OFF_PELVIS_FRACTION * (fs - ss)
     p3z = _pelvis_between(p3s, back_s, back_z, fs, zf, reach)
     f3 = _angles(p3s, p3z, fs, zf, a_len, b_len, L, min_reach)
@@ -192,7 +201,8 @@ def _key_frames(stance_s, stance_z, front_s, front_z, summit_s, summit_z, thigh,
                 out_thigh, out_calf, out_reachable):
     """Joint rotations and reachability of each step (see :func:`key_frames`)."""
     for i in range(stance_s.size):
+        constants = leg_constants(thigh[i], shank[i], toe_offset[i], ankle_height[i],
+                                  pelvis_ratio, cos_knee)
         out_thigh[i], out_calf[i], out_reachable[i] = key_frame(
             stance_s[i], stance_z[i], front_s[i], front_z[i], summit_s[i], summit_z[i],
-            thigh[i], shank[i], toe_offset[i], ankle_height[i], nominal_lift[i],
-            pelvis_ratio, cos_knee)
+            thigh[i], shank[i], toe_offset[i], ankle_height[i], nominal_lift[i], constants)

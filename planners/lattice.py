@@ -11,35 +11,30 @@ up.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
 import numpy as np
 
 from planners.config import PlannerConfig
-from planners.energy import (
-    normal_step,
-    step_energy,
-)
+from planners.grids import leg_grids, swing_basis
 from planners.lattice_kernel import build_agents, build_agents_serial
-from planners.leg import Leg
-from planners.profile import RASTER_CELL, GroundProfile
-from planners.swing import TABLE_LEVELS, adjust_swings, bernstein, bezier_points, sole_clearance
+from planners.profile import RASTER_CELL
+from planners.swing import TABLE_LEVELS
 
-__all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables",
-           "grid", "neutral_index"]
+__all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables"]
 
 
-#: Extra clearance of the reusable curves for straight sloped spans [m].
-SLOPE_EXTRA = 0.03
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
 LOOKUP_CONFIGS = 65536
 #: Batches of at least this many agents build their tables on every core (smaller ones
 #: on one: starting the threads costs more than it saves).
 PARALLEL_AGENTS = 8
-#: Compute swing curves only for pairs a legal sequence of steps can use (False: for
-#: every pair of supported footholds; the results are the same, only slower).
-PRUNE_SWINGS = True
+#: Evaluate only the steps whose stance foothold a legal sequence of steps from the start
+#: reaches (the others get E = +inf and ``Reason.UNREACHED``) and the swing curves of
+#: pairs a legal sequence can use (False: every step, and the swings of every pair of
+#: supported footholds; the plans are the same, only slower).
+PRUNE = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,24 +194,6 @@ def structure(n: int, J: int) -> Structure:
                      a(swing_stride))
 
 
-class _LegArrays:
-    """Legs as column arrays (A, 1) that broadcast against (A, N) step arrays."""
-
-    names = ("thigh", "shank", "foot_length", "heel_offset", "toe_offset", "ankle_height")
-
-    def __init__(self, legs):
-        for name in self.names:
-            setattr(self, name, np.array([getattr(leg, name) for leg in legs])[:, None])
-        self.length = self.thigh + self.shank
-
-    def take(self, rows: np.ndarray) -> _LegArrays:
-        """Per-row legs (C,) for the agents ``rows`` (C,)."""
-        new = object.__new__(_LegArrays)
-        for name, value in vars(self).items():
-            setattr(new, name, value[:, 0][rows])
-        return new
-
-
 @dataclass(frozen=True, eq=False)
 class TableWork:
     """What building the tables did, per agent (A,) each, counted where it was done.
@@ -224,7 +201,8 @@ class TableWork:
     Attributes
     ----------
     steps : ndarray of int
-        Lattice steps whose legality and energy were evaluated.
+        Lattice steps whose legality and energy were evaluated (those a legal sequence
+        of steps from the start can take, see :data:`PRUNE`).
     key_frames : ndarray of int
         Steps whose key frames were solved by inverse kinematics (the others are level
         steps on level ground, looked up in the per-leg cache).
@@ -262,7 +240,8 @@ class StepTables:
     length, rise : ndarray, shape (A, Ns)
         Step length and height change [m].
     En, Ev, Ej, E : ndarray, shape (A, Ns)
-        Energy terms (Eq. 1 cal/kg, Eq. 2 unit, Eq. 3 J/kg) and the total E [J/kg].
+        Energy terms (Eq. 1 cal/kg, Eq. 2 unit, Eq. 3 J/kg) and the total E [J/kg]; E
+        is +inf for a step that cannot be legal or was not evaluated (see :data:`PRUNE`).
     step_reason : ndarray of int, shape (A, Ns)
         :class:`~planners.legality.Reason` flags; 0 is legal.
     swing_ok : ndarray of bool, shape (A, Np)
@@ -342,143 +321,6 @@ class StepTables:
         return legal, np.round(length / energy, 12)
 
 
-_FLAT_CACHE: dict = {}
-
-
-def flat_swings(legs, config: PlannerConfig, extra: float = 0.0):
-    """Swing curves over flat ground for every stride ``2 L_min + s dL`` (s = 0..2J-2).
-
-    Returns control points (A, 2J-1, 4, 2) relative to the lift-off foothold [m], ok
-    flags (A, 2J-1) and the sole's clearance slack (A, 2J-1) [m] (how much more than
-    the required clearance the curve keeps away from the footholds' zones). Curves are
-    computed once per distinct (leg, config, extra), all missing legs in one vectorised
-    call. ``extra`` [m] is added to the clearance the curves are adjusted for, so that
-    their slack covers sloped ground; the slack is reported against the real clearance.
-    """
-    S = 2 * config.intervals + 1
-    key = (config, extra)
-    missing = list({leg: None for leg in legs if (leg, key) not in _FLAT_CACHE})
-    if missing:
-        lo, delta = grid(missing, config)
-        strides = (2 * lo[:, None] + delta[:, None] * np.arange(S)).ravel()
-        span = float(strides.max()) + 2 * max(leg.foot_length for leg in missing)
-        flat = GroundProfile.flat(2 * span, 0.0, -span / 2)
-        zero = np.zeros_like(strides)
-        feet = _LegArrays(missing).take(np.repeat(np.arange(len(missing)), S))
-        lifted = replace(config, clearance=config.clearance + extra)
-        swing = adjust_swings(zero, zero, strides, zero, flat, feet, lifted)
-        pts = bezier_points(swing.controls, config.bezier_samples)
-        deficit = sole_clearance(pts, zero, strides, flat, feet, config)
-        zone = 0.5 * feet.foot_length[:, None]
-        s_lo = np.minimum(pts[:, :-1, 0], pts[:, 1:, 0])
-        s_hi = np.maximum(pts[:, :-1, 0], pts[:, 1:, 0])
-        away = (s_hi > zone) & (s_lo < strides[:, None] - zone)
-        slack = -np.max(np.where(away, deficit, -np.inf), axis=1)
-        if len(_FLAT_CACHE) > 4096:
-            _FLAT_CACHE.clear()
-        for i, leg in enumerate(missing):
-            rows = slice(i * S, (i + 1) * S)
-            _FLAT_CACHE[(leg, key)] = (swing.controls[rows], swing.ok[rows], slack[rows])
-    entries = [_FLAT_CACHE[(leg, key)] for leg in legs]
-    return tuple(np.stack([e[i] for e in entries]) for i in range(3))
-
-
-def grid(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Shortest step and increment (A,) [m] of each leg's step-length grid (shifted by
-    ``grid_shift`` increments for an :class:`AnchoredLeg`)."""
-    length = np.array([leg.length for leg in legs])
-    lo = config.min_step_ratio * length
-    delta = (config.max_step_ratio * length - lo) / config.intervals
-    shift = np.array([getattr(leg, "grid_shift", 0.0) for leg in legs])
-    return lo + shift * delta, delta
-
-
-#: Grid shifts are multiples of 1/GRID_SHIFTS increment (so the per-leg caches stay small).
-GRID_SHIFTS = 16
-
-
-@dataclass(frozen=True)
-class AnchoredLeg(Leg):
-    """A leg whose step-length grid is anchored on its normal-mode step for one speed
-    (``PlannerConfig.step_model = "normal_mode"``): the grid is shifted by ``grid_shift``
-    increments (|shift| <= 1/2) so that grid node ``neutral`` is that step."""
-
-    grid_shift: float = 0.0
-    neutral: int = 0
-
-
-def anchored_legs(legs, speeds: np.ndarray, config: PlannerConfig) -> list[AnchoredLeg]:
-    """Each leg anchored on its normal-mode step at its speed [m/s] (to 1/32 increment)."""
-    lo, delta = grid(legs, config)
-    u = (normal_step(_LegArrays(legs), np.asarray(speeds, float)[:, None])[:, 0] - lo) / delta
-    k = np.clip(np.floor(u + 0.5), 0, config.intervals).astype(int)
-    shift = np.round(np.clip(u - k, -0.5, 0.5) * GRID_SHIFTS) / GRID_SHIFTS
-    names = [f.name for f in fields(Leg)]
-    return [AnchoredLeg(**{n: getattr(leg, n) for n in names}, grid_shift=float(q),
-                        neutral=int(j)) for leg, q, j in zip(legs, shift, k, strict=True)]
-
-
-_NEUTRAL_CACHE: dict = {}
-
-
-def neutral_index(legs, config: PlannerConfig) -> np.ndarray:
-    """Grid index (A,) of the most efficient step on flat ground (s_init of §4.2).
-
-    With En proportional to the step length at a given speed (Eq. 1 with cadence
-    v / L), the best flat step minimises Ej / L and does not depend on the speed; it is
-    cached per (leg, config).
-    """
-    _neutral(legs, config)
-    return np.array([_NEUTRAL_CACHE[(leg, config)][0] for leg in legs])
-
-
-def neutral_energy_per_metre(legs, speeds: np.ndarray, config: PlannerConfig) -> np.ndarray:
-    """Energy per metre (A,) [J/(kg m)] of neutral steps on flat ground at ``speeds``."""
-    _neutral(legs, config)
-    entries = [_NEUTRAL_CACHE[(leg, config)] for leg in legs]
-    v = 60.0 * np.asarray(speeds, dtype=float)
-    # En per metre is (32 + 0.005 v^2) / v [cal/(kg m)]; the rest does not depend on v.
-    w = config.weights
-    walking = w.alpha * (32.0 + 0.005 * v**2) / v
-    if config.step_model == "normal_mode":
-        lo, delta = grid(legs, config)
-        L = lo + delta * np.array([e[0] for e in entries])
-        normal = normal_step(_LegArrays(legs), np.asarray(speeds, float)[:, None])[:, 0]
-        walking = walking * (1.0 + w.frequency * (normal / L - 1.0) ** 2)
-    return walking + np.array([e[1] for e in entries])
-
-
-def _neutral(legs, config: PlannerConfig) -> None:
-    missing = list({leg: None for leg in legs if (leg, config) not in _NEUTRAL_CACHE})
-    if not missing:
-        return
-    lo, delta = grid(missing, config)
-    L = lo[:, None] + delta[:, None] * np.arange(config.intervals + 1)
-    leg = _LegArrays(missing)
-    zero = np.zeros_like(L)
-    summit = leg.ankle_height + 0.75 * config.swing_lift + zero
-    # Eqs. 1-4 alone: the speed-dependent frequency term is added per speed by the callers
-    paper = replace(config, step_model="paper")
-    En, _, Ej, E, reachable = step_energy(zero, zero, L, zero, summit, leg, 1.0, paper)
-    if len(_NEUTRAL_CACHE) > 4096:
-        _NEUTRAL_CACHE.clear()
-    best = np.argmax(L / E, axis=1)
-    anchored = np.array([isinstance(m, AnchoredLeg) for m in missing])
-    if anchored.any():
-        best = np.where(anchored, [getattr(m, "neutral", 0) for m in missing], best)
-    rows = np.arange(len(missing))
-    rest = (E - config.weights.alpha * En)[rows, best] / L[rows, best]  # [J/(kg m)]
-    for i, leg_i in enumerate(missing):
-        _NEUTRAL_CACHE[(leg_i, config)] = (int(best[i]), float(rest[i]), Ej[i], reachable[i])
-
-
-def flat_joint_energy(legs, config: PlannerConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Ej [J/kg] and knee reach of level steps of every grid length, (A, J) each (cached)."""
-    _neutral(legs, config)
-    entries = [_NEUTRAL_CACHE[(leg, config)] for leg in legs]
-    return np.stack([e[2] for e in entries]), np.stack([e[3] for e in entries])
-
-
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
                  origins: np.ndarray, config: PlannerConfig) -> StepTables:
     """Evaluate legality and energy of every node, step and swing for every agent.
@@ -504,12 +346,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     """
     A = len(profiles)
     st = structure(config.n_steps, config.intervals + 1)
-    if config.step_model == "normal_mode":
-        legs = anchored_legs(legs, speeds, config)
-    lo, delta = grid(legs, config)
-    neutral = neutral_index(legs, config)
+    g = leg_grids(legs, speeds, config)
     if trailing is None:
-        trailing = -(lo + delta * neutral)
+        trailing = -(g.lo + g.delta * g.neutral)
     # each agent's own profile, shifted so that its stance foot lies on a raster cell
     # boundary (rasters then align with the agent's origin, whatever the batch)
     offsets = np.floor(origins / RASTER_CELL) * RASTER_CELL - origins
@@ -518,18 +357,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     bounds = np.concatenate([[0], np.cumsum(sizes)])
     prof_s = np.concatenate([p.s + o for p, o in zip(profiles, offsets.tolist(), strict=True)])
     prof_z = np.concatenate([p.z for p in profiles])
-    legs_col = _LegArrays(legs)
-    leg_table = np.concatenate([getattr(legs_col, name) for name in _LegArrays.names], axis=1)
     w = config.weights
-    normal = (normal_step(legs_col, speeds[:, None])[:, 0] if config.step_model == "normal_mode"
-              else np.zeros(A))
-    per_metre = neutral_energy_per_metre(legs, speeds, config)
-    flat_Ej, flat_reach = flat_joint_energy(legs, config)
-    level, sloped = flat_swings(legs, config), flat_swings(legs, config, SLOPE_EXTRA)
-    flat_ctrl, flat_ok, flat_slack = (np.ascontiguousarray(np.stack([x, y], axis=1))
-                                      for x, y in zip(level, sloped, strict=True))
     first, second, valid = st.pair_steps
-    basis, influence = _swing_basis(config.bezier_samples)
+    basis, influence = swing_basis(config.bezier_samples)
     Nn, Ns, Np = st.node_depth.size, st.step_stance.size, st.swing_back.size
     node_s, node_z, terminal = np.empty((A, Nn)), np.empty((A, Nn)), np.zeros((A, Nn))
     length, rise, En, Ev, Ej, E, cost, progress = (np.empty((A, Ns)) for _ in range(8))
@@ -538,37 +368,27 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     swing_ok = np.zeros((A, Np), dtype=np.bool_)
     controls = np.zeros((A, Np, 4, 2))
     rounds = np.empty((A, Np), dtype=np.int64)
-    work = np.zeros((A, 4), dtype=np.int64)
+    work = np.zeros((A, 5), dtype=np.int64)
     fparams = np.array([config.max_step_rise, config.max_foot_slope, config.support_tolerance,
                         config.edge_margin, config.swing_lift, config.pelvis_height_ratio,
                         float(np.cos(np.pi - config.knee_max_flexion)), config.min_step_ratio,
                         config.max_step_ratio, config.intervals, config.clearance,
                         config.max_swing_lift, RASTER_CELL])
-    iparams = np.array([config.snap, config.terminal_cost, PRUNE_SWINGS,
+    iparams = np.array([config.snap, config.terminal_cost, PRUNE,
                         config.max_adjustments, TABLE_LEVELS], dtype=np.int64)
     weights = np.array([w.alpha, w.beta, w.gamma, w.down_ratio, w.vertical == "linear",
                         w.frequency * w.alpha, w.c_thigh, w.c_calf], dtype=float)
     kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
-    kernel(prof_s, prof_z, bounds, base, lo, delta, np.asarray(trailing, dtype=float),
-                 np.asarray(speeds, dtype=float), normal, per_metre, lo + delta * neutral,
-                 leg_table, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack,
-                 st.node_depth, st.node_m, st.step_stance, st.step_front, st.step_j,
-                 st.step_depth, np.asarray(st.step_offset, dtype=np.int64), st.swing_back,
-                 st.swing_front, st.swing_stride, first, second, valid, basis, influence,
-                 fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E,
-                 reason, cost, progress, terminal, far, swing_ok, controls, rounds, work)
-    return StepTables(st, lo, delta, neutral, per_metre, node_s, node_z, length, rise, En,
-                      Ev, Ej, E, reason, swing_ok, controls, rounds, config, cost, progress,
-                      terminal, far,
-                      TableWork(np.full(A, Ns), work[:, 0], work[:, 1], work[:, 2],
+    kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, np.asarray(trailing, dtype=float),
+           np.asarray(speeds, dtype=float), g.normal, g.per_metre,
+           g.lo + g.delta * g.neutral, g.legs, g.flat_Ej, g.flat_reach,
+           g.flat_ctrl, g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
+           st.step_front, st.step_j, st.step_depth, np.asarray(st.step_offset, dtype=np.int64),
+           st.swing_back, st.swing_front, st.swing_stride, first, second, valid, basis,
+           influence, fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E,
+           reason, cost, progress, terminal, far, swing_ok, controls, rounds, work)
+    return StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, node_s, node_z, length, rise,
+                      En, Ev, Ej, E, reason, swing_ok, controls, rounds, config, cost,
+                      progress, terminal, far,
+                      TableWork(work[:, 4], work[:, 0], work[:, 1], work[:, 2],
                                 work[:, 3]))
-
-
-@lru_cache(maxsize=8)
-def _swing_basis(samples: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bernstein basis (4, T) at the swing samples and the control points' influence
-    (2, T-1) at the segment midpoints (as :func:`~planners.swing.adjust_swings`)."""
-    t = np.linspace(0.0, 1.0, samples)
-    t_mid = 0.5 * (t[:-1] + t[1:])
-    influence = np.stack([3 * t_mid * (1 - t_mid) ** 2, 3 * t_mid**2 * (1 - t_mid)])
-    return np.ascontiguousarray(bernstein(t).T), influence

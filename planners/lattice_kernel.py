@@ -17,7 +17,7 @@ import numba as nb
 import numpy as np
 
 from planners.energy import EV_PEAK_CM
-from planners.kinematics import key_frame
+from planners.kinematics import key_frame, leg_constants
 from planners.swing import adjust_one
 
 __all__ = ["build_agents", "build_agents_serial"]
@@ -25,7 +25,7 @@ __all__ = ["build_agents", "build_agents_serial"]
 _EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
 _VERTICAL = 1e-12
 # Reason flags (planners.legality.Reason)
-_EDGE, _SLOPE, _STEP_HEIGHT, _KNEE_REACH = 1, 2, 4, 8
+_EDGE, _SLOPE, _STEP_HEIGHT, _KNEE_REACH, _UNREACHED = 1, 2, 4, 8, 32
 _jit = nb.njit(cache=True, nogil=True)
 
 
@@ -141,18 +141,18 @@ def _energy(length, rise, Ej, speed, normal, p):
 
 
 @_jit
-def _step_E(length, rise, summit_z, leg, speed, normal, p, c_thigh, c_calf, pelvis,
-            cos_knee, lift):
+def _step_E(length, rise, summit_z, leg, speed, normal, p, c_thigh, c_calf, constants,
+            lift):
     """step_energy(0, 0, length, rise, summit_z, ...)[3]: Eq. 4 of one step [J/kg]."""
     thigh, calf, _ = key_frame(0.0, 0.0, length, rise, 0.0, summit_z, leg[0], leg[1],
-                               leg[4], leg[5], leg[5] + lift, pelvis, cos_knee)
+                               leg[4], leg[5], leg[5] + lift, constants)
     Ej = c_thigh * thigh + c_calf * calf
     return _energy(length, rise, Ej, speed, normal, p)[2]
 
 
 @_jit
 def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre, L0,
-              p, c_thigh, c_calf, pelvis, cos_knee, lift, max_slope, min_ratio, max_ratio):
+              p, c_thigh, c_calf, constants, lift, max_slope, min_ratio, max_ratio):
     """terminal_energy of the footholds ``starts`` (K,) to ``stop`` [m] over the profile
     vertices lo_i..hi_i; fills ``out`` (K,) [J/kg]."""
     s = s[lo_i:hi_i + 1]
@@ -181,7 +181,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
     lo = min_ratio * length
     longest = max_ratio * length
     E0 = _step_E(L0, 0.0, 0.0 + (leg[5] + lift), leg, speed, normal, p, c_thigh, c_calf,
-                 pelvis, cos_knee, lift)
+                 constants, lift)
     cost = np.empty(nseg)
     gap = np.empty(nseg)
     nxt = np.empty(nseg, dtype=np.int64)
@@ -198,7 +198,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
             g = L0
             rise = dz[i] / max(ds[i], 1e-12) * L0
         E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
-                    c_thigh, c_calf, pelvis, cos_knee, lift)
+                    c_thigh, c_calf, constants, lift)
         cost[i] = E - per_metre * g if steep[i] else (E - E0) / L0 * ds[i]
     if nsteep > 1:  # a low obstacle may be stridden over (see terminal_energy)
         for i in range(nseg):
@@ -209,7 +209,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
             stride = max(L0, min(gap[i] + leg[2], longest))
             top = max(z[i + 1], z[j]) - z[i]
             Es = _step_E(stride, 0.0, max(top, 0.0) + (leg[5] + lift), leg, speed, normal,
-                         p, c_thigh, c_calf, pelvis, cos_knee, lift)
+                         p, c_thigh, c_calf, constants, lift)
             both, jump = cost[i] + cost[j], Es - per_metre * stride
             cost[j] = cost[j] if both <= jump else 0.0
             cost[i] = min(both, jump) - cost[j]
@@ -300,7 +300,8 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
     min_step_ratio, max_step_ratio, intervals, clearance, max_swing_lift, cell.
     ``iparams``: snap, terminal_cost, prune, max_adjustments, table levels.
     ``weights``: alpha, beta, gamma, down_ratio, linear, frequency*alpha, c_thigh,
-    c_calf. ``work`` (A, 4): key-frame solves, curves built, reused, adjustment rounds.
+    c_calf. ``work`` (A, 5): key-frame solves, curves built, reused, adjustment rounds,
+    steps evaluated.
     """
     for a in nb.prange(base.size):
         _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
@@ -372,6 +373,7 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
             e += 1
     leg = legs[a]
     heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
+    constants = leg_constants(leg[0], leg[1], toe_off, ankle, pelvis, cos_knee)
     b0 = base[a]
     # nodes: footholds relative to the stance foot, heights, support
     support = np.zeros(Nn, dtype=np.int64)
@@ -398,32 +400,44 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
             starts[v - last0] = b0 + node_s[a, v]
         _terminal(s, z, lo_i, hi_i, starts, b0 + far_a, terminal[a, last0:], leg,
                   speeds[a], normal[a], per_metre[a], neutral_len[a], weights, c_thigh,
-                  c_calf, pelvis, cos_knee, lift, max_slope, min_ratio, max_ratio)
-    # steps: stance node -> front node
+                  c_calf, constants, lift, max_slope, min_ratio, max_ratio)
+    # steps: stance node -> front node; with ``prune`` only those whose stance foothold a
+    # legal sequence of steps from the start reaches (the others are never used)
+    reach = np.zeros(Nn, dtype=np.bool_)
+    reach[0] = True
+    reach[1] = True
     key_frames = 0
-    for t in range(Ns):
+    evaluated = 0
+    for t in range(Ns):  # steps are ordered by depth
         st_v, fr_v = step_stance[t], step_front[t]
         ss, fs = node_s[a, st_v], node_s[a, fr_v]
         zs, zf = node_z[a, st_v], node_z[a, fr_v]
         r = zf - zs
         L = fs - ss
+        length[a, t], rise[a, t] = L, r
+        final = terminal_cost and step_depth[t] == n
+        progress[a, t] = far_a - ss if final else L
+        ej = flat_Ej[a, step_j[t]]
+        if prune and not reach[st_v]:
+            En[a, t], Ev[a, t], _ = _energy(L, r, ej, speeds[a], normal[a], weights)
+            Ej[a, t], E[a, t], cost[a, t] = ej, np.inf, np.inf
+            reason[a, t] = _UNREACHED
+            continue
+        evaluated += 1
         highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
         nominal = lo[a] + delta[a] * step_j[t]
         level = r == 0 and highest == zs and abs(L - nominal) <= 1e-12
         hopeless = support[fr_v] != 0 or abs(r) > max_rise
-        ej = flat_Ej[a, step_j[t]]
         reachable = flat_reach[a, step_j[t]]
         if not level and not hopeless:
             summit = highest + ankle + lift
             th, ca, reachable = key_frame(ss, zs, fs, zf, ss, summit, leg[0], leg[1],
-                                          toe_off, ankle, ankle + lift, pelvis,
-                                          cos_knee)
+                                          toe_off, ankle, ankle + lift, constants)
             ej = c_thigh * th + c_calf * ca
             key_frames += 1
         en, ev, et = _energy(L, r, ej, speeds[a], normal[a], weights)
         if hopeless and not level:
             et = np.inf
-        length[a, t], rise[a, t] = L, r
         En[a, t], Ev[a, t], Ej[a, t], E[a, t] = en, ev, ej, et
         flags = support[fr_v]
         if abs(r) > max_rise:
@@ -431,19 +445,10 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
         if not reachable:
             flags |= _KNEE_REACH
         reason[a, t] = flags
-        if terminal_cost and step_depth[t] == n:
-            cost[a, t] = et + terminal[a, fr_v]
-            progress[a, t] = far_a - ss
-        else:
-            cost[a, t] = et
-            progress[a, t] = L
+        if flags == 0:
+            reach[fr_v] = True
+        cost[a, t] = et + terminal[a, fr_v] if final else et
     # swings: only pairs some legal sequence of steps can use
-    reach = np.zeros(Nn, dtype=np.bool_)
-    reach[0] = True
-    reach[1] = True
-    for t in range(Ns):  # steps are ordered by depth
-        if reason[a, t] == 0 and reach[step_stance[t]]:
-            reach[step_front[t]] = True
     behind = (-trailing[a] - lo[a]) / delta[a]
     on_grid = (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
                and behind < intervals + 0.5)
@@ -516,6 +521,7 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
             built += 1
             adjustments += used
     work[a, 0] = key_frames
+    work[a, 4] = evaluated
     work[a, 1] = built
     work[a, 2] = reused
     work[a, 3] = adjustments

@@ -20,6 +20,7 @@ class Reason(IntFlag):
     STEP_HEIGHT = 4  #: the height change of the step exceeds the limit
     KNEE_REACH = 8  #: a key frame is out of the leg's reach or knee-flexion limit
     SWING = 16  #: no Bezier swing curve clears the ground inside the legal region
+    UNREACHED = 32  #: not evaluated: no legal sequence of steps reaches its stance foothold
 
 
 _TEXT = {
@@ -28,13 +29,14 @@ _TEXT = {
     Reason.STEP_HEIGHT: "the height change exceeds the largest step rise",
     Reason.KNEE_REACH: "the knee cannot reach a key frame",
     Reason.SWING: "the swing foot cannot clear the ground",
+    Reason.UNREACHED: "no legal step reaches its stance foothold",
 }
 
 
 def describe(reason: int) -> str:
     """Human-readable text of the most important flag in ``reason``."""
     for flag in (Reason.STEP_HEIGHT, Reason.EDGE, Reason.SLOPE, Reason.KNEE_REACH,
-                 Reason.SWING):
+                 Reason.SWING, Reason.UNREACHED):
         if reason & flag:
             return _TEXT[flag]
     return "legal"

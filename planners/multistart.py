@@ -8,11 +8,12 @@ search as written; this is the improvement, measured in ``benchmarks/bench_plann
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 from planners.dp import cheapest
 from planners.lattice import StepTables
-from planners.search import SearchResult, neighbour_deltas
+from planners.search import SearchResult, evaluate_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
 
@@ -69,33 +70,62 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
 
 
 def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
-    """BFP (Fig. 4) from ``configs`` (B, n) for table rows ``agents`` (B,), vectorised.
+    """BFP (Fig. 4) from ``configs`` (B, n) for table rows ``agents`` (B,), compiled.
 
-    Returns the local optima (B, n), their efficiencies (B,), expansions and checks (B,).
+    Steepest ascent: each expansion looks up every in-grid neighbour (see
+    :func:`~planners.search.neighbour_deltas`) and moves to the most efficient legal one
+    (the first among equals) while it beats the current configuration by more than 1e-12
+    (relative). Returns the local optima (B, n), their efficiencies (B,), expansions and
+    checks (B,).
     """
-    J = tables.struct.J
-    deltas = neighbour_deltas(tables.struct.n)
-    configs = configs.copy()
+    st = tables.struct
+    configs = np.ascontiguousarray(configs, dtype=np.int64).copy()
     B = agents.size
+    current = np.empty(B)
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
-    _, current = tables.evaluate(agents, configs)
-    active = np.arange(B)
-    while active.size:
-        neighbours = configs[active, None, :] + deltas[None, :, :]
-        inside = ((neighbours >= 0) & (neighbours < J)).all(axis=-1)
-        legal, eff = tables.evaluate(agents[active], np.clip(neighbours, 0, J - 1))
-        eff = np.where(inside & legal, eff, -np.inf)
-        expanded[active] += 1
-        checks[active] += inside.sum(axis=1)
-        best = np.argmax(eff, axis=1)
-        best_eff = eff[np.arange(active.size), best]
-        better = best_eff > current[active] * (1 + 1e-12)
-        movers = active[better]
-        configs[movers] = neighbours[better, best[better]]
-        current[movers] = best_eff[better]
-        active = movers
+    _climb(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
+           np.ascontiguousarray(tables.progress), st.J,
+           np.asarray(st.step_offset, dtype=np.int64), np.asarray(st.swing_offset, dtype=np.int64),
+           np.asarray(st.swing_strides, dtype=np.int64), neighbour_deltas(st.n),
+           np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
     return configs, current, expanded, checks
+
+
+@nb.njit(cache=True, nogil=True)
+def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
+           agents, configs, current, expanded, checks):
+    """The climbs of :func:`hill_climb`, one after the other (efficiencies rounded to
+    1e-12 as :meth:`~planners.lattice.StepTables.evaluate`)."""
+    B, n = configs.shape
+    r = np.empty(n, dtype=np.int64)
+    for b in range(B):
+        a = agents[b]
+        q = configs[b]
+        _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
+                           swing_off, strides)
+        while True:
+            expanded[b] += 1
+            best_eff, best_d = -np.inf, 0
+            for d in range(deltas.shape[0]):
+                inside = True
+                for k in range(n):
+                    r[k] = q[k] + deltas[d, k]
+                    if r[k] < 0 or r[k] >= J:
+                        inside = False
+                if not inside:
+                    continue
+                checks[b] += 1
+                legal, e = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
+                                     step_off, swing_off, strides)
+                if legal and e > best_eff:
+                    best_eff, best_d = e, d
+            if not best_eff > cur * (1 + 1e-12):
+                break
+            for k in range(n):
+                q[k] += deltas[best_d, k]
+            cur = best_eff
+        current[b] = cur
 
 
 def greedy(tables: StepTables) -> SearchResult:

@@ -23,8 +23,9 @@ def optimal(tables: StepTables) -> SearchResult:
     configuration so far, dynamic programming finds the legal configuration minimising
     ``sum(E - lam * L)``; if that sum is negative the new configuration is more efficient
     and ``lam`` moves to it, otherwise ``lam`` is optimal. All agents iterate together.
-    ``nodes_expanded`` counts the DP states and ``legality_checks`` the DP transitions
-    of every pass (plus those of the start, :func:`~planners.multistart.nearest_legal`). E and L are
+    ``nodes_expanded`` counts the reachable DP states and ``legality_checks`` their
+    transitions in every pass (:class:`~planners.dp.DPWork`; plus those of the start,
+    :func:`~planners.multistart.nearest_legal`). E and L are
     the tables' ``cost`` and ``progress``: with ``PlannerConfig.terminal_cost`` every
     configuration progresses equally and the optimum is the least energy for it.
     """

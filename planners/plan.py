@@ -6,6 +6,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -67,7 +68,7 @@ class Plan:
         Eq. 5 over the plan: total length / total energy [m kg/J].
     stats : dict
         Counted work: the search's ``nodes_expanded`` and ``legality_checks`` (see each
-        search), and the tables' ``lattice_steps``, ``key_frame_solves``,
+        search), and the tables' ``lattice_steps`` (evaluated), ``key_frame_solves``,
         ``swing_curves`` (built by §5.2), ``swing_curves_reused`` (from the flat-ground
         cache), ``swing_adjustments`` (see :class:`~planners.lattice.TableWork`);
         ``time_s`` (per plan, amortised over a batch); the grid (``step_min``,
@@ -215,7 +216,7 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     -------
     list of Plan, length A
     """
-    config = PlannerConfig() if config is None else config
+    config = _default_config() if config is None else config
     if not isinstance(config, PlannerConfig):
         raise invalid("plan", "config", "a PlannerConfig", config)
     if planner not in PLANNERS:
@@ -258,6 +259,12 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         return plans
     return [_turned(p, None if turns is None else float(turns[a]), first_foot[a], config)
             for a, p in enumerate(plans)]
+
+
+@lru_cache(maxsize=1)
+def _default_config() -> PlannerConfig:
+    """``PlannerConfig()``, built once (its validation is a large part of a single plan)."""
+    return PlannerConfig()
 
 
 def _turned(p: Plan, change: float | None, foot: str, config: PlannerConfig) -> Plan:

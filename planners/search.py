@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
 
-__all__ = ["SearchResult", "all_configs_evaluated", "neighbour_deltas"]
+__all__ = ["SearchResult", "all_configs_evaluated", "evaluate_one", "neighbour_deltas"]
 
 #: Largest number of (agent, configuration, step) entries evaluated in one gather.
 GATHER_BUDGET = 1 << 22
@@ -68,3 +69,30 @@ def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
         eff[sl] = (tables.progress[rows, steps].sum(axis=-1)
                    / tables.cost[rows, steps].sum(axis=-1))
     return legal, eff
+
+
+@nb.njit(cache=True, nogil=True)
+def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
+    """Legality and efficiency of configuration ``q`` (n,) for table row ``a``, rounded
+    to 1e-12 as :meth:`~planners.lattice.StepTables.evaluate` (compiled, for the
+    searches' kernels)."""
+    n = q.size
+    m_prev = 0  # lattice index of the stance foothold f_{k-1}
+    m_prev2 = 0  # of the lift-off foothold f_{k-2}
+    j_prev = 0
+    legal = True
+    energy = 0.0
+    length = 0.0
+    for k in range(n):
+        step = step_off[k] + m_prev * J + q[k]
+        stride = q[k] + (j_prev if k > 0 else 0)
+        swing = swing_off[k] + m_prev2 * strides[k] + stride
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            legal = False
+        energy += cost[a, step]
+        length += progress[a, step]
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return legal, np.rint(length / energy * 1e12) / 1e12

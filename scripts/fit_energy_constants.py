@@ -11,9 +11,9 @@ slopes: the cost per metre at +45 % against -45 % and at -10 % against level). T
 flat-ground term c_calf / c_thigh is calibrated on WBDS (Fukuchi et al. 2018; preferred
 step length over leg length at each subject's comfortable speed, ``../shared/data/gait``;
 the fit is skipped without it) and validated on the spatiotemporal normals of the same
-folder (adults, normal pace). The fitted set is ``planners.EnergyWeights.fitted()``; the
-defaults stay the hand-set ones (``EnergyWeights()``), Chen & Li's printed Eq. 2 is
-``EnergyWeights(vertical="paper")``.
+folder (adults, normal pace). The fitted set is ``planners.EnergyWeights.fitted()``, the
+default of ``PlannerConfig``; the hand-set ones are ``EnergyWeights.hand_set()``, Chen &
+Li's printed Eq. 2 is ``EnergyWeights.paper()``.
 
 Oxygen to energy: 20.1 J per mL O2 (respiratory exchange ratio about 0.85).
 """

@@ -87,9 +87,9 @@ def test_uphill_steps_shorten_with_the_linear_form_and_jump_with_the_printed_one
 
 
 def _legs(leg):
-    from planners.lattice import _LegArrays
+    from planners.grids import LegArrays
 
-    return _LegArrays([leg])
+    return LegArrays([leg])
 
 
 def test_terminal_energy_is_level_walking_on_level_ground(leg):
@@ -138,8 +138,9 @@ def test_fitted_constants_are_selectable_and_price_descent_below_ascent(leg):
     from planners import EnergyWeights, GroundProfile, PlannerConfig, plan
 
     fitted = PlannerConfig(weights=EnergyWeights.fitted())
+    assert PlannerConfig().weights == EnergyWeights.fitted()  # the default
     ratios = []
-    for config in (PlannerConfig(), fitted):
+    for config in (PlannerConfig(weights=EnergyWeights.hand_set()), fitted):
         up = plan(GroundProfile.stairs(0.17, 0.30, 6, first_edge=0.4), leg, 0.6, config=config)
         down = plan(GroundProfile.stairs(-0.17, 0.30, 6, first_edge=0.4), leg, 0.6,
                     config=config)

@@ -200,18 +200,20 @@ def test_batches_larger_than_a_chunk(leg):
 
 @settings(max_examples=10, deadline=None)
 @given(terrain_profiles())
-def test_pruning_swing_pairs_does_not_change_the_optimum(leg, profile):
+def test_pruning_does_not_change_the_optimum(leg, profile):
     import planners.lattice as lattice
 
     pruned = plan(profile, leg, 1.34, "optimal")
-    lattice.PRUNE_SWINGS = False
+    lattice.PRUNE = False
     try:
         full = plan(profile, leg, 1.34, "optimal")
     finally:
-        lattice.PRUNE_SWINGS = True
+        lattice.PRUNE = True
     assert pruned.status == full.status
     assert _to_reach(pruned) == pytest.approx(_to_reach(full), rel=1e-12)
     assert pruned.stats["swing_curves"] <= full.stats["swing_curves"]
+    assert pruned.stats["key_frame_solves"] <= full.stats["key_frame_solves"]
+    assert pruned.stats["lattice_steps"] <= full.stats["lattice_steps"] == 1148
 
 
 def _walk(profile, leg, planner, config, distance):
