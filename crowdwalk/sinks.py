@@ -29,6 +29,7 @@ from scipy.spatial import cKDTree
 from crowdwalk.steps import StepBatch
 
 if TYPE_CHECKING:
+    from crowdwalk.crowd.shape import BodyShape
     from crowdwalk.gait.engine import PoseFrame
 
 __all__ = ["RunInfo", "Snapshot", "RunSink", "OverlapMonitor", "BackgroundSink"]
@@ -43,8 +44,9 @@ class RunInfo:
     fps : float
         Output frame rate [1/s].
     body_height : (n,) float [m]
-    radius : (n,) float
-        Body radius [m].
+    shape : crowdwalk.crowd.shape.BodyShape
+        Body outlines (three discs on the shoulder line; ``shape.radius`` the centre
+        disc's radius [m]).
     group : (n,) str
         Group name per agent.
     planner : (n,) str
@@ -53,7 +55,7 @@ class RunInfo:
 
     fps: float
     body_height: np.ndarray
-    radius: np.ndarray
+    shape: BodyShape
     group: np.ndarray
     planner: np.ndarray
 
@@ -76,7 +78,8 @@ class Snapshot:
     z : (k,) float
         Body heights (mean of the two footholds' heights) [m].
     orientation : (k, 2) float
-        Unit walking directions.
+        Unit facing directions of the torsos (the walking direction turned by the
+        shoulder twist; the shoulder line is perpendicular to it).
     """
 
     frame: int
@@ -100,15 +103,16 @@ class RunSink(Protocol):
 
 
 class OverlapMonitor:
-    """The largest overlap of two body discs over the run's frames [m]
-    (``max_overlap`` in the summary; 0 when bodies never overlap)."""
+    """The largest overlap of two body outlines over the run's frames [m] (the deepest
+    interpenetration of any two of their discs; ``max_overlap`` in the summary; 0 when
+    bodies never overlap)."""
 
     def __init__(self) -> None:
         self.max_overlap = 0.0
-        self._radius = np.zeros(0)
+        self._shape = np.zeros((0, 3))
 
     def begin(self, info: RunInfo) -> None:
-        self._radius = np.asarray(info.radius, float)
+        self._shape = info.shape.packed()
 
     def steps(self, batch: StepBatch) -> None:
         pass
@@ -117,11 +121,15 @@ class OverlapMonitor:
         ids, xy = snapshot.agents, snapshot.xy
         if ids.size <= 1:
             return
-        pairs = cKDTree(xy).query_pairs(2 * float(self._radius.max()), output_type="ndarray")
+        reach = 2 * float(np.maximum(self._shape[:, 0], self._shape[:, 1:].sum(axis=1)).max())
+        pairs = cKDTree(xy).query_pairs(reach, output_type="ndarray")
         if len(pairs):
+            from crowdwalk.crowd.shape import shape_overlap  # crowd imports this module
+
             i, j = pairs[:, 0], pairs[:, 1]
-            gap = np.linalg.norm(xy[i] - xy[j], axis=1)
-            over = self._radius[ids[i]] + self._radius[ids[j]] - gap
+            yaw = np.arctan2(snapshot.orientation[:, 1], snapshot.orientation[:, 0])
+            over = shape_overlap(xy[i], yaw[i], self._shape[ids[i]], xy[j], yaw[j],
+                                 self._shape[ids[j]])
             self.max_overlap = max(self.max_overlap, float(over.max()))
 
     def end(self, summary: dict) -> None:

@@ -38,11 +38,12 @@ def swing_bezier(swing: np.ndarray, *, stance: np.ndarray, stance_z: np.ndarray,
 
 
 def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
-               direction: np.ndarray, plan, duration: np.ndarray, terrain, legs, population,
-               foot_half_width, turn) -> StepBatch:
+               direction: np.ndarray, yaw: np.ndarray, plan, duration: np.ndarray, terrain,
+               legs, population, foot_half_width, turn) -> StepBatch:
     """Start the steps ``plan`` (a :class:`~crowdwalk.crowd.stepping.StepPlan` of k rows)
     of ``agents`` (k,) at ``start_time`` (k,) [s] along unit ``direction`` (k, 2), lasting
-    ``duration`` (k,) [s], oriented by MetaGait's ``turn``
+    ``duration`` (k,) [s], the torso turning to face ``yaw`` (k,) [rad] (unwrapped against
+    its facing now), oriented by MetaGait's ``turn``
     (:class:`~crowdwalk.gait.metagait.StepTurn`): ``state`` moves on (in place; the plan
     queue's anchor is the new stance) and the steps are returned."""
     st, a, d = state, agents, direction
@@ -59,6 +60,8 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
     st.t0[a] = t0
     st.t1[a] = t0 + duration
     st.heading[a] = np.arctan2(d[:, 1], d[:, 0])
+    st.yaw0[a] = st.yaw1[a]
+    st.yaw1[a] = yaw
     foot = st.foot[a].copy()
     side = np.where(foot == 0, 1.0, -1.0)
     foothold = new_c + (side * foot_half_width)[:, None] * _left(d)

@@ -2,9 +2,9 @@
 committed steps, then between the agents deciding in the same tick.
 
 Steering tested sampled step lengths only; here the step actually chosen is tested: the
-body moving linearly along its sweep over the step's duration must stay clear, at every
-instant from now on, of each neighbour moving along its own committed sweep
-(:func:`crowdwalk.crowd.geometry.step_distance`).
+outline moving linearly along its sweep over the step's duration (its torso turning
+linearly) must stay clear, at every instant from now on, of each neighbour moving along
+its own committed sweep (:func:`crowdwalk.crowd.shape.body_gaps`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from crowdwalk.crowd.geometry import step_distance
+from crowdwalk.crowd.shape import body_gaps
 from crowdwalk.crowd.steering import Neighbours
 
 __all__ = ["clashes_with_neighbours", "same_tick_yielders"]
@@ -20,41 +20,59 @@ __all__ = ["clashes_with_neighbours", "same_tick_yielders"]
 
 def clashes_with_neighbours(neighbours: Neighbours, rows: np.ndarray, *, start: np.ndarray,
                             end: np.ndarray, duration: np.ndarray, elapsed: np.ndarray,
-                            radius: np.ndarray) -> np.ndarray:
+                            yaw: np.ndarray, yaw_end: np.ndarray,
+                            shape: np.ndarray) -> np.ndarray:
     """(k,) bool: the steps of the deciders at ``rows`` (k,) of ``neighbours`` — bodies
     from ``start`` to ``end`` (k, 2) [m] over ``duration`` (k,) [s], ``elapsed`` (k,) [s]
-    of it already gone, of ``radius`` (k,) [m] — come closer to a neighbour than the two
-    radii."""
-    gap = step_distance(start[:, None, :], end[:, None, :], duration[:, None],
-                        elapsed[:, None], neighbours.now[rows], neighbours.end[rows],
-                        neighbours.remaining[rows])
-    return ((gap < radius[:, None] + neighbours.radius[rows])
-            & neighbours.valid[rows]).any(axis=1)
+    of it already gone, turning from ``yaw`` to ``yaw_end`` (k,) [rad], of outline
+    ``shape`` (k, 3) — come closer to a neighbour than touching."""
+    valid = neighbours.valid[rows]
+    pa, pk = np.nonzero(valid)
+    clash = np.zeros(rows.size, bool)
+    if pa.size == 0:
+        return clash
+    nb, nr = rows[pa], pk
+    yaw_now, yaw_end_nb = neighbours.yaws()
+    gaps = body_gaps(pa, a_start=start, a_yaw0=yaw, a_end=end[:, None, :],
+                     a_yaw1=yaw_end[:, None], a_duration=duration[:, None], a_elapsed=elapsed,
+                     a_shape=shape, b_now=neighbours.now[nb, nr], b_yaw_now=yaw_now[nb, nr],
+                     b_end=neighbours.end[nb, nr], b_yaw_end=yaw_end_nb[nb, nr],
+                     b_remaining=neighbours.remaining[nb, nr],
+                     b_shape=neighbours.outlines()[nb, nr])[0][:, 0]
+    np.logical_or.at(clash, pa, gaps < 0.0)
+    return clash
 
 
 def same_tick_yielders(*, agent: np.ndarray, start: np.ndarray, end: np.ndarray,
                        duration: np.ndarray, elapsed: np.ndarray, heel_strike: np.ndarray,
-                       radius: np.ndarray) -> np.ndarray:
+                       yaw: np.ndarray, yaw_end: np.ndarray, shape: np.ndarray) -> np.ndarray:
     """Indices into the k movers of one tick that yield to another mover: each checked the
     others' positions at its heel strike, not their new steps. Of two steps that would
     come too close (in time, as against the neighbours), the later heel strike (then the
     higher ``agent`` id) yields and waits.
 
     ``start``, ``end`` (k, 2) [m], ``duration``, ``elapsed`` (time since the heel strike
-    ``heel_strike``), ``radius`` (k,) [s], [m].
+    ``heel_strike``) (k,) [s], torso ``yaw`` now and ``yaw_end`` (k,) [rad], outlines
+    ``shape`` (k, 3).
     """
     mid = 0.5 * (start + end)
     half = 0.5 * np.linalg.norm(end - start, axis=1)
+    bound = np.maximum(shape[:, 0], shape[:, 1] + shape[:, 2])
     tree = cKDTree(mid)
-    pairs = tree.query_pairs(2 * (half.max() + radius.max()), output_type="ndarray")
+    pairs = tree.query_pairs(2 * (half.max() + bound.max()), output_type="ndarray")
     if not len(pairs):
         return np.zeros(0, dtype=np.int64)
     i, j = pairs[:, 0], pairs[:, 1]
     gone = np.minimum(elapsed, duration)
-    now = start + gone[:, None] * ((end - start) / duration[:, None])  # each one now
-    gap = step_distance(start[i], end[i], duration[i], elapsed[i], now[j], end[j],
-                        (duration - gone)[j])
-    bad = gap < radius[i] + radius[j]
+    f = gone / np.where(duration > 0, duration, 1.0)
+    now = start + f[:, None] * (end - start)  # each one now
+    yaw_now = yaw + f * (yaw_end - yaw)
+    gap = body_gaps(i, a_start=start, a_yaw0=yaw, a_end=end[:, None, :],
+                    a_yaw1=yaw_end[:, None], a_duration=duration[:, None], a_elapsed=elapsed,
+                    a_shape=shape, b_now=now[j], b_yaw_now=yaw_now[j], b_end=end[j],
+                    b_yaw_end=yaw_end[j], b_remaining=(duration - gone)[j],
+                    b_shape=shape[j])[0][:, 0]
+    bad = gap < 0.0
     if not bad.any():
         return np.zeros(0, dtype=np.int64)
     later = np.where((heel_strike[i] > heel_strike[j])

@@ -345,7 +345,7 @@ def _sequence_cost(graph, origin: str, dests: tuple) -> float:
 
 
 def _clear(sim, door, t: float) -> bool:
-    """True when no walking body (radius [m]) overlaps ``door`` now or at the end of
+    """True when no walking body (its holding disc) overlaps ``door`` now or at the end of
     its current step."""
     st = sim.state
     idx = np.flatnonzero(st.status == ACTIVE)
@@ -353,7 +353,7 @@ def _clear(sim, door, t: float) -> bool:
         return True
     now, _ = st.position(t, idx)
     xy = np.concatenate([now, st.pos1[idx]])
-    gap = shapely.distance(door, shapely.points(xy)) - np.tile(sim.radius[idx], 2)
+    gap = shapely.distance(door, shapely.points(xy)) - np.tile(sim.shape.bound[idx], 2)
     return bool(np.all(gap >= 0.0))
 
 

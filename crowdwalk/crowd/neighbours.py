@@ -5,17 +5,18 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from crowdwalk.crowd.shape import BodyShape
 from crowdwalk.crowd.steering import Neighbours
 
 __all__ = ["gather_neighbours"]
 
 
 def gather_neighbours(state, deciders: np.ndarray, *, t: float, walkers: np.ndarray,
-                      radius: np.ndarray, count: int, reach: float) -> Neighbours:
+                      shape: BodyShape, count: int, reach: float) -> Neighbours:
     """The nearest ``count`` walking agents within ``reach`` [m] of each of ``deciders``
-    (k,) at time ``t`` [s], with their committed motion (:class:`Neighbours`).
+    (k,) at time ``t`` [s], with their committed motion and outline (:class:`Neighbours`).
 
-    ``walkers`` (w,) are the walking agents' indices, ``radius`` (n,) [m] every agent's.
+    ``walkers`` (w,) are the walking agents' indices, ``shape`` (n) every agent's outline.
     """
     st = state
     k = min(count + 1, walkers.size)
@@ -34,5 +35,7 @@ def gather_neighbours(state, deciders: np.ndarray, *, t: float, walkers: np.ndar
     vel = np.where(moving[..., None], (st.pos1[agent] - st.pos0[agent])
                    / np.where(span > 0, span, 1.0)[..., None], 0.0)
     return Neighbours(valid=valid, now=now[nb_safe], end=st.pos1[agent], velocity=vel,
-                      heading=st.heading[agent], radius=radius[agent],
-                      remaining=np.where(moving, st.t1[agent] - t, 0.0))
+                      heading=st.heading[agent], radius=shape.radius[agent],
+                      remaining=np.where(moving, st.t1[agent] - t, 0.0),
+                      yaw_now=st.yaw(t, agent.ravel()).reshape(agent.shape),
+                      yaw_end=st.yaw1[agent], shape=shape.packed(agent))

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
+from crowdwalk.body import PROPORTIONS
 from crowdwalk.crowd.steering import SteeringParams
 
 __all__ = ["CrowdParams"]
@@ -17,13 +18,17 @@ class CrowdParams:
     Attributes
     ----------
     radius_ratio : float
-        Body radius over body height [-]. Calibrated on one data set only: 0.105 gives
-        0.18 m for a 1.71 m person, so that two bodies standing one behind the other are
-        0.36 m apart, the standstill spacing Seyfried et al. (2005, J. Stat. Mech.
-        P10002) measured in single file. The bottleneck flows (Seyfried et al. 2009) are
-        validation, not calibration: the value is not changed to fit them. (A disc
-        stands for a body about 0.26 H broad (Winter 2009) but only about half as deep;
-        with 0.115 H the 1 m bottleneck passed 1.43 /s.)
+        Half the body's depth over body height [-] (the centre disc of the outline,
+        :class:`~crowdwalk.crowd.shape.BodyShape`). Calibrated on one data set only:
+        0.105 gives 0.18 m for a 1.71 m person, so that two bodies standing one behind
+        the other are 0.36 m apart, the standstill spacing Seyfried et al. (2005, J.
+        Stat. Mech. P10002) measured in single file. The bottleneck flows (Seyfried et
+        al. 2009) are validation, not calibration: the value is not changed to fit them.
+    half_width_ratio : float
+        Half the body's shoulder width over body height [-]: 0.1295, half of Winter's
+        (2009, Biomechanics and Motor Control of Human Movement, Fig. 4.1) shoulder width
+        0.259 H (``crowdwalk.body.PROPORTIONS``), anthropometry, not tuned. The outline
+        is 0.44 m broad and 0.36 m deep for a 1.71 m person.
     wait_time : float
         How long an agent stands before deciding again when it cannot step [s].
     target_distance : float
@@ -75,6 +80,7 @@ class CrowdParams:
     """
 
     radius_ratio: float = 0.105
+    half_width_ratio: float = 0.5 * PROPORTIONS["shoulder_width"]
     wait_time: float = 0.25
     target_distance: float = 2.0
     centre_pull: float = 0.25

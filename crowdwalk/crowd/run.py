@@ -219,7 +219,7 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
     overlap = OverlapMonitor()
     everyone: list[RunSink] = [writer, overlap, *sinks]
     pop = sim.pop
-    info = RunInfo(fps=sim.fps, body_height=pop.body_height, radius=sim.radius,
+    info = RunInfo(fps=sim.fps, body_height=pop.body_height, shape=sim.shape,
                    group=np.asarray(pop.group_names, dtype=object)[pop.group].astype(str),
                    planner=pop.planner.astype(str))
     for sink in everyone:

@@ -43,6 +43,7 @@ from crowdwalk.crowd.neighbours import gather_neighbours
 from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
+from crowdwalk.crowd.shape import BodyShape
 from crowdwalk.crowd.spawning import free_to_spawn, place
 from crowdwalk.crowd.speed import GapSteps, step_durations
 from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
@@ -101,7 +102,9 @@ class CrowdSimulation:
         self.dt = frame_dt / self.ticks_per_frame
         self.duration = float(duration)
         self.n = n = len(population)
-        self.radius = params.radius_ratio * population.body_height
+        h = population.body_height
+        self.shape = BodyShape.from_axes(params.radius_ratio * h, params.half_width_ratio * h)
+        self.radius = self.shape.radius  # the centre disc's (half the depth) [m]
         # KLAW locomotion parameters (crowdwalk.style) at the free speed: normal mode is
         # the body's normal-mode step and cadence (planners.normal_mode, WBDS relation); a
         # lock holds its step length (the step aimed at) or frequency (the step time), and
@@ -191,7 +194,7 @@ class CrowdSimulation:
         """The walking agents now (:class:`crowdwalk.sinks.Snapshot`)."""
         idx = self.active
         xy, z = self.state.position(self.time, idx)
-        h = self.state.heading[idx]
+        h = self.state.yaw(self.time, idx)
         return Snapshot(frame=self.frame, agents=idx, xy=xy, z=z,
                         orientation=np.column_stack([np.cos(h), np.sin(h)]))
 
@@ -231,7 +234,9 @@ class CrowdSimulation:
         if due.size == 0:
             return
         xy = self.pop.spawn_xy[due]
-        free = free_to_spawn(st, due, t=t, walkers=self.active, xy=xy, radius=self.radius)
+        # the outline's holding disc: a spawning walker's facing is not yet known
+        free = free_to_spawn(st, due, t=t, walkers=self.active, xy=xy,
+                             radius=self.shape.bound)
         idx = due[free]
         if idx.size:
             p = self.pop.spawn_xy[idx]
@@ -309,8 +314,9 @@ class CrowdSimulation:
         back = clogged & (np.round(st.stuck[idx] / prm.wait_time).astype(int) % 2 == 1)
         route_dir = np.where(back[:, None], -route_dir, route_dir)
         w0 = _time.perf_counter()
-        nbs = gather_neighbours(st, idx, t=t, walkers=self.active, radius=self.radius,
+        nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
                                 count=prm.neighbours, reach=prm.neighbour_range)
+        outline = self.shape.packed(idx)
         gap = self._gap_steps(idx, pos, nbs)
         choice = split_rows(
             self.workers, choose_steps, idx.size, pos, st.stance[idx],
@@ -318,8 +324,8 @@ class CrowdSimulation:
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
-            step_time=self.min_step_time[idx], lag=t - te, on=self._steer_on,
-            gap=gap if prm.speed_model == "contact_gap" else None)
+            step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
+            on=self._steer_on, gap=gap if prm.speed_model == "contact_gap" else None)
         self.wall_steering += _time.perf_counter() - w0
         if gap is not None:
             v, reach = gap.along(choice.direction)
@@ -342,14 +348,14 @@ class CrowdSimulation:
                 clash = clashes_with_neighbours(
                     nbs, go, start=pos[go], end=end,
                     duration=self._durations(idx[go], plan.take(go)), elapsed=t - te[go],
-                    radius=self.radius[idx[go]])
+                    yaw=st.yaw1[idx[go]], yaw_end=choice.yaw[go], shape=outline[go])
                 move = plan.move.copy()
                 move[go[clash]] = False
                 plan = plan.with_move(move)
                 self.queue.clear(idx[go[clash]])
-        self._commit(idx, te, t, choice.direction, plan)
+        self._commit(idx, te, t, choice.direction, choice.yaw, plan)
 
-    def _commit(self, idx, te, t, direction, plan: StepPlan) -> None:
+    def _commit(self, idx, te, t, direction, yaw, plan: StepPlan) -> None:
         st, prm = self.state, self.params
         mv = np.flatnonzero(plan.move)
         if mv.size > 1:
@@ -358,7 +364,8 @@ class CrowdSimulation:
             yielders = same_tick_yielders(
                 agent=a, start=st.pos1[a], end=0.5 * (st.stance[a] + new_c),
                 duration=self._durations(a, plan.take(mv)), elapsed=t - te[mv],
-                heel_strike=te[mv], radius=self.radius[a])
+                heel_strike=te[mv], yaw=st.yaw1[a], yaw_end=yaw[mv],
+                shape=self.shape.packed(a))
             if yielders.size:
                 move = plan.move.copy()
                 move[mv[yielders]] = False
@@ -379,7 +386,7 @@ class CrowdSimulation:
         a, steps = idx[go], plan.take(go)
         turn = self._orient(a, direction[go], steps.length)
         batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
-                           plan=steps, duration=self._durations(a, steps),
+                           yaw=yaw[go], plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
                            foot_half_width=self.half_width[a], turn=turn)
         self._decided.append(batch)

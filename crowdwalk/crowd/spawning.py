@@ -67,6 +67,7 @@ def place(state, agents: np.ndarray, *, t: float, xy: np.ndarray, z: np.ndarray,
     ahead = table.point_at(st.route[idx], s + 1.0)
     d = ahead - p
     st.heading[idx] = np.arctan2(d[:, 1], d[:, 0])
+    st.yaw0[idx] = st.yaw1[idx] = st.heading[idx]
     right = -_left(np.column_stack([np.cos(st.heading[idx]), np.sin(st.heading[idx])]))
     st.stance_foot[idx] = np.column_stack([p + np.asarray(foot_half_width)[..., None] * right,
                                            z])

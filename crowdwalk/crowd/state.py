@@ -21,6 +21,8 @@ class AgentState:
         self.t0 = np.zeros(n)  # start of the current step or wait [s]
         self.t1 = np.zeros(n)  # its end = next decision [s]
         self.heading = np.zeros(n)  # [rad]
+        self.yaw0 = np.zeros(n)  # torso facing at the start of the current step [rad]
+        self.yaw1 = np.zeros(n)  # ... at its end (turns linearly in time; unwrapped) [rad]
         self.stance = np.zeros((n, 2))  # centre-line point of the newest foothold [m]
         self.stance_z = np.zeros(n)
         self.trail = np.zeros((n, 2))  # centre-line point of the previous foothold [m]
@@ -52,3 +54,9 @@ class AgentState:
         f = np.clip((t - self.t0[idx]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
         xy = self.pos0[idx] + f[:, None] * (self.pos1[idx] - self.pos0[idx])
         return xy, self.z0[idx] + f * (self.z1[idx] - self.z0[idx])
+
+    def yaw(self, t: float, idx: np.ndarray) -> np.ndarray:
+        """Torso facing (k,) [rad] of agents ``idx`` at time t (not wrapped)."""
+        span = self.t1[idx] - self.t0[idx]
+        f = np.clip((t - self.t0[idx]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
+        return self.yaw0[idx] + f * (self.yaw1[idx] - self.yaw0[idx])

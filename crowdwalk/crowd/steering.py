@@ -37,7 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import point_segment_distance, segment_distance, step_distance
+from crowdwalk.crowd.geometry import point_segment_distance, segment_distance
+from crowdwalk.crowd.shape import body_gaps, disc_centres
 from crowdwalk.crowd.speed import GapSteps
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
@@ -76,6 +77,15 @@ class SteeringParams:
         adds ``give_way_weight`` [m/s] per further second to the cost of standing.
     clog_after : float
         Standing longer than this [s] (whoever the neighbours are) adds the same cost.
+    twists_deg : tuple of float
+        Shoulder twists [deg] a walker tries (the way it is turned already, else to the
+        left), after keeping its facing, when it cannot take its preferred step facing
+        where it walks (:mod:`~crowdwalk.crowd.shape`).
+    keep_facing : bool
+        Whether a walker that cannot step ahead facing forward tries keeping its facing
+        (False, with no ``twists_deg``: the torso always faces the step direction).
+    twist_weight : float
+        Cost of walking with the shoulders twisted by φ, ``w (1 - cos φ)`` [m].
     """
 
     offsets_deg: tuple[float, ...] = (0.0, -12.0, 12.0, -25.0, 25.0, -40.0, 40.0, -60.0,
@@ -95,6 +105,9 @@ class SteeringParams:
     give_way_after: float = 1.0
     give_way_weight: float = 0.3
     clog_after: float = 2.5
+    twists_deg: tuple[float, ...] = (60.0,)
+    keep_facing: bool = True
+    twist_weight: float = 0.05
 
 
 @dataclass(frozen=True)
@@ -118,6 +131,11 @@ class Neighbours:
         Time until the neighbour reaches ``end`` [s] (0 when standing). With it (and the
         deciding agents' step timing) the swept-body test is made in time: see
         :func:`choose_steps`.
+    yaw_now, yaw_end : (m, K) float, optional
+        Neighbour torso facing now and at ``end`` [rad] (default: ``heading``).
+    shape : (m, K, 3) float, optional
+        Neighbour outlines (:meth:`~crowdwalk.crowd.shape.BodyShape.packed` rows;
+        default: discs of ``radius``).
     """
 
     valid: np.ndarray
@@ -127,20 +145,40 @@ class Neighbours:
     radius: np.ndarray
     heading: np.ndarray | None = None
     remaining: np.ndarray | None = None
+    yaw_now: np.ndarray | None = None
+    yaw_end: np.ndarray | None = None
+    shape: np.ndarray | None = None
+
+    def outlines(self) -> np.ndarray:
+        """(m, K, 3) the neighbours' outlines (discs of ``radius`` unless given)."""
+        if self.shape is not None:
+            return self.shape
+        return np.stack([self.radius, self.radius, np.zeros_like(self.radius)], axis=-1)
+
+    def yaws(self) -> tuple[np.ndarray, np.ndarray]:
+        """(m, K) torso facing now and at ``end`` [rad] (default ``heading``, else 0)."""
+        now = self.yaw_now if self.yaw_now is not None else self.heading
+        now = np.zeros(self.valid.shape) if now is None else now
+        return now, (now if self.yaw_end is None else self.yaw_end)
 
 
 @dataclass(frozen=True)
 class StepChoice:
     """Steering result for m agents: ``direction`` (m, 2) unit, ``free_length`` (m,)
-    longest clear step along it [m], ``move`` (m,) False where the agent waits."""
+    longest clear step along it [m], ``move`` (m,) False where the agent waits, ``yaw``
+    (m,) the torso's facing at the step's end [rad] (unwrapped against the current one),
+    ``utility`` (m,) the choice's cost [m] (lower is better)."""
 
     direction: np.ndarray
     free_length: np.ndarray
     move: np.ndarray
+    yaw: np.ndarray
+    utility: np.ndarray
 
     def take(self, rows: np.ndarray) -> StepChoice:
         """The choices at ``rows``."""
-        return StepChoice(self.direction[rows], self.free_length[rows], self.move[rows])
+        return StepChoice(self.direction[rows], self.free_length[rows], self.move[rows],
+                          self.yaw[rows], self.utility[rows])
 
 
 def _rotate(v: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -164,6 +202,8 @@ def choose_steps(
     stuck: np.ndarray | None = None,
     step_time: np.ndarray | None = None,
     lag: np.ndarray | None = None,
+    shape: np.ndarray | None = None,
+    yaw: np.ndarray | None = None,
     gap: GapSteps | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
@@ -202,6 +242,11 @@ def choose_steps(
         follower may step into the room its leader is vacating during the same step.
     lag : (m,), optional
         How long ago each agent's step would have started (its heel strike) [s].
+    shape : (m, 3), optional
+        The agents' outlines (:meth:`~crowdwalk.crowd.shape.BodyShape.packed` rows;
+        default: discs of ``radius``). Used by the in-time test and the walls.
+    yaw : (m,), optional
+        Torso facing now [rad] (default: ``heading``).
     gap : crowdwalk.crowd.speed.GapSteps, optional
         The contact-gap model's steps: the utility then scores each candidate direction
         at the step the model allows along it (every neighbour counted), so that a
@@ -214,7 +259,11 @@ def choose_steps(
     """
     m = position.shape[0]
     if m == 0:
-        return StepChoice(np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool))
+        return StepChoice(np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool), np.zeros(0),
+                          np.zeros(0))
+    yaw = heading if yaw is None else np.asarray(yaw, dtype=float)
+    shape = (np.column_stack([radius, radius, np.zeros(m)]) if shape is None
+             else np.asarray(shape, dtype=float))
     speed = 2.0 * nominal_step if speed is None else np.asarray(speed, dtype=float)
     lengths = np.asarray(params.step_lengths)  # (L,)
     # candidates: fixed offsets from the route direction, plus keeping the current heading
@@ -226,45 +275,108 @@ def choose_steps(
     dirs = _rotate(route_direction[:, None, :], offsets)  # (m, C, 2)
     ends = stance[:, None, None, :] + 0.5 * lengths[None, None, :, None] * dirs[:, :, None, :]
     # (m, C, L, 2): body position at the end of a step of each length
+    cand_heading = np.arctan2(dirs[..., 1], dirs[..., 0])  # (m, C)
+
+    def facing(turned) -> np.ndarray:  # (m, C) torso facing at the step's end
+        turn = cand_heading + turned - yaw[:, None]
+        return yaw[:, None] + (turn + np.pi) % (2 * np.pi) - np.pi  # unwrapped
 
     # hard limits: walls (sampled at each length's end point and the sweep's midpoint)
     # a step may not bring the body closer to a wall than its radius, unless it was
     # already closer (then it may not get closer still: agents can leave a wall)
     r = np.minimum(radius, clearance(position) - 1e-6)[:, None, None]
-    wall_ok = clearance(ends) >= r
-    wall_ok &= clearance(0.5 * (ends + position[:, None, None, :])) >= r
+    at_end, halfway = clearance(ends), clearance(0.5 * (ends + position[:, None, None, :]))
+    wall_ok = (at_end >= r) & (halfway >= r)
     # the new foothold itself must lie inside the walkable area
     foot = stance[:, None, None, :] + lengths[None, None, :, None] * dirs[:, :, None, :]
     wall_ok &= clearance(foot) >= params.foot_clearance
     # hard limits: swept bodies of neighbours (only those a step could reach)
-    ok = wall_ok
+    timed = neighbours.remaining is not None and step_time is not None
+    pa = np.zeros(0, dtype=np.int64)
     if neighbours.valid.shape[1]:
         need = radius[:, None] + neighbours.radius  # (m, K)
+        if timed:  # the outlines' holding discs
+            nb_shape = neighbours.outlines()
+            need = (np.maximum(shape[:, 0], shape[:, 1] + shape[:, 2])[:, None]
+                    + np.maximum(nb_shape[..., 0], nb_shape[..., 1] + nb_shape[..., 2]))
         gap0 = point_segment_distance(position[:, None, :], neighbours.now, neighbours.end)
         reach = np.linalg.norm(ends - position[:, None, None, :], axis=-1).max(axis=(1, 2))
         relevant = neighbours.valid & (gap0 - need < reach[:, None] + 1e-9)
         # the relevant (agent, neighbour) pairs only, not every agent padded to the most
         # crowded one's count
         pa, pk = np.nonzero(relevant)  # (P,), agent-major
-        if pa.size:
-            q0 = neighbours.now[pa, pk][:, None, None, :]  # (P, 1, 1, 2)
-            q1 = neighbours.end[pa, pk][:, None, None, :]
-            p0 = position[pa][:, None, None, :]
-            p1 = ends[pa]  # (P, C, L, 2)
-            if neighbours.remaining is not None and step_time is not None:
-                # in time: both bodies move along their sweeps from now on and then stand
-                # (the candidate's body from ``position`` to ``ends`` over the step)
-                dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])[pa]
-                late = np.zeros(m) if lag is None else np.asarray(lag, dtype=float)
-                d = step_distance(p0, p1, dur[:, None, :], late[pa][:, None, None], q0, q1,
-                                  neighbours.remaining[pa, pk][:, None, None])  # (P, C, L)
-            else:
-                d = segment_distance(p0, p1, q0, q1)  # (P, C, L)
-            blocked = d < need[pa, pk][:, None, None]
-            first = np.flatnonzero(np.concatenate([[True], pa[1:] != pa[:-1]]))
-            ok[pa[first]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
-    n_free = np.cumprod(ok, axis=2).sum(axis=2)  # (m, C) feasible lengths from the short end
-    free = np.where(n_free > 0, lengths[np.maximum(n_free - 1, 0)], 0.0)
+    n_c, n_l = dirs.shape[1], lengths.size
+
+    def clear(rows: np.ndarray, yaw_end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(r, C, L) bool: the steps of ``rows`` (ascending) clear of walls and
+        neighbours, the torsos turning to ``yaw_end`` (m, C); and the same for the
+        centre discs alone (no facing can do better)."""
+        centre = wall_ok[rows]
+        ok = centre & _shoulders_clear(
+            position[rows], ends[rows], yaw=yaw[rows], yaw_end=yaw_end[rows],
+            shape=shape[rows], clearance=clearance,
+            near=np.minimum(at_end[rows], halfway[rows]))
+        local = np.full(m, -1)
+        local[rows] = np.arange(rows.size)
+        sel = np.flatnonzero(local[pa] >= 0)
+        if sel.size == 0:
+            return ok, centre
+        qa, qk = pa[sel], pk[sel]
+        centre = centre.copy()
+        if timed:
+            # in time: both outlines move along their sweeps from now on and then stand
+            # (the candidate's body from ``position`` to ``ends`` over the step, its
+            # torso turning from ``yaw`` to ``yaw_end``)
+            dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])
+            nb_yaw, nb_yaw_end = neighbours.yaws()
+            gaps, centre_gaps = body_gaps(
+                qa, a_start=position, a_yaw0=yaw, a_end=ends.reshape(m, n_c * n_l, 2),
+                a_yaw1=np.repeat(yaw_end, n_l, axis=1), a_duration=np.tile(dur, (1, n_c)),
+                a_elapsed=np.zeros(m) if lag is None else lag, a_shape=shape,
+                b_now=neighbours.now[qa, qk], b_yaw_now=nb_yaw[qa, qk],
+                b_end=neighbours.end[qa, qk], b_yaw_end=nb_yaw_end[qa, qk],
+                b_remaining=neighbours.remaining[qa, qk], b_shape=nb_shape[qa, qk])
+            blocked = gaps.reshape(-1, n_c, n_l) < 0.0
+            centre_blocked = centre_gaps.reshape(-1, n_c, n_l) < 0.0
+        else:
+            q0 = neighbours.now[qa, qk][:, None, None, :]  # (P, 1, 1, 2)
+            q1 = neighbours.end[qa, qk][:, None, None, :]
+            d = segment_distance(position[qa][:, None, None, :], ends[qa], q0, q1)
+            blocked = centre_blocked = d < need[qa, qk][:, None, None]  # (P, C, L)
+        first = np.flatnonzero(np.concatenate([[True], qa[1:] != qa[:-1]]))
+        ok[local[qa[first]]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
+        centre[local[qa[first]]] &= ~np.logical_or.reduceat(centre_blocked, first, axis=0)
+        return ok, centre
+
+    def free_lengths(ok: np.ndarray) -> np.ndarray:  # feasible lengths from the short end
+        n_free = np.cumprod(ok, axis=2).sum(axis=2)
+        return np.where(n_free > 0, lengths[np.maximum(n_free - 1, 0)], 0.0)
+
+    everyone = np.arange(m)
+    yaw_end = facing(0.0)
+    ok, centre = clear(everyone, yaw_end)
+    free = free_lengths(ok)  # (m, C)
+    if timed:
+        # walkers who cannot take their preferred step ahead facing forward, where a
+        # body as narrow as it is deep could, try keeping their facing (a side step or a
+        # step back without turning: shuffling in a queue), then turning their shoulders
+        # by each twist, the way they are turned already (else to the left; the outline
+        # is symmetric): a candidate takes the first facing that lets it step strictly
+        # further than facing forward
+        ahead = np.abs(offsets) <= np.deg2rad(25.0) + 1e-9
+        want = np.minimum(nominal_step, lengths[-1]) - 1e-9
+        narrow = free_lengths(centre)  # no facing steps further
+        rows = np.flatnonzero((np.where(ahead, free, 0.0).max(axis=1) < want)
+                              & (narrow > free + 1e-9).any(axis=1))
+        side = np.where(((yaw - heading + np.pi) % (2 * np.pi) - np.pi) < -1e-3, -1.0, 1.0)
+        options = [np.broadcast_to(yaw[:, None], (m, n_c))] if params.keep_facing else []
+        options += [facing(side[:, None] * phi) for phi in np.deg2rad(params.twists_deg)]
+        for twisted in options if rows.size else ():
+            reach_t = free_lengths(clear(rows, twisted)[0])
+            r_, c_ = np.nonzero(reach_t > free[rows] + 1e-9)
+            free[rows[r_], c_] = reach_t[r_, c_]
+            yaw_end[rows[r_], c_] = twisted[rows[r_], c_]
+    turned = (yaw_end - cand_heading + np.pi) % (2 * np.pi) - np.pi  # (m, C) twist [rad]
 
     # utility at the end point of the preferred (or longest clear) step
     use = np.minimum(free, nominal_step[:, None])  # (m, C)
@@ -301,7 +413,7 @@ def choose_steps(
         utility += np.where(nb.valid[:, None, :], rep, 0.0).sum(axis=-1)
     wall_gap = clearance(cand) - radius[:, None]  # soft term uses the full radius
     utility += params.wall_weight * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)
-    cand_heading = np.arctan2(dirs[..., 1], dirs[..., 0])  # (m, C)
+    utility[:, :-1] += params.twist_weight * (1.0 - np.cos(turned))
     utility[:, :-1] += params.turn_weight * (1.0 - np.cos(cand_heading - heading[:, None]))
     utility[:, :-1] += params.right_bias * np.maximum(np.sin(offsets), 0.0)
     utility[:, :-1] = np.where(np.abs(offsets) <= np.pi / 2 + 1e-9, utility[:, :-1], np.inf)
@@ -334,4 +446,29 @@ def choose_steps(
         direction=dirs[rows, pick],
         free_length=np.where(move, free[rows, pick], 0.0),
         move=move,
+        yaw=np.where(move, yaw_end[rows, pick], yaw),
+        utility=utility[rows, best],
     )
+
+
+def _shoulders_clear(position, ends, *, yaw, yaw_end, shape, clearance,
+                     near) -> np.ndarray:
+    """(m, C, L) bool: the shoulder discs keep their radius (widened for the turn) from
+    the walls at the step's end and halfway, or do not come closer than they are now.
+    Only where the centre's clearance ``near`` (m, C, L) [m] (the smaller at the end and
+    halfway) is within the outline's reach plus the largest widening are they tested
+    (clearance grows by at most the distance moved)."""
+    ok = np.ones(ends.shape[:-1], bool)
+    offset = shape[:, 2]
+    reach = shape[:, 1] + 2 * offset
+    i, c, l = np.nonzero((near < reach[:, None, None]) & (offset > 0)[:, None, None])
+    if i.size == 0:
+        return ok
+    y0, y1 = yaw[i], yaw_end[i, c]
+    bend = offset[i] * (1.0 - np.cos(0.5 * (y1 - y0)))
+    now = disc_centres(position[i], y0, offset[i])[:, 1:]  # (k, 2, 2): left, right
+    end = disc_centres(ends[i, c, l], y1, offset[i])[:, 1:]
+    r = shape[i, 1][:, None] + bend[:, None]
+    r = np.minimum(r, clearance(now) - 1e-6)
+    ok[i, c, l] = np.all((clearance(end) >= r) & (clearance(0.5 * (now + end)) >= r), axis=1)
+    return ok

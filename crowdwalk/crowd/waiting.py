@@ -21,6 +21,7 @@ def stand(state, queue, *, agents: np.ndarray, t: float, terrain, legs, params) 
     queue.clear(wait)
     st.pos0[wait] = st.pos1[wait]
     st.z0[wait] = st.z1[wait]
+    st.yaw0[wait] = st.yaw1[wait]
     st.t0[wait] = st.t1[wait]
     st.t1[wait] = t + params.wait_time
     apart = wait[np.linalg.norm(st.stance[wait] - st.trail[wait], axis=1) > 1e-6]

@@ -110,9 +110,13 @@ class RunPoses:
 
 
 class TrajectoryPoses:
-    """Upright poles from trajectories, for runs stored without poses.
+    """Upright poles with a shoulder bar from trajectories, for runs stored without poses.
 
-    Each agent is a two-joint figure from the ground under it to ``height`` above it.
+    Each agent is a four-joint figure: a pole from the ground under it to ``height``
+    above it and, ``0.2`` m below its top, a bar ``shoulders`` wide across the torso's
+    facing (the trajectories' ``ori_x, ori_y``), so that drawn with capsules of
+    :attr:`pole_radius` the figure is as broad as the body's outline and shows which way
+    its shoulders face (:mod:`crowdwalk.crowd.shape`).
 
     Parameters
     ----------
@@ -120,24 +124,33 @@ class TrajectoryPoses:
         Rows sorted by frame.
     height : float
         Pole height [m].
+    shoulders : float
+        Distance between the bar's end joints [m].
     """
 
-    def __init__(self, trajectories, height: float = 1.5) -> None:
+    #: Capsule radius [m] the viewer draws the figure with.
+    pole_radius = 0.12
+
+    def __init__(self, trajectories, height: float = 1.5, shoulders: float = 0.2) -> None:
         frames = np.asarray(trajectories.frame, dtype=int)
-        self.names = ["ground", "top"]
-        self.parents = np.array([-1, 0])
+        self.names = ["ground", "top", "left", "right"]
+        self.parents = np.array([-1, 0, 1, 1])
         self._frames = np.unique(frames)
         self.times = self._frames / float(trajectories.fps)
         self._start = np.searchsorted(frames, self._frames, side="left")
         self._stop = np.searchsorted(frames, self._frames, side="right")
         ground = np.column_stack([trajectories.x, trajectories.y, trajectories.z])
-        self._positions = np.stack([ground, ground + [0.0, 0.0, height]], axis=1)
+        left = np.column_stack([-np.asarray(trajectories.ori_y), trajectories.ori_x,
+                                np.zeros(len(ground))]) * (0.5 * shoulders)
+        bar = ground + [0.0, 0.0, height - 0.2]
+        self._positions = np.stack([ground, ground + [0.0, 0.0, height], bar + left,
+                                    bar - left], axis=1)
         self._ids = np.asarray(trajectories.id, dtype=int)
         self.agent_ids = np.unique(self._ids)
         self.n_agents = len(self.agent_ids)
 
     def at(self, index: int) -> tuple[np.ndarray, np.ndarray]:
-        """Ids (k,) and pole end points (k, 2, 3) [m] of frame ``index``."""
+        """Ids (k,) and figure joints (k, 4, 3) [m] of frame ``index``."""
         rows = slice(self._start[index], self._stop[index])
         return self._ids[rows], self._positions[rows]
 

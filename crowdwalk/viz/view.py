@@ -200,7 +200,7 @@ class SceneView:
         if poses is None or not len(poses.times):
             return
         self.bodies = SolidBodies(poses.names, poses.parents, detail=detail_for(poses.n_agents),
-                                  pole_radius=0.12 if len(poses.parents) <= 2 else 0.035)
+                                  pole_radius=getattr(poses, "pole_radius", 0.035))
         self._root = int(np.flatnonzero(np.asarray(poses.parents) < 0)[0])
         self._timeline = PoseTimeline(poses, interpolate=self.scene.interpolate)
         self._show_time(float(poses.times[0]))

@@ -9,6 +9,7 @@ import yaml
 from scipy.spatial import cKDTree
 
 from crowdwalk.crowd.run import RunOverrides, run_scenario
+from crowdwalk.crowd.shape import BodyShape, shape_overlap
 from crowdwalk.crowd.simulation import CrowdParams
 from crowdwalk.record import open_run
 
@@ -16,18 +17,24 @@ SCENARIOS = Path(__file__).parents[2] / "scenarios"
 
 
 def _max_overlap(summary, run) -> float:
-    """Largest body overlap over all frames [m], from the trajectory file."""
+    """Largest overlap of two body outlines over all frames [m], from the trajectory file
+    (positions and torso facing) and the agents' heights."""
     traj = run.trajectories()
-    radius = {a["id"]: CrowdParams().radius_ratio * a["body_height_m"] for a in summary["agents"]}
-    r = np.array([radius[i] for i in traj.id])
+    prm = CrowdParams()
+    height = {a["id"]: a["body_height_m"] for a in summary["agents"]}
+    h = np.array([height[i] for i in traj.id])
+    shape = BodyShape.from_axes(prm.radius_ratio * h, prm.half_width_ratio * h).packed()
+    yaw = np.arctan2(traj.ori_y, traj.ori_x)
     worst = 0.0
     for f in np.unique(traj.frame):
-        m = traj.frame == f
+        m = np.flatnonzero(traj.frame == f)
         xy = np.column_stack([traj.x[m], traj.y[m]])
         pairs = cKDTree(xy).query_pairs(0.6, output_type="ndarray")
         if len(pairs):
-            gap = np.linalg.norm(xy[pairs[:, 0]] - xy[pairs[:, 1]], axis=1)
-            worst = max(worst, float((r[m][pairs[:, 0]] + r[m][pairs[:, 1]] - gap).max()))
+            i, j = m[pairs[:, 0]], m[pairs[:, 1]]
+            over = shape_overlap(xy[pairs[:, 0]], yaw[i], shape[i], xy[pairs[:, 1]], yaw[j],
+                                 shape[j])
+            worst = max(worst, float(over.max()))
     return worst
 
 

@@ -7,6 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 from crowdwalk.cli import app
+from crowdwalk.record import open_run
 from crowdwalk.viz.scene import Scene
 
 runner = CliRunner()
@@ -40,8 +41,15 @@ def test_run_without_poses_shows_trajectory_poles(run_dir, tmp_path):
     (bare / "poses.sqlite").unlink()
     scene = Scene.from_run(bare)
     ids, poles = scene.poses.at(3)
-    assert poles.shape == (12, 2, 3)
+    assert poles.shape == (12, 4, 3)
     np.testing.assert_allclose(poles[:, 1, 2] - poles[:, 0, 2], 1.5)
+    # the shoulder bar lies across the torso's facing (the trajectories' orientation)
+    traj = open_run(bare).trajectories()
+    rows = traj.frame == np.unique(traj.frame)[3]
+    bar = poles[:, 2, :2] - poles[:, 3, :2]
+    facing = np.column_stack([traj.ori_x[rows], traj.ori_y[rows]])
+    np.testing.assert_allclose(np.einsum("ij,ij->i", bar, facing), 0.0, atol=1e-6)
+    np.testing.assert_allclose(np.linalg.norm(bar, axis=1), 0.2)
 
 
 def test_render_png_and_gif(offscreen, run_dir, tmp_path):

@@ -1,0 +1,241 @@
+"""The body's outline in plan: three discs on the shoulder line, broader than deep.
+
+A body is a centre disc of radius ``radius`` and two shoulder discs of radius
+``shoulder_radius`` whose centres lie ``shoulder_offset`` to the left and right of the
+body's centre along its shoulder line (the three-circle body of Thompson & Marchant 1995,
+"A computer model for the evacuation of large building populations", Fire Safety J. 24,
+131; Langston et al. 2006, Safety Sci. 44, 395). The torso faces ``yaw`` [rad]: the
+shoulder line runs along (−sin yaw, cos yaw). Turned by a twist against its walking
+direction, the body needs less width across the walking direction ("turning the
+shoulders" to slip through a gap) and more depth along it.
+
+While a body steps, its centre moves linearly and its yaw turns linearly in time; every
+clearance test here takes a shoulder disc's centre along the chord between its start and
+end and widens the disc by the largest distance between that chord and the true arc,
+``offset (1 − cos(Δyaw / 2))`` (at mid-step), so a test that passes is a guarantee.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+__all__ = ["BodyShape", "body_gaps", "disc_centres", "shape_overlap"]
+
+
+@dataclass(frozen=True, eq=False)
+class BodyShape:
+    """Outlines of n bodies (struct-of-arrays).
+
+    Attributes
+    ----------
+    radius : (n,) float
+        Centre disc radius [m] (half the body's depth facing forward).
+    shoulder_radius : (n,) float
+        Shoulder disc radius [m].
+    shoulder_offset : (n,) float
+        Distance of each shoulder disc's centre from the body's centre [m].
+    """
+
+    radius: np.ndarray
+    shoulder_radius: np.ndarray
+    shoulder_offset: np.ndarray
+
+    @classmethod
+    def from_axes(cls, half_depth: np.ndarray, half_width: np.ndarray) -> BodyShape:
+        """The three discs for bodies ``2 half_depth`` deep and ``2 half_width`` broad
+        (n,) [m]: the centre disc spans the depth; the shoulder discs are the osculating
+        circles of the ellipse with these half-axes at its ends (radius
+        ``half_depth² / half_width``), so the outline reaches the full width and follows
+        the ellipse's curvature there. ``half_width <= half_depth`` gives one disc."""
+        b = np.asarray(half_depth, float)
+        a = np.maximum(np.asarray(half_width, float), b)
+        rs = b * b / a
+        return cls(radius=b, shoulder_radius=rs, shoulder_offset=a - rs)
+
+    def __len__(self) -> int:
+        return int(self.radius.shape[0])
+
+    @property
+    def bound(self) -> np.ndarray:
+        """(n,) radius of the smallest disc about the centre holding the body [m] (half
+        the shoulder width)."""
+        return np.maximum(self.radius, self.shoulder_offset + self.shoulder_radius)
+
+    def take(self, index: np.ndarray) -> BodyShape:
+        """The bodies at ``index``."""
+        return BodyShape(self.radius[index], self.shoulder_radius[index],
+                         self.shoulder_offset[index])
+
+    def packed(self, index: np.ndarray | None = None) -> np.ndarray:
+        """(k, 3) float: radius, shoulder radius, shoulder offset per body (all, or those
+        at ``index``), the layout the kernels read."""
+        p = np.column_stack([self.radius, self.shoulder_radius, self.shoulder_offset])
+        return p if index is None else p[index]
+
+
+def disc_centres(xy: np.ndarray, yaw: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """(..., 3, 2) centres [m] of the centre, left and right disc of bodies at ``xy``
+    (..., 2) [m] facing ``yaw`` (...) [rad] with shoulder ``offset`` (...) [m]."""
+    side = np.stack([-np.sin(yaw), np.cos(yaw)], axis=-1) * np.asarray(offset)[..., None]
+    return np.stack([xy, xy + side, xy - side], axis=-2)
+
+
+@nb.njit(cache=True, nogil=True)
+def _closest(rx, ry, wx, wy, span):
+    """min over s in [0, span] of |r + w s|."""
+    ww = wx * wx + wy * wy
+    s = 0.0
+    if ww > 0.0:
+        s = min(max(-(rx * wx + ry * wy) / ww, 0.0), span)
+    return np.hypot(rx + s * wx, ry + s * wy)
+
+
+@nb.njit(cache=True, nogil=True)
+def _approach(ax, ay, avx, avy, ta, bx, by, bvx, bvy, tb):
+    """Closest approach [m] of two points moving from now (time 0) with velocities ``av``
+    for ``ta`` s and ``bv`` for ``tb`` s, then standing (exact: piecewise linear)."""
+    t1, t2 = min(ta, tb), max(ta, tb)
+    rx, ry = ax - bx, ay - by
+    wx, wy = avx - bvx, avy - bvy
+    d = _closest(rx, ry, wx, wy, t1)
+    rx += t1 * wx
+    ry += t1 * wy
+    if ta < tb:
+        wx, wy = -bvx, -bvy
+    else:
+        wx, wy = avx, avy
+    return min(d, _closest(rx, ry, wx, wy, t2 - t1))
+
+
+_SIDE = (0.0, 1.0, -1.0)
+
+
+@nb.njit(cache=True, nogil=True)
+def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, b_yaw_now,
+          b_end, b_yaw_end, b_remaining, b_shape, out, out_centre):
+    npairs, nj = out.shape
+    bx = np.empty(3)
+    by = np.empty(3)
+    bvx = np.empty(3)
+    bvy = np.empty(3)
+    for p in range(npairs):
+        i = pa[p]
+        ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
+        rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
+        bound = max(ra, sa + ras) + max(rb, sb + rbs)
+        # B's three discs now and their velocities (the same for every candidate of A)
+        tb = b_remaining[p]
+        if tb <= 1e-9:
+            tb = 0.0
+        yb0, yb1 = b_yaw_now[p], b_yaw_end[p]
+        c0, s0, c1, s1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
+        bend_b = sb * (1.0 - np.cos(0.5 * (yb1 - yb0))) + 1e-12
+        for v in range(3):
+            k = _SIDE[v]
+            bx[v] = b_now[p, 0] - k * sb * s0
+            by[v] = b_now[p, 1] + k * sb * c0
+            bvx[v] = bvy[v] = 0.0
+            if tb > 0.0:
+                bvx[v] = (b_end[p, 0] - k * sb * s1 - bx[v]) / tb
+                bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
+        sx, sy = a_start[i, 0], a_start[i, 1]
+        for j in range(nj):
+            dur = a_dur[i, j]
+            gone = min(a_elapsed[i], dur)
+            ta = dur - gone
+            f = gone / dur if dur > 0.0 else 1.0
+            ex, ey = a_end[i, j, 0], a_end[i, j, 1]
+            ax0, ay0 = sx + f * (ex - sx), sy + f * (ey - sy)
+            avx = avy = 0.0
+            if ta > 1e-9:
+                avx, avy = (ex - ax0) / ta, (ey - ay0) / ta
+            else:
+                ta = 0.0
+            # the centres: their approach bounds the holding discs' (clear: done) and is
+            # the centre discs' (overlapping: done)
+            d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
+            out_centre[p, j] = d - ra - rb
+            if d >= bound:
+                out[p, j] = d - bound
+                continue
+            best = d - ra - rb
+            if best < 0.0 or (sa == 0.0 and sb == 0.0):
+                out[p, j] = best
+                continue
+            ya0 = a_yaw0[i] + f * (a_yaw1[i, j] - a_yaw0[i])
+            ya1 = a_yaw1[i, j]
+            bend_a = sa * (1.0 - np.cos(0.5 * (ya1 - ya0))) + 1e-12
+            cs0, sn0, cs1, sn1 = np.cos(ya0), np.sin(ya0), np.cos(ya1), np.sin(ya1)
+            for u in range(3):
+                ku = _SIDE[u]
+                rad_a = ra if u == 0 else ras + bend_a
+                # disc u of A: now and at its step's end
+                cx0, cy0 = ax0 - ku * sa * sn0, ay0 + ku * sa * cs0
+                cvx = cvy = 0.0
+                if ta > 0.0:
+                    cvx = (ex - ku * sa * sn1 - cx0) / ta
+                    cvy = (ey + ku * sa * cs1 - cy0) / ta
+                for v in range(3):
+                    if u == 0 and v == 0:
+                        continue
+                    rad_b = rb if v == 0 else rbs + bend_b
+                    g = _approach(cx0, cy0, cvx, cvy, ta, bx[v], by[v], bvx[v], bvy[v],
+                                  tb) - rad_a - rad_b
+                    best = min(best, g)
+                if best < 0.0:  # overlapping: how deep does not matter
+                    break
+            out[p, j] = best
+
+
+def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end: np.ndarray,
+              a_yaw1: np.ndarray, a_duration: np.ndarray, a_elapsed: np.ndarray,
+              a_shape: np.ndarray, b_now: np.ndarray, b_yaw_now: np.ndarray,
+              b_end: np.ndarray, b_yaw_end: np.ndarray, b_remaining: np.ndarray,
+              b_shape: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least clearance [m] from now on between the outlines of m stepping bodies A and
+    P neighbours B, for J candidate steps of each A: (P, J); negative where they would
+    overlap (then not necessarily the least). A lower bound (a shoulder disc turning is
+    widened by its chord's sagitta; when the discs holding the two bodies stay clear,
+    their clearance is returned), exact for discs. Also returned: (P, J) the clearance
+    of the centre discs alone [m] (exact), which no facing of the outlines can exceed.
+
+    Parameters
+    ----------
+    pa : (P,) int
+        The body A (row of the ``a_*`` arrays) of each neighbour.
+    a_start, a_yaw0 : (m, 2), (m,)
+        A's position [m] and yaw [rad] at its heel strike.
+    a_end, a_yaw1, a_duration : (m, J, 2), (m, J), (m, J)
+        Each candidate step's end position [m], end yaw [rad] and duration [s].
+    a_elapsed : (m,)
+        Time since the heel strike [s] (that much of the step has gone).
+    a_shape, b_shape : (m, 3), (P, 3)
+        :meth:`BodyShape.packed` rows.
+    b_now, b_yaw_now, b_end, b_yaw_end, b_remaining : (P, 2), (P,), (P, 2), (P,), (P,)
+        The neighbour now, at the end of its committed step, and the time until then [s]
+        (0: standing).
+    """
+    f = np.ascontiguousarray
+    out = np.empty((pa.shape[0], a_end.shape[1]))
+    centre = np.empty_like(out)
+    _gaps(f(pa, dtype=np.int64), f(a_start, float), f(a_yaw0, float), f(a_end, float),
+          f(a_yaw1, float), f(a_duration, float), f(a_elapsed, float), f(a_shape, float),
+          f(b_now, float), f(b_yaw_now, float), f(b_end, float), f(b_yaw_end, float),
+          f(b_remaining, float), f(b_shape, float), out, centre)
+    return out, centre
+
+
+def shape_overlap(xy_a: np.ndarray, yaw_a: np.ndarray, shape_a: np.ndarray,
+                  xy_b: np.ndarray, yaw_b: np.ndarray, shape_b: np.ndarray) -> np.ndarray:
+    """(P,) overlap [m] of two standing outlines (positive where they overlap): the
+    deepest interpenetration of any two of their discs; positions (P, 2) [m], yaws (P,)
+    [rad], :meth:`BodyShape.packed` rows (P, 3)."""
+    ca = disc_centres(xy_a, yaw_a, shape_a[:, 2])  # (P, 3, 2)
+    cb = disc_centres(xy_b, yaw_b, shape_b[:, 2])
+    ra = shape_a[:, [0, 1, 1]]
+    rb = shape_b[:, [0, 1, 1]]
+    d = np.linalg.norm(ca[:, :, None, :] - cb[:, None, :, :], axis=-1)  # (P, 3, 3)
+    return (ra[:, :, None] + rb[:, None, :] - d).max(axis=(1, 2))
