@@ -28,10 +28,16 @@ from itertools import count as _count
 import numpy as np
 
 __all__ = ["Workers", "WorkerError", "available_cores", "split_rows", "worker_count",
-           "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS"]
+           "MIN_PARALLEL_AGENTS", "MIN_PARALLEL_AGENTS_NO_POSES", "MIN_SPLIT_ROWS"]
 
-#: A run with fewer walkers stays in one process (workers cost ~2 s to start) [-].
+#: A run that writes poses and has fewer walkers stays in one process (workers cost ~2 s
+#: to start) [-]. Without poses the worker only steers, which pays from more walkers:
+#: ``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2 --seconds 6`` on the idle
+#: machine gave 2.86 vs 2.18 sim s per wall s (one process faster) without poses and 0.69
+#: vs 0.91 with poses; ``--agents 5000 --outputs traj+steps --seconds 3``, 0.60 vs 0.81.
 MIN_PARALLEL_AGENTS = 500
+#: The threshold without poses [-], between the measured loss at 1,000 and gain at 5,000.
+MIN_PARALLEL_AGENTS_NO_POSES = 2_500
 #: A call with fewer rows is not split [-]: the 1,000-walker stadium (~100 walkers deciding
 #: per tick) ran at 1.21 sim s per wall s with its steering split and 1.45 without
 #: (``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2``, load 1-4); the 10,000-
@@ -50,15 +56,17 @@ def available_cores() -> int:
     return os.cpu_count() or 1
 
 
-def worker_count(agents: int, requested: int | None) -> int:
+def worker_count(agents: int, requested: int | None, *, poses: bool = True) -> int:
     """Worker processes for a run of ``agents`` walkers: ``requested`` if given, else one
-    per core beyond this one when the run has at least :data:`MIN_PARALLEL_AGENTS` (none
-    in a daemon process, such as a Dask worker, which may not start processes)."""
+    per core beyond this one when the run has at least :data:`MIN_PARALLEL_AGENTS` walkers
+    (:data:`MIN_PARALLEL_AGENTS_NO_POSES` when it writes no ``poses``); none in a daemon
+    process, such as a Dask worker, which may not start processes."""
     if requested is not None:
         return int(requested)
     if mp.current_process().daemon:  # e.g. a Dask worker: a process per core already
         return 0
-    return available_cores() - 1 if agents >= MIN_PARALLEL_AGENTS else 0
+    least = MIN_PARALLEL_AGENTS if poses else MIN_PARALLEL_AGENTS_NO_POSES
+    return available_cores() - 1 if agents >= least else 0
 
 
 class _Handle:

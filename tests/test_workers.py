@@ -80,6 +80,8 @@ def test_worker_count_follows_cores_and_run_size():
     assert worker_count(10, None) == 0
     assert worker_count(10, 3) == 3
     assert worker_count(10_000, None) == W.available_cores() - 1
+    assert worker_count(1_000, None) == W.available_cores() - 1  # posing: a worker pays
+    assert worker_count(1_000, None, poses=False) == 0  # steering alone: one process faster
 
 
 def _rows(path: Path, table: str) -> list:

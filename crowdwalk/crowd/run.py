@@ -128,7 +128,7 @@ def prepare(scenario, overrides: RunOverrides | None = None, *,
     duration = overrides.duration if overrides.duration is not None else sc.simulation.duration
     fps = overrides.fps if overrides.fps is not None else sc.simulation.fps
     want_poses = sc.outputs.poses if overrides.poses is None else overrides.poses
-    count = worker_count(len(pop), overrides.workers) if parallel else 0
+    count = worker_count(len(pop), overrides.workers, poses=want_poses) if parallel else 0
     workers = Workers(count) if count else None
     try:
         gait, pose_note = None, "disabled (outputs.poses is false)"
