@@ -103,7 +103,7 @@ class CrowdSimulation:
         self.duration = float(duration)
         self.n = n = len(population)
         h = population.body_height
-        self.shape = BodyShape.from_axes(params.radius_ratio * h, params.half_width_ratio * h)
+        self.shape = BodyShape.from_axes(*params.body_axes(h))
         self.radius = self.shape.radius  # the centre disc's (half the depth) [m]
         # KLAW locomotion parameters (crowdwalk.style) at the free speed: normal mode is
         # the body's normal-mode step and cadence (planners.normal_mode, WBDS relation); a

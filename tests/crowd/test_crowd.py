@@ -23,7 +23,7 @@ def _max_overlap(summary, run) -> float:
     prm = CrowdParams()
     height = {a["id"]: a["body_height_m"] for a in summary["agents"]}
     h = np.array([height[i] for i in traj.id])
-    shape = BodyShape.from_axes(prm.radius_ratio * h, prm.half_width_ratio * h).packed()
+    shape = BodyShape.from_axes(*prm.body_axes(h)).packed()
     yaw = np.arctan2(traj.ori_y, traj.ori_x)
     worst = 0.0
     for f in np.unique(traj.frame):

@@ -107,7 +107,8 @@ def _slit(gap: float) -> dict:
 
 def test_walker_turns_its_shoulders_to_slip_through_a_gap(tmp_path):
     # 0.40 m: narrower than the 0.44 m shoulders, wider than the 0.36 m depth
-    run = _run(_slit(0.40), tmp_path / "twist")
+    broad = CrowdParams(body="three_discs")
+    run = _run(_slit(0.40), tmp_path / "twist", params=broad)
     assert run.summary["agents_arrived"] == 1
     t = run.traj
     inside = (t.x > 4.0) & (t.x < 4.2)  # the body centre between the slit's faces
@@ -115,7 +116,14 @@ def test_walker_turns_its_shoulders_to_slip_through_a_gap(tmp_path):
     assert inside.any() and facing.min() > 30.0  # shoulders turned in the slit
     assert facing.max() < 90.0  # still facing ahead, not walking sideways
     # facing where it steps, the same walker cannot pass
-    still = replace(CrowdParams(), steering=replace(SteeringParams(), twists_deg=(),
+    still = replace(broad, steering=replace(SteeringParams(), twists_deg=(),
                                                     keep_facing=False))
     stuck = _run(_slit(0.40), tmp_path / "square", params=still)
     assert stuck.summary["agents_arrived"] == 0
+
+
+def test_the_default_body_is_one_disc_as_broad_as_deep():
+    axes = CrowdParams().body_axes(np.array([1.71]))
+    assert axes[0] == axes[1] == np.float64(0.105 * 1.71)
+    half_depth, half_width = CrowdParams(body="three_discs").body_axes(np.array([1.71]))
+    assert half_width[0] > half_depth[0]
