@@ -1,7 +1,6 @@
 """Re-routing: walkers held up in a jammed corridor take a free detour."""
 
 import numpy as np
-import yaml
 
 from crowdwalk.crowd.run import RunOverrides, run_scenario
 from crowdwalk.record import open_run
@@ -30,7 +29,6 @@ outputs: {poses: false}
 def test_blocked_walkers_reroute_through_the_free_corridor(tmp_path):
     path = tmp_path / "detour.yaml"
     path.write_text(SCENARIO)
-    assert yaml.safe_load(SCENARIO)["groups"][0]["count"] == 40
     summary = run_scenario(path, tmp_path / "run", overrides=RunOverrides(duration=45.0))
     assert summary["planning"]["reroutes"] >= 3
     traj = open_run(tmp_path / "run").trajectories()
