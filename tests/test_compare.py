@@ -50,13 +50,13 @@ def test_runs_use_the_same_agents_and_differ_only_in_planner(report):
 
 def test_fixed_walkers_step_on_the_obstacle_planned_do_not(report):
     steps = {p: open_run(report.parent / p).footsteps() for p in (PLANNED, "fixed")}
-    assert steps[PLANNED]["on_obstacle"].sum() == 0
+    assert steps[PLANNED].on_obstacle.sum() == 0
     # at least one fixed walker lands on it (whether both do depends on where their
     # neutral steps fall: with the normal-mode steps one of the two strides it by chance)
-    assert steps["fixed"]["on_obstacle"].sum() >= 1
+    assert steps["fixed"].on_obstacle.sum() >= 1
     text = report.read_text()
     fixed_row = next(line for line in text.splitlines() if line.startswith("| fixed | 2/2"))
-    assert fixed_row.split("|")[6].strip() == str(steps["fixed"]["on_obstacle"].sum())
+    assert fixed_row.split("|")[6].strip() == str(steps["fixed"].on_obstacle.sum())
 
 
 def test_cli_rejects_unknown_planner_with_exit_2(tmp_path):
