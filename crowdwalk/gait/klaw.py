@@ -86,6 +86,19 @@ _DS_FREQ = np.array([1.439, 1.817, 1.822, 2.045, 2.340])
 _DS_FRAC = np.array([0.3089, 0.2526, 0.2558, 0.2385, 0.1882])
 
 
+SPIN_HEEL_LIFT = 0.008  # heel height off the ground at which a spin turn starts [m]
+_SPIN_GRID = np.linspace(0.3, 1.0, 15)  # step fractions searched for the heel rise
+
+
+def _column_or(cmd, name: str, default: np.ndarray) -> np.ndarray:
+    """``cmd.name`` (m,) where finite, else ``default`` (m,)."""
+    value = getattr(cmd, name, None)
+    if value is None:
+        return np.asarray(default, float)
+    value = np.asarray(value, float)
+    return np.where(np.isfinite(value), value, default)
+
+
 def double_support_fraction(step_frequency: np.ndarray) -> np.ndarray:
     """Double support over step time [1] at ``step_frequency`` (k,) [steps/s] (measured,
     clamped to the data's range)."""
@@ -230,7 +243,8 @@ class KlawEngine:
             "t0", "T", "tds", "side", "psi0", "psi1", "dmax", "rot", "list", "tflat",
             "p_hs", "yaw_st", "yaw_tr", "yaw_land", "p_tr0", "k_tr0", "front", "lat_to",
             "lat_hs", "rear", "z_land", "v_end_x", "v_end_z", "next_p", "p_hs_now", "kmin",
-            "arm", "arm_out", "elbow_min", "elbow_max", "shoulder", "tilt", "sway")}
+            "arm", "arm_out", "elbow_min", "elbow_max", "shoulder", "tilt", "sway", "spin",
+            "spin_t0", "yaw_end")}
         self._s.update({name: z3.copy() for name in (
             "origin", "u", "heel_st", "ball_st", "ball_tr", "hip_b_end", "ankle_hs")})
         self._s.update({name: np.zeros((n, 4)) for name in (
@@ -279,12 +293,14 @@ class KlawEngine:
         ankle_flat[:, 2] += b.ankle_height
         ball_st = ankle_flat + _foot_offsets(b, np.zeros(m), yaw_st)[:, 1]
         lateral0 = _left(psi1) * (side * st.stride_width)[:, None]
-        yaw_tr = np.where(first, psi1 - side * st.foot_angle, s["yaw_st"][a])
+        yaw_tr = np.where(first, psi1 - side * st.foot_angle, s["yaw_end"][a])
         ball_tr = np.where(first[:, None], ball_st - lateral0, s["ball_st"][a])
         p_tr0 = np.where(first, 0.0, s["next_p"][a])
 
-        # landing: the heel-strike ankle, the landing leg's hip HIP_BEHIND steps behind it
-        yaw_land = psi1 - side * st.foot_angle
+        # landing: the heel-strike ankle, the landing leg's hip HIP_BEHIND steps behind it;
+        # the landing foot points the step's toe-out from the heading (MetaGait §6.1)
+        toe_out = _column_or(cmd, "toe_out", st.foot_angle)
+        yaw_land = psi1 - side * toe_out
         land_heel = target - b.heel_offset[:, None] * _fwd(yaw_land)
         ankle_hs = land_heel - _foot_offsets(b, np.full(m, HEEL_STRIKE_PITCH), yaw_land)[:, 0]
         fwd1, left1 = _fwd(psi1), _left(psi1)
@@ -351,6 +367,7 @@ class KlawEngine:
         for k, v in cols.items():
             s[k][a] = v
         s["p_hs_now"][a] = p_hs_st
+        s["spin"][a], s["spin_t0"][a] = 0.0, T
         self._commanded[a] = True
         # trailing knee at t1: where the previous step left it (the foot on its ball)
         t_abs = np.asarray(cmd.start_time, float)
@@ -390,10 +407,26 @@ class KlawEngine:
         c_lo, c_hi = clearance(lo), clearance(hi)
         w = np.clip((st.toe_clearance - c_lo) / np.where(c_hi > c_lo, c_hi - c_lo, 1.0), 0, 1)
         clearance(lo + w * (hi - lo))
+        # the spin turn (MetaGait §6.1) of the stance foot: about its ball, from when its
+        # heel is up SPIN_HEEL_LIFT to the step's end (none if the heel stays down)
+        s["spin_t0"][a] = self._heel_off(a, b, t_abs, T)
+        s["spin"][a] = _column_or(cmd, "spin", np.zeros(m))
         # the stance foot's state at t4 is the next step's trailing foot
         end = self._legs(a, t_abs + T)
         s["next_p"][a] = end["pitch_a"]
+        s["yaw_end"][a] = end["yaw_a"]
         self.stats["commands"] += m
+
+    def _heel_off(self, a, b, t_abs, T):
+        """Time into the step [s] (m,) at which the stance foot's heel has risen
+        ``SPIN_HEEL_LIFT`` rolling on its ball (after 30 % of the step: not the heel
+        strike's rocker); ``T`` where it never does."""
+        m = a.size
+        times = t_abs[:, None] + _SPIN_GRID[None, :] * T[:, None]
+        legs = self._legs(np.repeat(a, _SPIN_GRID.size), times.ravel())
+        hb = np.repeat(b.heel_offset + b.ball_offset, _SPIN_GRID.size)
+        up = (hb * np.sin(np.maximum(-legs["pitch_a"], 0.0)) >= SPIN_HEEL_LIFT).reshape(m, -1)
+        return np.where(up.any(axis=1), _SPIN_GRID[np.argmax(up, axis=1)] * T, T)
 
     @staticmethod
     def _swing_coords(b, hip, ankle, psi):
@@ -453,8 +486,11 @@ class KlawEngine:
         hip_b = root - (side * hh)[:, None] * y_p
         l1, l2 = b.thigh, b.shank
         kmin_reach = virtual_leg_length(l1, l2, s["kmin"][a])
-        # stance foot: heel rocker to flat by t2, then flat, heel rising if out of reach
-        yaw_st = s["yaw_st"][a]
+        # stance foot: heel rocker to flat by t2, then flat, heel rising if out of reach;
+        # once the heel is up it spins its spin turn about the ball (MetaGait §6.1)
+        t0 = s["spin_t0"][a]
+        turned = np.clip((tau - t0) / np.maximum(T - t0, 1e-9), 0.0, 1.0)
+        yaw_st = s["yaw_st"][a] + s["spin"][a] * turned * turned * (3.0 - 2.0 * turned)
         heel = s["heel_st"][a]
         p_rock = s["p_hs_now"][a] * np.clip(1.0 - tau / np.maximum(s["tflat"][a], 1e-9), 0, 1)
         p_ball = _roll_about(s["ball_st"][a], (b.ball_offset, b.ankle_height), hip_a,
@@ -463,6 +499,10 @@ class KlawEngine:
         flat_ankle[:, 2] += b.ankle_height
         far = np.linalg.norm(hip_a - flat_ankle, axis=1) > kmin_reach
         pitch_a = np.where(p_rock > 0, p_rock, np.where(far, p_ball, 0.0))
+        # while it spins the heel stays up: the foot turns on its ball only
+        hold = -np.arcsin(np.minimum(SPIN_HEEL_LIFT / (b.heel_offset + b.ball_offset), 1.0))
+        pitch_a = np.where((turned > 0) & (s["spin"][a] != 0), np.minimum(pitch_a, hold),
+                           pitch_a)
         offs_a = _foot_offsets(b, pitch_a, yaw_st)
         ankle_a = np.where((pitch_a >= 0)[:, None], heel - offs_a[:, 0],
                            s["ball_st"][a] - offs_a[:, 1])

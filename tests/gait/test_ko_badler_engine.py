@@ -64,10 +64,10 @@ def test_swing_foot_lands_on_the_target_foothold(walked):
         end = step[-1]
         swing = np.where(st.foot == 0, JOINT["l_talocrural"], JOINT["r_talocrural"])
         ankle = end.positions[np.arange(3), swing]
-        heading = st.heading[0]
-        fwd = np.array([np.cos(heading), np.sin(heading)])
-        # the heel is on the floor at the moment of heel strike ...
+        # the foot's own direction (its toe-out from the heading, MetaGait §6.1)
         ball = end.positions[np.arange(3), swing + 2]
+        fwd = (ball - ankle)[:, :2] / np.linalg.norm((ball - ankle)[:, :2], axis=1)[:, None]
+        # the heel is on the floor at the moment of heel strike ...
         pitch = np.arctan2(ball[:, 2] - ankle[:, 2], np.linalg.norm((ball - ankle)[:, :2], axis=1))
         pitch = pitch + np.arctan2(body.ankle_height, body.ball_offset)  # sole angle, toe up
         heel = ankle[:, :2] - np.hypot(body.heel_offset, body.ankle_height)[:, None] * (
@@ -162,14 +162,14 @@ def test_swing_toes_clear_the_floor_in_mid_swing(walked):
     phases = np.linspace(0, 1, 20)
     tom = engine.own.tom
     mid = (phases > tom + 0.4 * (1 - tom)) & (phases < tom + 0.7 * (1 - tom))  # toes straight
-    fwd = np.array([np.cos(0.4), np.sin(0.4)])
     toes = body.toe_offset - body.ball_offset
     for st, step in zip(steps[1:], frames[1:], strict=True):
         ankle_j = np.where(st.foot == 0, JOINT["l_talocrural"], JOINT["r_talocrural"])
         for f in (f for f, m in zip(step, mid, strict=True) if m):
             ankle, ball = f.positions[np.arange(3), ankle_j], f.positions[np.arange(3), ankle_j + 2]
             d = ball - ankle
-            pitch = np.arctan2(d[:, 2], d[:, :2] @ fwd) + np.arctan2(body.ankle_height,
+            # the foot's own direction (it toes out from the heading by its toe-out)
+            pitch = np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1])) + np.arctan2(body.ankle_height,
                                                                     body.ball_offset)
             toe_z = ball[:, 2] + toes * np.sin(pitch)
             assert np.all(np.minimum(ball[:, 2], toe_z) > 0.0129 - 1e-6)

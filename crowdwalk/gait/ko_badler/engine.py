@@ -72,6 +72,17 @@ _PATH = np.linspace(0.0, 1.0, 17)  # ground samples along the swing path
 _TOE_CLEARANCE = 0.0129
 _BEZIER_RAMP = 0.25  # fraction of the swing over which the Bezier lift is eased in
 _UNEVEN = 0.01  # ground this far above the foothold line: the step is over uneven ground [m]
+SPIN_HEEL_LIFT = 0.008  # heel height off the ground at which a spin turn starts [m]
+_SPIN_GRID = np.linspace(0.3, 1.0, 15)  # step phases searched for the heel rise
+
+
+def _column_or(steps, name: str, default: np.ndarray) -> np.ndarray:
+    """``steps.name`` (m,) where finite, else ``default`` (m,)."""
+    value = getattr(steps, name, None)
+    if value is None:
+        return np.asarray(default, float)
+    value = np.asarray(value, float)
+    return np.where(np.isfinite(value), value, default)
 
 
 def foot_configuration(body: BodyCondition, foot_angle, meta_angle):
@@ -160,6 +171,10 @@ class KoBadlerEngine:
         self._trail = np.zeros((n, 3))
         self._yaw_stance = np.zeros(n)
         self._yaw_trail = np.zeros(n)
+        self._yaw_land = np.zeros(n)  # where the swing foot lands pointing [rad]
+        self._yaw_end = np.zeros(n)  # where the stance foot points after its spin [rad]
+        self._spin = np.zeros(n)  # the stance foot's spin turn on its ball [rad]
+        self._spin_start = np.ones(n)  # step phase s at which it starts [1]
         self._psi0 = np.zeros(n)
         self._psi1 = np.zeros(n)
         self._bezier = np.full((n, 4, 3), np.nan)
@@ -194,13 +209,19 @@ class KoBadlerEngine:
                                  start[:, 2:]], axis=1)  # fmt: skip
         guess = 2 * centre - start - length[:, None] * fwd
         guess[:, 2] = start[:, 2]
-        trail = np.where(first[:, None], guess, self._start[a])
+        # MetaGait's orientation (§6.1): the landing foot points the step's toe-out from
+        # the heading; the trailing foot is where the last stance foot's spin left it
+        side_sw = np.where(np.asarray(steps.foot) == 0, 1.0, -1.0)
+        toe_out = _column_or(steps, "toe_out", np.full(a.size, self.style.toe_out))
+        spun = self._spun_origin(a, self._start[a], self._yaw_stance[a], self._yaw_end[a])
+        trail = np.where(first[:, None], guess, spun)
         before = np.where(first, length, self._length[a])
         hip_now = np.where(first, hip_height_at_heel_strike(
             self.own.law, self.condition.take(a), before), self._hip_end[a])  # fmt: skip
-        yaw_stance = np.where(first, heading, self._psi1[a])
-        self._yaw_trail[a] = np.where(first, heading, self._yaw_stance[a])
+        yaw_stance = np.where(first, heading - side_sw * toe_out, self._yaw_land[a])
+        self._yaw_trail[a] = np.where(first, heading + side_sw * toe_out, self._yaw_end[a])
         self._yaw_stance[a] = yaw_stance
+        self._yaw_land[a] = heading + side_sw * toe_out
         self._psi0[a] = np.where(first, heading, self._psi1[a])
         self._psi1[a] = heading
         # φ_ρ of the walker's own walk to this step (Ko & Badler §2).
@@ -222,7 +243,31 @@ class KoBadlerEngine:
         self._bezier[a] = bezier
         self._use_bezier[a] = np.isfinite(bezier).all(axis=(1, 2)) & self._uneven(trail, target)
         self._commanded[a] = True
+        # the stance foot's spin turn: about its ball once its heel is up (none if never)
+        self._spin_start[a] = self._heel_off(a)
+        spin = _column_or(steps, "spin", np.zeros(a.size))
+        self._spin[a] = np.where(self._spin_start[a] < 1.0, spin, 0.0)
+        self._yaw_end[a] = yaw_stance + self._spin[a]
         self.stats["commands"] += a.size
+
+    def _heel_off(self, a: np.ndarray) -> np.ndarray:
+        """Step phase s (m,) [1] at which the stance foot's heel has risen
+        ``SPIN_HEEL_LIFT`` on its ball (after 30 % of the step); 1 where it never does."""
+        g = _SPIN_GRID.size
+        rows, s = np.repeat(a, g), np.tile(_SPIN_GRID, a.size)
+        f = np.where(s < self.own.fgm, self._seq("foot1", rows, s), self._seq("foot2", rows, s))
+        cond = self.condition.take(rows)
+        up = ((cond.heel + cond.ball) * np.sin(np.maximum(-f, 0.0)) >= SPIN_HEEL_LIFT)
+        up = up.reshape(a.size, g)
+        return np.where(up.any(axis=1), _SPIN_GRID[np.argmax(up, axis=1)], 1.0)
+
+    def _spun_origin(self, a, origin, yaw0, yaw):
+        """Footprint origins (m, 3) [m] of stance feet at ``origin`` pointing ``yaw0``
+        turned to ``yaw`` (m,) [rad] about their balls (N + bN along the foot)."""
+        bn = np.asarray(self.condition.take(a).ball, dtype=float) * np.ones(a.size)
+        d = np.stack([np.cos(yaw0) - np.cos(yaw), np.sin(yaw0) - np.sin(yaw),
+                      np.zeros(a.size)], axis=1)
+        return origin + bn[:, None] * d
 
     def _uneven(self, trail: np.ndarray, target: np.ndarray) -> np.ndarray:
         """(m,) bool: the ground under the swing path rises above the line between the
@@ -278,8 +323,16 @@ class KoBadlerEngine:
         start, target, trail = self._start[a], self._target[a], self._trail[a]
         length, before = self._length[a], self._before[a]
 
-        # Stance foot on its foothold (F1, F2, M).
+        # Stance foot on its foothold (F1, F2, M); a spin turn turns it about its ball
+        # from when its heel is up, holding the heel up while it turns (MetaGait §6.1).
         f_st = np.where(s < fgm, self._seq("foot1", a, s), self._seq("foot2", a, s))
+        s0 = self._spin_start[a]
+        turned = np.clip((s - s0) / np.maximum(1.0 - s0, _EPS), 0.0, 1.0)
+        spinning = (turned > 0) & (self._spin[a] != 0)
+        hold = -np.arcsin(np.minimum(SPIN_HEEL_LIFT / (cond.heel + cond.ball), 1.0))
+        f_st = np.where(spinning, np.minimum(f_st, hold), f_st)
+        yaw_st = self._yaw_stance[a] + self._spin[a] * turned * turned * (3.0 - 2.0 * turned)
+        origin_st = self._spun_origin(a, start, self._yaw_stance[a], yaw_st)
         m_st = np.where(s >= mom, self._seq("meta", a, s), 0.0)
         ankle_st, toe_st = foot_configuration(cond, f_st, m_st)
         # Swing foot: until TOM it pushes off its footprint as the stance foot of the last
@@ -303,12 +356,19 @@ class KoBadlerEngine:
         fly0, _, _ = flight(self._seq("ankle", a, np.full(k, tom)))
         fly, floor, u = flight(self._seq("ankle", a, s))
         fly += fade[:, None] * (on_print(trail, self._yaw_trail[a], ankle_end) - fly0)
+        # ... and lands pointing its toe-out: A ends its offset from the target along ψ;
+        # the foot turned to its landing yaw carries that offset round (faded in over the
+        # swing), so the landing is where the next step's stance foot starts
+        reach = np.stack([self._seq("ankle", a, np.ones(k))[:, 0] - length, 0 * s], axis=1)
+        turn_in = on_print(target, self._yaw_land[a], reach) - on_print(
+            target, self._psi1[a], reach)
+        fly += (1.0 - fade)[:, None] * turn_in
         f_fly = self._seq("foot3", a, s) + fade * (f_end - self._values["foot3"][a, 0])
         relax = np.clip((s - tom) / _TOE_RELAX, 0.0, 1.0)
         toe_fly = f_fly + (1 - relax) * (toe_end - f_end)
         f_sw = np.where(push, f_push, f_fly)
         toe_sw = np.where(push, toe_push, toe_fly)
-        p_ankle_st = on_print(start, self._yaw_stance[a], ankle_st)
+        p_ankle_st = on_print(origin_st, yaw_st, ankle_st)
         fly[:, 2] += self._toe_clearance_lift(cond, fly[:, 2] - floor[:, 2], f_fly, toe_fly,
                                               (s - tom) / (1 - tom))  # fmt: skip
         bez = self._bezier[a]
@@ -321,7 +381,7 @@ class KoBadlerEngine:
             fly[has_bez, 2] += ramp * ramp * (3 - 2 * ramp) * up  # eased in after TOM
             self.stats["bezier_lifted"] += int(np.count_nonzero(up > 0))
         p_ankle_sw = np.where(push[:, None], on_print(trail, self._yaw_trail[a], ankle_push), fly)
-        yaw_fly = self._yaw_trail[a] + _wrap(self._psi1[a] - self._yaw_trail[a]) * np.clip(
+        yaw_fly = self._yaw_trail[a] + _wrap(self._yaw_land[a] - self._yaw_trail[a]) * np.clip(
             (s - tom) / (1 - tom), 0.0, 1.0)  # fmt: skip
         yaw_sw = np.where(push, self._yaw_trail[a], yaw_fly)
 
@@ -359,7 +419,7 @@ class KoBadlerEngine:
         legs_sw = np.where(self._stance_left[a][:, None], LEG_JOINTS[1], LEG_JOINTS[0])
         rows = np.arange(k)
         for joints, hp, kn, an, f, yaw, toe in (
-            (legs, hip_st, knee_st, p_ankle_st, f_st, self._yaw_stance[a], toe_st),
+            (legs, hip_st, knee_st, p_ankle_st, f_st, yaw_st, toe_st),
             (legs_sw, hip_sw, knee_sw, p_ankle_sw, f_sw, yaw_sw, toe_sw),
         ):
             hinge = np.cross(hp - an, forward)  # normal of the leg's plane (+y at rest)
