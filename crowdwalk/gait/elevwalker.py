@@ -67,6 +67,7 @@ __all__ = [
     "foot_points",
     "joint_flexion",
     "walk_cycle",
+    "pelvis_shapes",
 ]
 
 # Skew ankle axes per side (row 0 left, row 1 right), unit vectors in the parent frame.
@@ -104,6 +105,12 @@ class GaitStyle:
     level_clearance : bool
         The Animator lifts the data's swing sole to ``toe_clearance`` over level ground
         (an extension, docs/architecture.md "Level steps"); False: the data's swing.
+    pelvis_from_data : bool
+        Pelvic list L(t) and the pelvis's transverse rotation follow the measured curves
+        of Bovi 2011 (adult natural walking, :func:`~crowdwalk.gait.datasets.pelvis_motion`;
+        list greatest in loading response, level again by mid-stance), scaled by the
+        amplitudes ``pelvic_list`` / the style's ``pelvic_rotation``; False: L(t) =
+        amplitude · sin 2πt and rotation = amplitude · cos 2πt.
     """
 
     step_width: float = 0.05
@@ -116,6 +123,7 @@ class GaitStyle:
     max_iterations: int = 12
     toe_clearance: float = 0.013
     level_clearance: bool = True
+    pelvis_from_data: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
@@ -315,6 +323,7 @@ def elevwalker_pose(
     swing_goal: np.ndarray | None = None,
     swing_toe_angle: np.ndarray | None = None,
     attributes=None,
+    list_scale: np.ndarray | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -357,6 +366,8 @@ def elevwalker_pose(
         flat at the swing leg's t = 0.5, straightening by toe-off.
     attributes : crowdwalk.style.Style, optional
         The k walkers' KLAW attributes (:func:`styled`); None: ``style`` alone.
+    list_scale : (k,), optional
+        Factor [1] on the pelvic list (the Animator starts a walk from a level pelvis).
 
     Returns
     -------
@@ -376,8 +387,9 @@ def elevwalker_pose(
     sway = style.sway * h * np.sin(2.0 * np.pi * phase)
     half_width = 0.5 * (style.step_width * h if attributes is None else attributes.stride_width)
     list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
+    list_shape, rotation_shape = pelvis_shapes(style, phase)
     rotation = 0.0 if attributes is None else (
-        -side_st * attributes.pelvic_rotation * np.cos(2.0 * np.pi * phase))
+        -side_st * attributes.pelvic_rotation * rotation_shape)
     if attributes is not None:
         dip = _bounce_dip(body, attributes, phase)
         stance_hip_offset = dip if stance_hip_offset is None else stance_hip_offset + dip
@@ -410,7 +422,9 @@ def elevwalker_pose(
     )  # fmt: skip
 
     # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
-    lst = side_st * list_amplitude * np.sin(2.0 * np.pi * phase)
+    lst = side_st * list_amplitude * list_shape
+    if list_scale is not None:
+        lst = lst * np.asarray(list_scale, dtype=float)
     tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
     r_pelvis = rotation_z(heading + rotation) @ rotation_x(lst) @ rotation_y(tilt)
@@ -479,6 +493,17 @@ def elevwalker_pose(
         warm=WarmStart(x_ankle, x_hip, jac_ankle, jac_hip),
         solves=np.stack([ok_ankle, ok_hip, ok_knee_st, ok_knee_sw, ok_foot_sw], axis=1),
     )
+
+
+def pelvis_shapes(style: GaitStyle, phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pelvic list and rotation at stance phases (k,) [1], peak 1, + stance side up /
+    forward: Bovi's measured shapes (``style.pelvis_from_data``) or sin / cos 2πt."""
+    if style.pelvis_from_data:
+        from crowdwalk.gait.datasets import pelvis_motion
+
+        motion = pelvis_motion()
+        return motion.list_shape(phase), motion.rotation_shape(phase)
+    return np.sin(2.0 * np.pi * phase), np.cos(2.0 * np.pi * phase)
 
 
 # KLAW attributes on this engine (crowdwalk.style; docs/architecture.md). The arm follows
