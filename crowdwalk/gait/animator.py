@@ -237,12 +237,13 @@ class _StepState:
     psi0: np.ndarray  # (n,) heading at the start of the step [rad]
     psi1: np.ndarray  # (n,) ... at its end [rad]
     spin_start: np.ndarray  # (n,) step phase τ at which a spin turn starts [1]
+    first: np.ndarray  # (n,) bool, the agent's first step (a walk from standing)
 
     @classmethod
     def zeros(cls, n: int, samples: int) -> _StepState:
         return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.full(n, 0.6),
                    np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n),
-                   np.ones(n))
+                   np.ones(n), np.ones(n, bool))
 
 
 @dataclass(eq=False)
@@ -488,6 +489,7 @@ class Animator:
         step.t0[a] = cmd.time
         step.duration[a] = cmd.duration
         step.stance_left[a] = cmd.swing_foot != 0
+        step.first[a] = ~had
         st.ball[a], st.yaw[a], st.slope[a] = stance.ball, stance.yaw, stance.slope
         # Spin turn (§6.1, MetaGait's): on the ball of the stance foot, once its heel is up
         st.spin[a] = 0.0 if cmd.spin is None else cmd.spin
@@ -949,7 +951,7 @@ class Animator:
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
         # a walk starts from standing: the pelvis is level and lists in over the first step
-        list_scale = np.where(self._swing.has_trail[a], 1.0, _smoothstep(tau))
+        list_scale = np.where(self._step.first[a], _smoothstep(tau), 1.0)
         toe_out = self._swing_toe(a, tau, psi)
         if toe_fix is not None:
             toe_out = toe_out + toe_fix
