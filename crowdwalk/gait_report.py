@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.body import LEG_JOINTS, PROPORTIONS
+from crowdwalk.body import JOINT, LEG_JOINTS, PROPORTIONS
 
 __all__ = ["CycleKind", "GaitFigures", "WalkerTrack", "cycle_curves", "edge_clearance",
            "foot_points", "gait_figures", "heel_slides", "load_tracks", "references",
@@ -347,14 +347,17 @@ class GaitFigures:
     pelvic_list_peak_phase: float = float("nan")
     pelvic_list_mid_stance: float = float("nan")
     pelvic_rotation_at_strike: float = float("nan")
+    trunk_rotation_at_strike: float = float("nan")
 
 
-def pelvis_list_rotation(track: WalkerTrack) -> np.ndarray:
-    """Pelvic list and rotation (F, 2) [deg] of the left side from the hip joints: list +
-    left hip above the right, rotation + left hip ahead along the pelvis's path (its
-    displacement over ±0.5 s), Bovi 2011's signs for the left leg."""
+def pelvis_list_rotation(track: WalkerTrack, joints=None) -> np.ndarray:
+    """Pelvic list and rotation (F, 2) [deg] of the left side from the hip joints (or the
+    left/right ``joints`` pair, e.g. the shoulders): list + left above the right,
+    rotation + left ahead along the pelvis's path (its displacement over ±0.5 s), Bovi
+    2011's signs for the left leg."""
     p = track.positions
-    axis = p[:, LEG_JOINTS[0, 0]] - p[:, LEG_JOINTS[1, 0]]
+    left, right = (LEG_JOINTS[0, 0], LEG_JOINTS[1, 0]) if joints is None else joints
+    axis = p[:, left] - p[:, right]
     flat = np.linalg.norm(axis[:, :2], axis=1)
     lst = np.arctan2(axis[:, 2], flat)
     pelvis = p[:, _PELVIS, :2]
@@ -489,6 +492,9 @@ def _pelvis_figures(track: WalkerTrack, strikes: np.ndarray, level: np.ndarray) 
     if not level.size:
         return {}
     curves = cycle_curves(pelvis_list_rotation(track), strikes)[level].mean(axis=0)
+    shoulders = cycle_curves(pelvis_list_rotation(track, (JOINT["l_shoulder"],
+                                                          JOINT["r_shoulder"])),
+                             strikes)[level].mean(axis=0)
     grid = np.linspace(0.0, 1.0, SAMPLES)
     first = grid < 0.5
     peak = int(np.argmax(np.abs(curves[first, 0])))
@@ -496,7 +502,8 @@ def _pelvis_figures(track: WalkerTrack, strikes: np.ndarray, level: np.ndarray) 
     return {"pelvic_list_peak": float(abs(curves[peak, 0])),
             "pelvic_list_peak_phase": float(grid[peak]),
             "pelvic_list_mid_stance": float(np.abs(curves[late, 0]).max()),
-            "pelvic_rotation_at_strike": float(0.5 * (curves[0, 1] + curves[-1, 1]))}
+            "pelvic_rotation_at_strike": float(0.5 * (curves[0, 1] + curves[-1, 1])),
+            "trunk_rotation_at_strike": float(0.5 * (shoulders[0, 1] + shoulders[-1, 1]))}
 
 
 def run_figures(run_dir: str | Path) -> list[GaitFigures]:
@@ -544,8 +551,8 @@ _ROWS = (  # (figure, target, values of one walker, format of those values)
     ("pelvic list peak [deg] at [% cycle]; 30-45 %", "Bovi ~5 at ~15; ~0",
      lambda f: (f.pelvic_list_peak, f.pelvic_list_peak_phase * 100, f.pelvic_list_mid_stance),
      "{:.1f} at {:.0f}; {:.1f}"),
-    ("pelvic rotation at heel strike [deg]", "Bovi ~4 (own side ahead)",
-     lambda f: (f.pelvic_rotation_at_strike,), "{:.1f}"),
+    ("pelvic / shoulder rotation at heel strike [deg]", "Bovi ~4; Schwartz ~-5",
+     lambda f: (f.pelvic_rotation_at_strike, f.trunk_rotation_at_strike), "{:.1f} / {:.1f}"),
     ("heel slide max [mm]; stances > 10 mm", "<= 10; 0",
      lambda f: (f.heel_slide_max * 1000, f.stances_over_10mm, f.stances), "{:.0f}; {:.0f}/{:.0f}"),
     ("stances turning > 10 deg; spin turns > 10 deg", "spin turns only",

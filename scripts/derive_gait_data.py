@@ -3,8 +3,9 @@
 Writes ``crowdwalk/data/elevation_datasets.npz`` (sagittal elevation-angle datasets from
 Bovi et al. 2011), ``crowdwalk/data/normative.json`` (spatiotemporal references) and
 ``crowdwalk/data/pelvis_motion.json`` (Fourier coefficients of Bovi's level pelvic list and
-rotation, the §4.3 hip complex's L(t) and the pelvis's transverse rotation), and prints a
-summary table. Run from anywhere::
+rotation, the §4.3 hip complex's L(t) and the pelvis's transverse rotation) and
+``crowdwalk/data/trunk_motion.json`` (Schwartz et al. 2008's trunk rotation and sagittal
+tilt wave), and prints a summary table. Run from anywhere::
 
     python scripts/derive_gait_data.py [--gait-dir DIR] [--out-dir DIR] [--check]
 
@@ -58,6 +59,12 @@ OBLIQUITY = "Pelvic Up/Down Obliquity"  # + ipsilateral side up (checked: + in l
 ROTATION = "Pelvic Int/External Rotation"  # + ipsilateral side forward (+ at heel strike)
 LEVEL_TASKS = ["XS", "S", "Natural", "M", "L"]
 HARMONICS = (1, 3, 5)  # odd harmonics: L(t + 0.5) = -L(t), the two legs' halves agree
+TILT_HARMONICS = (2, 4)  # a sagittal wave repeats every step: even harmonics
+SCHWARTZ_FILE = "schwartz2008_speed_reference_original.xls"
+SCHWARTZ = ("Schwartz MH, Rozumalski A, Trost JP (2008). The effect of walking speed on the "
+            "gait of typically developing children. J Biomech 41(8):1639-1650. "
+            "Supplementary data, 'Free' speed mean (Plug-in Gait trunk = thorax in the lab).")
+SCHWARTZ_FREE_MEAN = 9  # column: angle, % cycle, then (-1sd, mean, +1sd) per speed
 ADULT_FIRST_COLUMN = 2 + 3 * len(BOVI_TASKS)  # after variable, %cycle and the Young block
 N_SAMPLES = 100  # t = k / 100, k = 0..99
 
@@ -211,13 +218,17 @@ def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
     return angles, meta
 
 
-def _odd_harmonics(curve: np.ndarray) -> tuple[list[float], float]:
-    """Cosine and sine coefficients [deg] of :data:`HARMONICS` of a periodic (N,) curve,
-    and the RMS [deg] of what they leave of its half-period-antisymmetric part."""
-    t = np.arange(N_SAMPLES) / N_SAMPLES
-    odd = 0.5 * (curve - np.roll(curve, -N_SAMPLES // 2))  # (c(t) - c(t + 0.5)) / 2
-    coef, fit = [], np.zeros(N_SAMPLES)
-    for k in HARMONICS:
+def _odd_harmonics(curve: np.ndarray, harmonics=HARMONICS) -> tuple[list[float], float]:
+    """Cosine and sine coefficients [deg] of ``harmonics`` of a periodic (N,) curve, and the
+    RMS [deg] of what they leave of its half-period-antisymmetric part (odd harmonics;
+    for even ``harmonics`` the symmetric part less its mean)."""
+    n = curve.size
+    t = np.arange(n) / n
+    sign = -1.0 if harmonics[0] % 2 else 1.0
+    odd = 0.5 * (curve + sign * np.roll(curve, -n // 2))  # (c(t) -/+ c(t + 0.5)) / 2
+    odd = odd - (0.0 if sign < 0 else odd.mean())
+    coef, fit = [], np.zeros(n)
+    for k in harmonics:
         a = 2.0 * np.mean(odd * np.cos(2 * np.pi * k * t))
         b = 2.0 * np.mean(odd * np.sin(2 * np.pi * k * t))
         coef += [round(float(a), 3), round(float(b), 3)]
@@ -259,6 +270,37 @@ def derive_pelvis_motion(gait_dir: Path) -> dict:
         "sign": "list: + ipsilateral side up; rotation: + ipsilateral side forward",
         "generator": "scripts/derive_gait_data.py",
         "tasks": tasks,
+    }
+
+
+def derive_trunk_motion(gait_dir: Path) -> dict:
+    """Trunk rotation (odd harmonics, + ipsilateral side forward) and the sagittal trunk
+    tilt's wave (even harmonics, mean removed: Plug-in Gait's thorax axis reads about 21°
+    forward at every speed, a marker-frame offset, not a lean) of Schwartz 2008's Free
+    speed, over the cycle from ipsilateral foot strike (t = 0). Bovi 2011 has no trunk."""
+    rot = _read_excel(gait_dir / SCHWARTZ_FILE, "Joint Rotations")
+    names = rot[0].ffill().astype(str).str.split().str.join(" ")
+    out = {}
+    for key, var, harmonics in (("rotation", "Trunk Int/External Rotation", HARMONICS),
+                                ("tilt", "Trunk Ant/Posterior Tilt", TILT_HARMONICS)):
+        rows = rot[names == var]
+        cycle = rows[1].to_numpy(float)
+        if len(cycle) != 51 or not np.allclose(cycle, np.linspace(0, 1, 51)):
+            raise ValueError(f"Schwartz sheet layout changed for {var!r}")
+        curve = rows[SCHWARTZ_FREE_MEAN].to_numpy(float)
+        closed = (curve - (curve[-1] - curve[0]) * cycle)[:50]
+        coef, resid = _odd_harmonics(closed, harmonics)
+        out[key] = {"harmonics": list(harmonics), "coefficients_deg": coef,
+                    "residual_rms_deg": round(resid, 3), "mean_deg": round(float(closed.mean()), 3)}
+    return {
+        "source": SCHWARTZ,
+        "t": "gait cycle fraction from ipsilateral foot strike",
+        "form": "c(t) = sum_k a_k cos(2 pi k t) + b_k sin(2 pi k t), coefficients "
+                "[a_k, b_k, ...] in degrees; tilt: the wave about its mean (mean_deg is "
+                "Plug-in Gait's thorax offset, not shipped as a lean)",
+        "sign": "rotation: + ipsilateral side forward; tilt: + anterior",
+        "generator": "scripts/derive_gait_data.py",
+        **out,
     }
 
 
@@ -408,10 +450,10 @@ def _fields(meta: dict) -> dict:
     }
 
 
-def write_pelvis(out_dir: Path, pelvis: dict) -> None:
-    """Write ``pelvis_motion.json``."""
-    (out_dir / "pelvis_motion.json").write_text(json.dumps(pelvis, indent=2) + "\n",
-                                                encoding="utf-8")
+def write_pelvis(out_dir: Path, pelvis: dict, trunk: dict) -> None:
+    """Write ``pelvis_motion.json`` and ``trunk_motion.json``."""
+    for name, data in (("pelvis_motion.json", pelvis), ("trunk_motion.json", trunk)):
+        (out_dir / name).write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
 
 
 def write(out_dir: Path, angles: np.ndarray, meta: dict, norm: dict) -> None:
@@ -453,6 +495,9 @@ def main(argv: list[str] | None = None) -> int:
     diffs = ", ".join(f"{k} {v * 100:+.1f}" for k, v in check["step_length_vs_wbds"].items())
     print(f"step length minus WBDS fit at the same speed [cm]: {diffs}")
     pelvis = derive_pelvis_motion(args.gait_dir)
+    trunk = derive_trunk_motion(args.gait_dir)
+    print(f"trunk (Schwartz Free) rotation {trunk['rotation']['coefficients_deg']}, tilt wave "
+          f"{trunk['tilt']['coefficients_deg']} about {trunk['tilt']['mean_deg']} deg")
     for task, entry in pelvis["tasks"].items():
         print(f"pelvis {task:8s} list {entry['list']['coefficients_deg']} "
               f"(residual {entry['list']['residual_rms_deg']:.2f} deg), rotation "
@@ -463,14 +508,15 @@ def main(argv: list[str] | None = None) -> int:
             same = np.array_equal(shipped["angles"], angles) and json.loads(
                 str(shipped["meta"])) == json.loads(json.dumps(_fields(meta)))
         same &= json.loads((args.out_dir / "normative.json").read_text()) == norm
-        same &= json.loads((args.out_dir / "pelvis_motion.json").read_text()) == json.loads(
-            json.dumps(pelvis))
+        for name, data in (("pelvis_motion.json", pelvis), ("trunk_motion.json", trunk)):
+            same &= json.loads((args.out_dir / name).read_text()) == json.loads(
+                json.dumps(data))
         print("shipped files match" if same else "shipped files DIFFER")
         return 0 if same else 1
     write(args.out_dir, angles, meta, norm)
-    write_pelvis(args.out_dir, pelvis)
-    print(f"wrote {args.out_dir / 'elevation_datasets.npz'}, normative.json and "
-          "pelvis_motion.json")
+    write_pelvis(args.out_dir, pelvis, trunk)
+    print(f"wrote {args.out_dir / 'elevation_datasets.npz'}, normative.json, "
+          "pelvis_motion.json and trunk_motion.json")
     if args.plots:
         from crowdwalk.gait.datasets import _load_npz, load_datasets
         from crowdwalk.gait.elevinterp import ElevInterp, SagittalLeg

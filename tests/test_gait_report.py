@@ -61,6 +61,8 @@ def test_pelvis_lists_and_rotates_as_measured(natural):
     assert f.pelvic_list_mid_stance <= 0.3 * f.pelvic_list_peak
     assert f.pelvic_rotation_at_strike >= 2.0
     assert f.knee_at_strike <= 8.5
+    # the trunk counter-rotates (Schwartz 2008): the shoulder line turns against the hips
+    assert f.trunk_rotation_at_strike <= -2.0
 
 
 @pytest.mark.parametrize(("speed", "height"), [(1.0, 1.75), (1.7, 1.75), (1.33, 1.50)])

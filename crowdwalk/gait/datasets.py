@@ -46,6 +46,8 @@ __all__ = [
     "normative",
     "PelvisMotion",
     "pelvis_motion",
+    "TrunkMotion",
+    "trunk_motion",
 ]
 
 ANGLE_NAMES: tuple[str, ...] = ("foot", "shank", "thigh", "pelvis")
@@ -290,3 +292,42 @@ def pelvis_motion(task: str = "Natural") -> PelvisMotion:
         out[key] = (coef / peak, peak)
     return PelvisMotion(harmonics, out["list"][0], out["rotation"][0], out["list"][1],
                         out["rotation"][1])
+
+
+@dataclass(frozen=True, eq=False)
+class TrunkMotion:
+    """Trunk (thorax) rotation and sagittal tilt wave over the stride (Schwartz et al.
+    2008, Free speed; ``crowdwalk/data/trunk_motion.json``; Bovi 2011 has no trunk).
+
+    ``rotation_shape(t)`` [1]: + the leg's own side forward, unit peak, c(t + 0.5) =
+    −c(t) (against the pelvis: −0.99 at heel strike); ``rotation_peak`` [rad];
+    ``tilt_wave(t)`` [rad]: + anterior, about the cycle mean (the mean, Plug-in Gait's
+    thorax offset, is not a lean and is not used).
+    """
+
+    rotation_harmonics: tuple[int, ...]
+    rotation_coefficients: np.ndarray
+    rotation_peak: float
+    tilt_harmonics: tuple[int, ...]
+    tilt_coefficients: np.ndarray
+
+    def rotation_shape(self, t) -> np.ndarray:
+        """Trunk rotation at stride times t, + own side forward, peak 1 [1]."""
+        return PelvisMotion._series(self.rotation_coefficients, self.rotation_harmonics, t)
+
+    def tilt_wave(self, t) -> np.ndarray:
+        """Trunk tilt about its mean at stride times t, + anterior [rad]."""
+        return PelvisMotion._series(self.tilt_coefficients, self.tilt_harmonics, t)
+
+
+@cache
+def trunk_motion() -> TrunkMotion:
+    """The shipped trunk rotation shape (unit peak) and tilt wave."""
+    ref = resources.files("crowdwalk").joinpath("data", "trunk_motion.json")
+    data = json.loads(ref.read_text(encoding="utf-8"))
+    rot, tilt = data["rotation"], data["tilt"]
+    coef = np.deg2rad(np.asarray(rot["coefficients_deg"], dtype=float))
+    harmonics = tuple(rot["harmonics"])
+    peak = float(np.abs(PelvisMotion._series(coef, harmonics, np.arange(1000) / 1000)).max())
+    return TrunkMotion(harmonics, coef / peak, peak, tuple(tilt["harmonics"]),
+                       np.deg2rad(np.asarray(tilt["coefficients_deg"], dtype=float)))

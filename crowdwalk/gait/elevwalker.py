@@ -111,6 +111,12 @@ class GaitStyle:
         list greatest in loading response, level again by mid-stance), scaled by the
         amplitudes ``pelvic_list`` / the style's ``pelvic_rotation``; False: L(t) =
         amplitude · sin 2πt and rotation = amplitude · cos 2πt.
+    trunk_from_data : bool
+        With KLAW attributes, the trunk's counter-rotation follows Schwartz 2008's
+        measured thorax rotation (scaled by ``shoulder_rotation``) and its forward tilt
+        carries the measured wave about ``torso_tilt``
+        (:func:`~crowdwalk.gait.datasets.trunk_motion`); False: ``shoulder_rotation`` ·
+        cos 2πt and a constant tilt.
     """
 
     step_width: float = 0.05
@@ -124,6 +130,7 @@ class GaitStyle:
     toe_clearance: float = 0.013
     level_clearance: bool = True
     pelvis_from_data: bool = True
+    trunk_from_data: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
@@ -473,7 +480,7 @@ def elevwalker_pose(
         thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
         thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
         _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
-                           attributes)
+                           attributes, style)
 
     positions, rotations = forward_kinematics(body, root, r_pelvis, local)
     swing_phase = phase + 0.5
@@ -524,16 +531,24 @@ def _bounce_dip(body: Body, attributes, phase: np.ndarray) -> np.ndarray:
 
 
 def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
-                       attributes) -> None:
+                       attributes, style: GaitStyle | None = None) -> None:
     """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
     KLAW attributes: trunk tilt and sway over the stance leg, shoulders against the
     pelvis, arms with the opposite thigh (abducted by arm_out), elbows between their
     least (arm back) and greatest (arm forward) flexion; the head stays upright."""
     a = attributes
-    shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
+    tilt = a.torso_tilt
+    if style is not None and style.trunk_from_data:
+        from crowdwalk.gait.datasets import trunk_motion
+
+        motion = trunk_motion()  # + stance side forward: negative at heel strike
+        shoulder = -side_st * a.shoulder_rotation * motion.rotation_shape(phase)
+        tilt = tilt + motion.tilt_wave(phase)
+    else:
+        shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
     sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
     yaw = rotation_z(heading + shoulder)
-    trunk = yaw @ rotation_x(sway) @ rotation_y(a.torso_tilt)
+    trunk = yaw @ rotation_x(sway) @ rotation_y(tilt)
     local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ trunk
     local[:, JOINT["skullbase"]] = np.swapaxes(trunk, 1, 2) @ rotation_z(heading)
     for side, thigh, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):

@@ -129,3 +129,12 @@ def test_shipped_pelvis_motion_matches_rederivation_and_bovi(script):
         # the time warp moves samples by < 1 % of the stride: compare on the raw grid
         assert np.sqrt(np.mean((np.rad2deg(peak) * shape(t) - odd) ** 2)) < 0.3
     assert motion.list_shape(0.15) > 0.9 and motion.rotation_shape(0.0) > 0.9
+
+
+def test_shipped_trunk_motion_matches_rederivation(script):
+    """trunk_motion.json is what the script derives from Schwartz 2008 (Free speed)."""
+    trunk = script.derive_trunk_motion(GAIT_DIR)
+    assert json.loads((DATA / "trunk_motion.json").read_text()) == json.loads(
+        json.dumps(trunk))
+    assert trunk["rotation"]["residual_rms_deg"] < 0.2
+    assert trunk["tilt"]["residual_rms_deg"] < 0.2
