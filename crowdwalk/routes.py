@@ -114,6 +114,38 @@ class RouteCosts:
     min_length: float = 0.05
 
 
+def _segments_near(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray,
+                   eps: float) -> np.ndarray:
+    """(p,) bool: segments a–b that cross or come within ``eps`` [m] of segments c–d (all
+    (p, 2) [m], or (2,) for one c–d)."""
+    def cross(u, v):
+        return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+    def to_segment(p, q0, q1):  # distance of points p from segments q0-q1
+        e = q1 - q0
+        t = np.clip(np.sum((p - q0) * e, axis=-1) / np.maximum(np.sum(e * e, axis=-1),
+                                                              1e-300), 0.0, 1.0)
+        return np.linalg.norm(p - (q0 + t[..., None] * e), axis=-1)
+
+    crossing = (cross(b - a, c - a) * cross(b - a, d - a) < 0) & \
+        (cross(d - c, a - c) * cross(d - c, b - c) < 0)
+    near = np.minimum(np.minimum(to_segment(a, c, d), to_segment(b, c, d)),
+                      np.minimum(to_segment(c, a, b), to_segment(d, a, b)))
+    return crossing | (near < eps)
+
+
+def _ring_edges(rings) -> frozenset:
+    """The edges of polygon rings as a set of ((x0, y0), (x1, y1)) [m], each with its
+    ends in sorted order (coordinates rounded to 1 nm)."""
+    out = set()
+    for ring in rings:
+        xy = np.round(shapely.get_coordinates(ring), 9)
+        for p, q in zip(map(tuple, xy[:-1]), map(tuple, xy[1:]), strict=True):
+            if p != q:
+                out.add((p, q) if p < q else (q, p))
+    return frozenset(out)
+
+
 def _slope_factor(grade: np.ndarray, tobler: float) -> np.ndarray:
     """Tobler (1993) travel-time factor relative to level ground, floored at 1."""
     return np.maximum(1.0, np.exp(tobler * (np.abs(grade + 0.05) - 0.05)))
@@ -432,9 +464,12 @@ class RouteGraph:
         walls: this graph (``self``, with every corridor open)."""
         if not walls:
             return self
+        family = self.__dict__.setdefault("_family", [self])  # the graphs of one layout
         new = copy.copy(self)
-        for cached in ("walkable_area", "_walkable_tolerant", "_inner", "_corner_legs"):
+        for cached in ("walkable_area", "_walkable_tolerant", "_inner", "_corner_legs",
+                       "_corner_ok"):
             new.__dict__.pop(cached, None)
+        family.append(new)  # its visibility legs are re-checked only near the change
         new._fields, new._paths = {}, {}
         new.graph = self.layout.copy(as_view=False)
         new.graph.remove_edges_from([(u, v) for u, v in self.layout.edges
@@ -508,18 +543,60 @@ class RouteGraph:
         inner = self.walkable_area.buffer(-0.25, quad_segs=2).simplify(0.02)
         rings = shapely.get_rings(shapely.get_parts(inner))
         corners = np.unique(np.round(shapely.get_coordinates(rings), 9), axis=0)
+        self._inner_edges = _ring_edges(rings)
         inner = inner.buffer(1e-6)
         shapely.prepare(inner)
         return inner, corners
 
     @functools.cached_property
-    def _corner_legs(self) -> list[tuple[int, int, float]]:
-        """Visibility legs (i, j, length [m]) between the corners of :attr:`_inner` that stay
-        inside it, indexed from 2 as in :meth:`shortest_walk` (computed once)."""
+    def _corner_ok(self) -> np.ndarray:
+        """For every pair i < j of the corners of :attr:`_inner` (``np.triu_indices`` order):
+        True when the segment between them stays inside it (computed once). When another
+        graph of the same layout (this one and those :meth:`with_closed` made from it:
+        other doors shut) has them, only the pairs that involve a corner it lacks or whose
+        segment comes near an edge where the two shrunk areas differ are checked; every
+        other pair keeps its answer, which is then the same (a segment inside the one area
+        that misses their difference is inside the other, and one that leaves it there
+        leaves the other too)."""
         inner, corners = self._inner
         i, j = np.triu_indices(len(corners), 1)
-        seg = shapely.linestrings(np.stack([corners[i], corners[j]], axis=1))
-        ok = shapely.covers(inner, seg)
+        base = next((g for g in getattr(self, "_family", ())
+                     if g is not self and "_corner_ok" in g.__dict__), None)
+        if base is None:
+            return shapely.covers(inner, shapely.linestrings(
+                np.stack([corners[i], corners[j]], axis=1)))
+        _, old_corners = base._inner
+        old_ok, n_old = base._corner_ok, len(old_corners)
+        index = {tuple(c): k for k, c in enumerate(old_corners)}
+        at = np.array([index.get(tuple(c), -1) for c in corners])  # setup: one per corner
+        oi, oj = np.minimum(at[i], at[j]), np.maximum(at[i], at[j])
+        kept = (oi >= 0) & (oj >= 0)
+        pair = oi * n_old - oi * (oi + 1) // 2 + (oj - oi - 1)
+        ok = np.zeros(len(i), bool)
+        ok[kept] = old_ok[pair[kept]]
+        # where the areas differ is bounded by the ring edges only one of them has (a
+        # segment between kept corners can reach it only across such an edge)
+        check = ~kept
+        a, b = corners[i], corners[j]
+        edges = np.array(sorted(base._inner_edges ^ self._inner_edges)).reshape(-1, 2, 2)
+        if len(edges):  # bounding boxes of (pair, changed edge) first, then exact
+            lo, hi = np.minimum(a, b), np.maximum(a, b)
+            e_lo, e_hi = edges.min(axis=1) - 1e-5, edges.max(axis=1) + 1e-5
+            p, e = np.nonzero(np.all((lo[:, None] <= e_hi[None]) & (hi[:, None] >= e_lo[None]),
+                                     axis=2) & kept[:, None])
+            near = _segments_near(a[p], b[p], edges[e, 0], edges[e, 1], 1e-5)
+            check[p[near]] = True
+        seg = shapely.linestrings(np.stack([a[check], b[check]], axis=1))
+        ok[check] = shapely.covers(inner, seg)
+        return ok
+
+    @functools.cached_property
+    def _corner_legs(self) -> list[tuple[int, int, float]]:
+        """Visibility legs (i, j, length [m]) between the corners of :attr:`_inner` that stay
+        inside it, indexed from 2 as in :meth:`shortest_walk` (:attr:`_corner_ok`)."""
+        inner, corners = self._inner
+        i, j = np.triu_indices(len(corners), 1)
+        ok = self._corner_ok
         length = np.linalg.norm(corners[i] - corners[j], axis=1)
         return list(zip((i[ok] + 2).tolist(), (j[ok] + 2).tolist(), length[ok].tolist(),
                         strict=True))

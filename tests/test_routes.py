@@ -211,3 +211,27 @@ def test_walkable_area_excludes_tall_obstacles_but_not_curbs():
     assert w.covers(Point(5, -1.5)) and w.covers(Point(8, 1.5)) and w.covers(Point(5.6, 1.5))
     assert w.area == pytest.approx(routes.graph.edges["a", "b"]["geometry"].buffer(2).area - 1.0,
                                    abs=0.02)
+
+
+@pytest.mark.parametrize("shut", [[("east_door", "east")],
+                                  [("east_door", "east"), ("north_door", "office")],
+                                  [("west_door", "west")]])
+def test_graphs_with_doors_shut_recheck_only_the_legs_near_the_doors(shut):
+    """The corner-to-corner visibility legs of a graph with doors shut (``with_closed``)
+    and of the open one, each derived from the other's near the doors only: the same
+    legs as computed from scratch."""
+    from pathlib import Path
+
+    from crowdwalk.crowd.events import door_wall
+    from crowdwalk.scenario import load_scenario
+    from crowdwalk.world import build_world
+
+    scenario = load_scenario(Path(__file__).parents[1] / "scenarios" / "events.yaml")
+    reference = build_world(scenario).routes._corner_legs  # open, from scratch
+    graph = build_world(scenario).routes
+    walls = {frozenset(c): door_wall(graph, c, 0.5) for c in shut}
+    closed = graph.with_closed(walls)
+    shut_legs = closed._corner_legs  # nothing to derive from yet: from scratch
+    assert set(reference) - set(shut_legs)  # the doors cut legs
+    assert graph._corner_legs == reference  # open, derived from the closed graph
+    assert graph.with_closed(walls)._corner_legs == shut_legs  # closed, from the open one
