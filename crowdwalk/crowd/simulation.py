@@ -333,7 +333,8 @@ class CrowdSimulation:
             neighbours=nbs, clearance=self.clearance, params=prm.steering,
             speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            on=self._steer_on, gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None)
+            on=self._steer_on,
+            gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None)
         self.wall_steering += _time.perf_counter() - w0
         if gap is not None:
             v, reach = gap.along(choice.direction)

@@ -68,18 +68,17 @@ class SteeringParams:
         The nearest oncoming neighbours (among all gathered, not only the
         ``soft_neighbours``) in the anticipation term [-]. Before, only oncoming walkers
         among the 12 nearest counted: in a group the 12 nearest are its own members, so
-        an oncoming group was seen only on contact (counterflow seeds 1–5 and 6–10,
-        2 × 50 in 4 m: 3 and ? of 5 within 1.5 × the free walk before; with this and
-        ``right_bias`` 0.09, 5 and 3 of 5).
+        an oncoming group was seen only on contact. Counterflow 2 × 50 in 4 m within
+        1.5 × the free walk: seeds 1–5 3 → 4 of 5, held-out seeds 6–10 0 → 4 of 5
+        (with ``right_bias`` 0.09; docs/architecture.md).
     wall_weight, wall_range : float
         Wall repulsion ``w exp(-(clearance - r) / range)`` [m], [m].
     turn_weight : float
         Cost of turning away from the current heading, ``w (1 - cos Δψ)`` [m].
     right_bias : float
         Cost of stepping left of the route direction, ``w max(sin offset, 0)`` [m]:
-        0.09, chosen on the counterflow seeds 1–5 (0.06, 0.09, 0.12 tried with
-        ``oncoming_neighbours``: 4, 5, 5 of 5 passing; 0.12 fails RiMEA 9, ratio 1.43),
-        validated on seeds 6–10.
+        0.09, chosen on the counterflow seeds 1–5 (0.06: 2 of 5 within 1.5 × the free
+        walk, 0.09: 4 of 5; 0.12 failed RiMEA 9, ratio 1.43), validated on seeds 6–10.
     wait_cost : float
         Cost of standing still for one decision [m].
     give_way_after, give_way_weight : float

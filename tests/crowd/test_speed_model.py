@@ -93,5 +93,6 @@ def test_verify_names_an_unknown_speed_model_in_one_line(tmp_path):
     result = CliRunner().invoke(app, ["verify", "--speed-model", "fast", "--only", "rimea1",
                                       "--out", str(tmp_path / "v.md")])
     assert result.exit_code == 2
-    assert "speed_model must be one of free, time_gap, contact_gap, headway; got 'fast'" in result.output
+    assert ("speed_model must be one of free, time_gap, contact_gap, headway; got 'fast'"
+            in result.output)
     assert not (tmp_path / "v.md").exists()
