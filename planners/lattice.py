@@ -22,7 +22,13 @@ import numpy as np
 
 from planners.config import PlannerConfig
 from planners.grids import leg_grids, swing_basis
-from planners.lattice_kernel import Lattice, complete_agents, prepare_agents
+from planners.lattice_kernel import (
+    Lattice,
+    build_agents,
+    build_agents_serial,
+    complete_agents,
+    prepare_agents,
+)
 from planners.legality import Reason
 from planners.profile import RASTER_CELL
 from planners.swing import TABLE_LEVELS
@@ -60,9 +66,13 @@ def run_parts(kernel, count: int, *args) -> None:
 #: pairs a legal sequence can use (False: every step, and the swings of every pair of
 #: supported footholds, up front; the plans are the same, only slower).
 PRUNE = True
-#: Plans evaluate the lattice lazily, where their search reads it (False: every entry
-#: :data:`PRUNE` allows, up front; the plans are the same).
-LAZY = True
+#: The planners whose plans evaluate the lattice lazily, where the search reads it: those
+#: that read a small part of it. ``optimal`` and ``best_first_multistart`` (whose starts
+#: include a DP over the whole lattice) read nearly every entry the pruned tables hold
+#: (705 of 717 steps on random terrain) and get the tables up front, in one pass, which
+#: is faster than entry by entry. Empty: every plan evaluates its tables up front (the
+#: plans are the same).
+LAZY = frozenset({"best_first", "fixed"})
 
 
 @dataclass(frozen=True, eq=False)
@@ -332,8 +342,13 @@ class StepTables:
 
     @property
     def step_legal(self) -> np.ndarray:
-        """Legal steps (A, Ns), bool (evaluated so far, for lazy tables)."""
-        return self.step_reason == 0
+        """Legal steps (A, Ns), bool (evaluated so far, for lazy tables; cached for
+        tables evaluated up front)."""
+        if self.lazy:
+            return self.step_reason == 0
+        if "_legal" not in self.__dict__:
+            object.__setattr__(self, "_legal", self.step_reason == 0)
+        return self.__dict__["_legal"]
 
     def complete(self, agents: np.ndarray | None = None) -> None:
         """Evaluate every entry a search may read (:data:`PRUNE`) for ``agents``
@@ -391,7 +406,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     config : PlannerConfig
     lazy : bool
         Evaluate only the nodes (footholds, support, terminal energies) and leave every
-        step and swing to the searches.
+        step and swing to the searches (else every entry :data:`PRUNE` allows, in one
+        compiled pass per agent, agents in parallel).
 
     Notes
     -----
@@ -456,6 +472,17 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                         L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
                         lattice, lazy)
     run_parts(prepare_agents, A, lattice)
-    if not lazy:
-        tables.complete()
+    if not lazy:  # the one-pass kernel (faster than entry by entry where most are read)
+        L = lattice
+        kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
+        kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, trailing, L.speeds, g.normal,
+               g.per_metre, L.neutral_len, g.legs, g.flat_Ej, g.flat_reach, g.flat_ctrl,
+               g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
+               st.step_front, st.step_j, st.step_depth, L.step_offset, st.swing_back,
+               st.swing_front, st.swing_stride, first, second, valid, basis, influence,
+               fparams, iparams, weights, L.node_s, L.node_z, L.length, L.rise, L.En, L.Ev,
+               L.Ej, L.E, L.reason, L.cost, L.progress, L.terminal, L.far, L.swing_ok,
+               L.controls, L.rounds, L.work)
+        np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
+        np.greater_equal(L.rounds, 0, out=L.swing_done)
     return tables

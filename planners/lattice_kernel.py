@@ -26,9 +26,9 @@ from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, leg_constants
 from planners.swing import adjust_one
 
-__all__ = ["Lattice", "complete", "complete_agents", "config_efficiency", "config_legal",
-           "eval_step", "eval_swing", "inline", "prepare", "prepare_agents", "probe",
-           "probe_efficiency", "step_legal", "swing_legal"]
+__all__ = ["Lattice", "build_agents", "build_agents_serial", "complete", "complete_agents",
+           "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
+           "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_legal"]
 
 _EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
 _VERTICAL = 1e-12
@@ -669,6 +669,260 @@ def config_efficiency(L, a, q):
                                   L.progress, L.step_offset, L.swing_offset,
                                   L.swing_strides, J, a, q)
     return True, eff
+
+
+# The tables evaluated up front in one pass per agent (agents in parallel): the searches
+# that read most of the lattice (the DP of optimal and best_first_multistart's starts)
+# spend less on this loop than on evaluating entry by entry (planners.lattice.EAGER).
+
+
+@nb.njit(cache=True, nogil=True, parallel=True)
+def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
+                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
+                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
+                 step_depth, step_offset, swing_back, swing_front, swing_stride,
+                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
+                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+                 progress, terminal, far, swing_ok, controls, rounds, work):
+    """Fill every table of every agent (see :func:`planners.lattice.build_tables`).
+
+    Per agent a: its profile ``prof_s/prof_z[bounds[a]:bounds[a+1]]`` [m] (shifted:
+    the stance foot at ``base[a]``), grid ``lo, delta`` [m], ``trailing`` [m], speed
+    [m/s], normal-mode step [m] (0 without the term), neutral energy per metre and step
+    [J/(kg m)], [m]; ``legs`` (A, 6): thigh, shank, foot_length, heel, toe, ankle [m];
+    the per-leg flat caches (J,), (S, ...) for the two clearances (index 0 level,
+    1 sloped). ``fparams``: max_step_rise, max_foot_slope, support_tolerance,
+    edge_margin, swing_lift, pelvis_height_ratio, cos(pi - knee_max_flexion),
+    min_step_ratio, max_step_ratio, intervals, clearance, max_swing_lift, cell.
+    ``iparams``: snap, terminal_cost, prune, max_adjustments, table levels.
+    ``weights``: alpha, beta, gamma, down_ratio, linear, frequency*alpha, c_thigh,
+    c_calf. ``work`` (A, 5): key-frame solves, curves built, reused, adjustment rounds,
+    steps evaluated.
+    """
+    for a in nb.prange(base.size):
+        _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
+               neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack, node_depth,
+               node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
+               swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
+               fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+               progress, terminal, far, swing_ok, controls, rounds, work)
+
+
+@_jit
+def build_agents_serial(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
+                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
+                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
+                 step_depth, step_offset, swing_back, swing_front, swing_stride,
+                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
+                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+                 progress, terminal, far, swing_ok, controls, rounds, work):
+    """:func:`build_agents` one agent after the other (no thread start-up: for small
+    batches)."""
+    for a in range(base.size):
+        _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
+               neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack, node_depth,
+               node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
+               swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
+               fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+               progress, terminal, far, swing_ok, controls, rounds, work)
+
+
+@_jit
+def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
+                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
+                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
+                 step_depth, step_offset, swing_back, swing_front, swing_stride,
+                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
+                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
+                 progress, terminal, far, swing_ok, controls, rounds, work):
+    """Every table of agent ``a`` (see :func:`build_agents`)."""
+    Nn = node_depth.size
+    Ns = step_stance.size
+    Np = swing_back.size
+    n = step_offset.size
+    J = flat_Ej.shape[1]
+    max_rise, max_slope, tolerance, margin, lift = (fparams[0], fparams[1], fparams[2],
+                                                   fparams[3], 0.75 * fparams[4])
+    pelvis, cos_knee, min_ratio, max_ratio = fparams[5], fparams[6], fparams[7], fparams[8]
+    intervals, clearance, max_lift, cell = fparams[9], fparams[10], fparams[11], fparams[12]
+    snap, terminal_cost, prune = iparams[0] > 0, iparams[1] > 0, iparams[2] > 0
+    max_adjustments, levels = iparams[3], iparams[4]
+    c_thigh, c_calf = weights[6], weights[7]
+    T = basis.shape[1]
+    last0 = Nn - ((J - 1) * n + 1)  # first node of depth n
+    s = prof_s[bounds[a]:bounds[a + 1]]
+    z = prof_z[bounds[a]:bounds[a + 1]]
+    m_v = s.size
+    slope = np.zeros(m_v)
+    n_edges = 0
+    for i in range(m_v - 1):
+        d = s[i + 1] - s[i]
+        if d > _VERTICAL:
+            slope[i] = (z[i + 1] - z[i]) / d
+        elif abs(z[i + 1] - z[i]) > tolerance:
+            n_edges += 1
+    edges = np.empty(n_edges)
+    e = 0
+    for i in range(m_v - 1):
+        if s[i + 1] - s[i] <= _VERTICAL and abs(z[i + 1] - z[i]) > tolerance:
+            edges[e] = s[i]
+            e += 1
+    leg = legs[a]
+    heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
+    constants = leg_constants(leg[0], leg[1], toe_off, ankle, pelvis, cos_knee)
+    b0 = base[a]
+    # nodes: footholds relative to the stance foot, heights, support
+    support = np.zeros(Nn, dtype=np.int64)
+    for v in range(Nn):
+        depth = node_depth[v]
+        x = trailing[a] if depth == -1 else max(depth, 0) * lo[a] + node_m[v] * delta[a]
+        if snap and v >= 2:
+            x = _snap(b0 + x, 0.5 * delta[a], heel_off, toe_off, s, z, slope, edges,
+                      margin, tolerance, max_slope) - b0
+        node_s[a, v] = x
+        node_z[a, v] = _height(s, z, slope, b0 + x)
+        if v >= 2:
+            support[v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges, margin,
+                                  tolerance, max_slope)
+    far_a = -np.inf
+    for v in range(last0, Nn):
+        far_a = max(far_a, node_s[a, v])
+    far[a] = far_a
+    if terminal_cost:
+        lo_i = max(_right(s, b0 + trailing[a] - 2.0) - 1, 0)
+        hi_i = min(_left(s, b0 + far_a + 2.0), m_v - 1)
+        starts = np.empty(Nn - last0)
+        for v in range(last0, Nn):
+            starts[v - last0] = b0 + node_s[a, v]
+        _terminal(s, z, lo_i, hi_i, starts, b0 + far_a, terminal[a, last0:], leg,
+                  speeds[a], normal[a], per_metre[a], neutral_len[a], weights, c_thigh,
+                  c_calf, constants, lift, max_slope, min_ratio, max_ratio)
+    # steps: stance node -> front node; with ``prune`` only those whose stance foothold a
+    # legal sequence of steps from the start reaches (the others are never used)
+    reach = np.zeros(Nn, dtype=np.bool_)
+    reach[0] = True
+    reach[1] = True
+    key_frames = 0
+    evaluated = 0
+    for t in range(Ns):  # steps are ordered by depth
+        st_v, fr_v = step_stance[t], step_front[t]
+        ss, fs = node_s[a, st_v], node_s[a, fr_v]
+        zs, zf = node_z[a, st_v], node_z[a, fr_v]
+        r = zf - zs
+        L = fs - ss
+        length[a, t], rise[a, t] = L, r
+        final = terminal_cost and step_depth[t] == n
+        progress[a, t] = far_a - ss if final else L
+        ej = flat_Ej[a, step_j[t]]
+        if prune and not reach[st_v]:
+            En[a, t], Ev[a, t], _ = _energy(L, r, ej, speeds[a], normal[a], weights)
+            Ej[a, t], E[a, t], cost[a, t] = ej, np.inf, np.inf
+            reason[a, t] = _UNREACHED
+            continue
+        evaluated += 1
+        highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
+        nominal = lo[a] + delta[a] * step_j[t]
+        level = r == 0 and highest == zs and abs(L - nominal) <= 1e-12
+        hopeless = support[fr_v] != 0 or abs(r) > max_rise
+        reachable = flat_reach[a, step_j[t]]
+        if not level and not hopeless:
+            summit = highest + ankle + lift
+            th, ca, reachable = key_frame(ss, zs, fs, zf, ss, summit, leg[0], leg[1],
+                                          toe_off, ankle, ankle + lift, constants)
+            ej = c_thigh * th + c_calf * ca
+            key_frames += 1
+        en, ev, et = _energy(L, r, ej, speeds[a], normal[a], weights)
+        if hopeless and not level:
+            et = np.inf
+        En[a, t], Ev[a, t], Ej[a, t], E[a, t] = en, ev, ej, et
+        flags = support[fr_v]
+        if abs(r) > max_rise:
+            flags |= _STEP_HEIGHT
+        if not reachable:
+            flags |= _KNEE_REACH
+        reason[a, t] = flags
+        if flags == 0:
+            reach[fr_v] = True
+        cost[a, t] = et + terminal[a, fr_v] if final else et
+    # swings: only pairs some legal sequence of steps can use
+    behind = (-trailing[a] - lo[a]) / delta[a]
+    on_grid = (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
+               and behind < intervals + 0.5)
+    rest = np.zeros(Np, dtype=np.bool_)
+    rest_lo, rest_hi = np.inf, -np.inf
+    reused = 0
+    for q in range(Np):
+        rounds[a, q] = -1
+        bk, fr = swing_back[q], swing_front[q]
+        if prune:
+            through = False
+            for jp in range(J):
+                if (pair_valid[q, jp] and reason[a, pair_first[q, jp]] == 0
+                        and reason[a, pair_second[q, jp]] == 0):
+                    through = True
+                    break
+            if not (through and reach[bk]):
+                continue
+        elif support[fr] != 0 or support[bk] != 0:
+            continue
+        start, end = b0 + node_s[a, bk], b0 + node_s[a, fr]
+        z0, z1 = node_z[a, bk], node_z[a, fr]
+        stride = swing_stride[q]
+        if stride < 0 and on_grid:
+            stride = np.int64(np.rint(behind)) + node_m[fr]
+        vertices = _left(s, end + toe_off) - _right(s, start - heel_off)
+        grade = (z1 - z0) / (end - start)
+        nominal = 2 * lo[a] + max(stride, 0) * delta[a]
+        flat = (stride >= 0 and vertices == 0 and abs(grade) <= max_slope
+                and abs(end - start - nominal) <= 1e-9)
+        if flat:
+            c = 0 if grade == 0 else 1
+            if flat_ok[a, c, stride] and (abs(grade) * max(heel_off, toe_off)
+                                          <= flat_slack[a, c, stride]):
+                for i in range(4):
+                    c0 = flat_ctrl[a, c, stride, i, 0]
+                    controls[a, q, i, 1] = flat_ctrl[a, c, stride, i, 1] + (z0 + grade
+                                                                            * c0)
+                    controls[a, q, i, 0] = c0 + node_s[a, bk]
+                rounds[a, q] = 0
+                swing_ok[a, q] = True
+                reused += 1
+                continue
+        rest[q] = True
+        rest_lo = min(rest_lo, start)
+        rest_hi = max(rest_hi, end)
+    built = 0
+    adjustments = 0
+    if rest_hi >= rest_lo:
+        span = 2 * leg[2]
+        r_start = np.floor((rest_lo - span) / cell) * cell
+        count = max(1, int(np.ceil((rest_hi + span - r_start) / cell)))
+        levels_a = min(levels, _bit_length(count))
+        table = np.empty((levels_a, count))
+        vertex_cum = np.empty(count + 1, dtype=np.int64)
+        _raster(s, z, slope, r_start, cell, count, levels_a, table, vertex_cum)
+        scratch = np.empty((3, T))
+        summit = np.empty(2)
+        for q in range(Np):
+            if not rest[q]:
+                continue
+            bk, fr = swing_back[q], swing_front[q]
+            ok, used = adjust_one(b0 + node_s[a, bk], node_z[a, bk], b0 + node_s[a, fr],
+                                  node_z[a, fr], heel_off, toe_off, ankle, leg[2],
+                                  r_start, cell, table, vertex_cum, basis, influence,
+                                  clearance, fparams[4], max_lift, max_slope,
+                                  max_adjustments, controls[a, q], summit, scratch)
+            for i in range(4):
+                controls[a, q, i, 0] -= b0
+            swing_ok[a, q] = ok
+            rounds[a, q] = used
+            built += 1
+            adjustments += used
+    work[a, 0] = key_frames
+    work[a, 4] = evaluated
+    work[a, 1] = built
+    work[a, 2] = reused
+    work[a, 3] = adjustments
 
 
 @_jit

@@ -11,16 +11,9 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from planners.dp import DISTANCE, RATIO, cheapest, groups
-from planners.lattice import StepTables, run_parts
-from planners.lattice_kernel import (
-    config_efficiency,
-    probe_efficiency,
-    step_legal,
-    swing_legal,
-)
-from planners.lattice_kernel import inline as _inline
-from planners.search import SearchResult, evaluate, neighbour_deltas
+from planners.dp import cheapest
+from planners.lattice import StepTables
+from planners.search import SearchResult, evaluate_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
 
@@ -58,12 +51,14 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
     centres = tables.neutral[agents] if centres is None else centres
     A = agents.size
     configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
-    legal, _ = evaluate(tables, agents, configs)
+    legal, _ = tables.evaluate(agents, configs)
     found = legal.copy()
     checks = np.ones(A, dtype=np.int64)
     blocked = np.flatnonzero(~legal)
     if blocked.size:
-        best, ok, work = cheapest(tables, DISTANCE, centres[blocked], agents[blocked])
+        dist = np.abs(st.step_j[None, :] - centres[blocked, None])
+        cost = dist + 1e-7 * tables.cost[agents[blocked]]
+        best, ok, work = cheapest(tables, cost, agents[blocked])
         configs[blocked[ok]] = best[ok]
         found[blocked] = ok
         checks[blocked] += work.transitions
@@ -84,97 +79,74 @@ def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
     checks (B,).
     """
     st = tables.struct
-    agents = np.asarray(agents, dtype=np.int64)
     configs = np.ascontiguousarray(configs, dtype=np.int64).copy()
     B = agents.size
     current = np.empty(B)
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
-    order, starts = groups(agents)
-    run_parts(_climb, starts.size - 1, tables.lattice, neighbour_deltas(st.n), agents, order,
-              starts, configs, current, expanded, checks)
+    _climb(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
+           np.ascontiguousarray(tables.progress), st.J,
+           np.asarray(st.step_offset, dtype=np.int64), np.asarray(st.swing_offset, dtype=np.int64),
+           np.asarray(st.swing_strides, dtype=np.int64), neighbour_deltas(st.n),
+           np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
     return configs, current, expanded, checks
 
 
 @nb.njit(cache=True, nogil=True)
-def _climb(L, deltas, agents, order, starts, configs, current, expanded, checks, part, parts):
-    """The climbs of :func:`hill_climb`, one agent's after the other on one thread
-    (efficiencies rounded to 1e-12 as :meth:`~planners.lattice.StepTables.evaluate`)."""
-    for u in range(part, starts.size - 1, parts):
-        for i in range(starts[u], starts[u + 1]):
-            b = order[i]
-            current[b] = _climb_one(L, agents[b], deltas, configs[b], expanded, checks, b)
-
-
-@_inline
-def _climb_one(L, a, deltas, q, expanded, checks, b):
-    """Steepest ascent of agent ``a`` from its legal ``q`` (n,), in place; the local
-    optimum's efficiency."""
-    n = q.size
-    J = L.flat_Ej.shape[1]
+def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
+           agents, configs, current, expanded, checks):
+    """The climbs of :func:`hill_climb`, one after the other (efficiencies rounded to
+    1e-12 as :meth:`~planners.lattice.StepTables.evaluate`)."""
+    B, n = configs.shape
     r = np.empty(n, dtype=np.int64)
-    sd, rs, wd, wo = L.step_done, L.reason, L.swing_done, L.swing_ok
-    co, pr, so, wf, ws = L.cost, L.progress, L.step_offset, L.swing_offset, L.swing_strides
-    _, cur = config_efficiency(L, a, q)
-    while True:
-        expanded[b] += 1
-        best_eff, best_d = -np.inf, 0
-        for d in range(deltas.shape[0]):
-            inside = True
+    for b in range(B):
+        a = agents[b]
+        q = configs[b]
+        _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
+                           swing_off, strides)
+        while True:
+            expanded[b] += 1
+            best_eff, best_d = -np.inf, 0
+            for d in range(deltas.shape[0]):
+                inside = True
+                for k in range(n):
+                    r[k] = q[k] + deltas[d, k]
+                    if r[k] < 0 or r[k] >= J:
+                        inside = False
+                if not inside:
+                    continue
+                checks[b] += 1
+                legal, e = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
+                                     step_off, swing_off, strides)
+                if legal and e > best_eff:
+                    best_eff, best_d = e, d
+            if not best_eff > cur * (1 + 1e-12):
+                break
             for k in range(n):
-                r[k] = q[k] + deltas[d, k]
-                if r[k] < 0 or r[k] >= J:
-                    inside = False
-            if not inside:
-                continue
-            checks[b] += 1
-            legal, e = _efficiency(L, a, r, sd, rs, wd, wo, co, pr, so, wf, ws, J)
-            if legal and e > best_eff:
-                best_eff, best_d = e, d
-        if not best_eff > cur * (1 + 1e-12):
-            break
-        for k in range(n):
-            q[k] += deltas[best_d, k]
-        cur = best_eff
-    return cur
+                q[k] += deltas[best_d, k]
+            cur = best_eff
+        current[b] = cur
 
 
 def greedy(tables: StepTables) -> SearchResult:
     """Step by step, the legal step of highest own efficiency (length / E); no lookahead."""
     st = tables.struct
-    A, n = tables.neutral.size, st.n
+    A, n, J = tables.neutral.size, st.n, st.J
     configs = np.zeros((A, n), dtype=np.int64)
-    found = np.ones(A, dtype=np.bool_)
-    run_parts(_greedy, A, tables.lattice, configs, found)
-    checks = np.full(A, n * st.J, dtype=np.int64)
+    found = np.ones(A, dtype=bool)
+    rows = np.arange(A)[:, None]
+    for k in range(n):
+        trial = np.repeat(configs[:, None, :], J, axis=1)
+        trial[:, :, k] = np.arange(J)
+        steps, swings = st.indices(trial)
+        s, w = steps[:, :, k], swings[:, :, k]
+        score = np.where(tables.step_legal[rows, s] & tables.swing_ok[rows, w],
+                         tables.length[rows, s] / tables.E[rows, s], -np.inf)
+        best = np.argmax(score, axis=1)
+        found &= np.isfinite(score[rows[:, 0], best])
+        configs[:, k] = best
+    checks = np.full(A, n * J, dtype=np.int64)
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
-
-
-@nb.njit(cache=True, nogil=True)
-def _greedy(L, configs, found, part, parts):
-    """:func:`greedy` of every agent (its steps and swings read up to the first depth
-    without a legal step)."""
-    J = L.flat_Ej.shape[1]
-    for a in range(part, configs.shape[0], parts):
-        m_prev, m_prev2, j_prev = 0, 0, 0
-        for k in range(configs.shape[1]):
-            best, best_j = -np.inf, 0
-            for j in range(J):
-                step = L.step_offset[k] + m_prev * J + j
-                swing = L.swing_offset[k] + m_prev2 * L.swing_strides[k] + j + (
-                    j_prev if k > 0 else 0)
-                if step_legal(L, a, step) and swing_legal(L, a, swing):
-                    score = L.length[a, step] / L.E[a, step]
-                    if score > best:
-                        best, best_j = score, j
-            configs[a, k] = best_j
-            if not best > -np.inf:
-                found[a] = False
-                break
-            if k > 0:
-                m_prev2 += j_prev
-            m_prev += best_j
-            j_prev = best_j
 
 
 def budget(tables: StepTables) -> SearchResult:
@@ -186,7 +158,8 @@ def budget(tables: StepTables) -> SearchResult:
     L are the tables' ``cost`` and ``progress`` (with the terminal energy, see
     :class:`~planners.config.PlannerConfig`).
     """
-    configs, found, work = cheapest(tables, RATIO, tables.neutral_cost)
+    cost = tables.cost - tables.neutral_cost[:, None] * tables.progress
+    configs, found, work = cheapest(tables, cost)
     A = found.size
     return SearchResult(configs, found, np.full(A, work.states), np.full(A, work.transitions))
 
@@ -270,13 +243,3 @@ def _climb_all(tables: StepTables, seeds: list[SearchResult]):
         np.minimum.at(worst, rows, eff)
         differ = worst < best_eff * (1 - AGREE)
     return configs, best_eff, found, expanded, checks, differ
-
-
-@_inline
-def _efficiency(L, a, q, sd, rs, wd, wo, co, pr, so, wf, ws, J):
-    """:func:`~planners.lattice_kernel.config_efficiency` from the arrays of ``L``
-    (taken once per search), evaluating through ``L`` only what is missing."""
-    legal, e = probe_efficiency(sd, rs, wd, wo, co, pr, so, wf, ws, J, a, q)
-    if legal >= 0:
-        return legal == 1, e
-    return config_efficiency(L, a, q)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from planners.dp import RATIO, cheapest
+from planners.dp import cheapest
 from planners.lattice import StepTables
 from planners.multistart import nearest_legal
-from planners.search import SearchResult, evaluate
+from planners.search import SearchResult
 
 __all__ = ["optimal"]
 
@@ -36,29 +36,21 @@ def optimal(tables: StepTables) -> SearchResult:
     agents = np.flatnonzero(found)
     eff = np.zeros(A)
     if agents.size:
-        eff[agents] = _efficiency(tables, agents, configs[agents])
+        _, eff[agents] = tables.evaluate(agents, configs[agents])
     expanded, checks = init.expanded.copy(), init.checks.copy()
     active = agents
     for _ in range(MAX_ITERATIONS):
         if active.size == 0:
             break
-        best, ok, work = cheapest(tables, RATIO, 1.0 / eff[active], active)
+        lam = 1.0 / eff[active, None]
+        best, ok, work = cheapest(tables, tables.cost[active] - lam * tables.progress[active],
+                                  active)
         expanded[active] += work.states
         checks[active] += work.transitions
-        new = _efficiency(tables, active, best)
+        _, new = tables.evaluate(active, best)
         better = ok & (new > eff[active] * (1 + 1e-12))
         movers = active[better]
         configs[movers] = best[better]
         eff[movers] = new[better]
         active = movers
     return SearchResult(configs, found, expanded, checks)
-
-
-def _efficiency(tables: StepTables, agents: np.ndarray, configs: np.ndarray) -> np.ndarray:
-    """:meth:`~planners.lattice.StepTables.evaluate`'s efficiency (B,) of configurations
-    (B, n), evaluated through the lazy lattice first (0 where illegal)."""
-    legal, _ = evaluate(tables, agents, configs)
-    eff = np.zeros(agents.size)
-    if legal.any():
-        eff[legal] = tables.evaluate(agents[legal], configs[legal])[1]
-    return eff

@@ -33,8 +33,6 @@ _SEARCHES = {"best_first": best_first, "best_first_multistart": best_first_multi
 #: improved ``best_first_multistart`` (several starts, a wider neighbourhood), the
 #: unplanned ``fixed`` walker and the exact ``optimal`` over the same grid and horizon.
 PLANNERS = frozenset(_SEARCHES)
-#: The searches that read the tables through the lazy lattice's kernels.
-_LAZY = frozenset(_SEARCHES)
 #: Agents planned together in one vectorised pass (bounds memory).
 BATCH_CHUNK = 64
 OK = "ok"
@@ -254,7 +252,7 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         t0 = time.perf_counter()
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
                               None if trailing is None else trailing[sl], origins[sl], config,
-                              lazy=lattice.LAZY and lattice.PRUNE and planner in _LAZY)
+                              lazy=lattice.PRUNE and planner in lattice.LAZY)
         result = _SEARCHES[planner](tables)
         elapsed = (time.perf_counter() - t0) / len(profiles[sl])
         plans += _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],

@@ -7,10 +7,9 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from planners.lattice import StepTables, run_parts
-from planners.lattice_kernel import config_efficiency
+from planners.lattice import StepTables
 
-__all__ = ["SearchResult", "all_configs_evaluated", "evaluate", "neighbour_deltas"]
+__all__ = ["SearchResult", "all_configs_evaluated", "evaluate_one", "neighbour_deltas"]
 
 #: Largest number of (agent, configuration, step) entries evaluated in one gather.
 GATHER_BUDGET = 1 << 22
@@ -72,28 +71,28 @@ def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
     return legal, eff
 
 
-def evaluate(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
-    """Legality (B,) and efficiency (B,) of configurations (B, n) of table rows
-    ``agents`` (B,), read through the lazy lattice (illegal ones: efficiency 0, their
-    steps evaluated up to the first illegal one); the efficiencies of legal ones are
-    :meth:`~planners.lattice.StepTables.evaluate`'s."""
-    from planners.dp import groups
-
-    agents = np.asarray(agents, dtype=np.int64)
-    configs = np.ascontiguousarray(configs, dtype=np.int64)
-    legal = np.zeros(agents.size, dtype=np.bool_)
-    eff = np.zeros(agents.size)
-    order, starts = groups(agents)
-    run_parts(_evaluate, starts.size - 1, tables.lattice, agents, order, starts, configs, legal,
-              eff)
-    return legal, eff
-
-
 @nb.njit(cache=True, nogil=True)
-def _evaluate(L, agents, order, starts, configs, legal, eff, part, parts):
-    for u in range(part, starts.size - 1, parts):
-        for i in range(starts[u], starts[u + 1]):
-            b = order[i]
-            legal[b], eff[b] = config_efficiency(L, agents[b], configs[b])
-
-
+def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
+    """Legality and efficiency of configuration ``q`` (n,) for table row ``a``, rounded
+    to 1e-12 as :meth:`~planners.lattice.StepTables.evaluate` (compiled, for the
+    searches' kernels)."""
+    n = q.size
+    m_prev = 0  # lattice index of the stance foothold f_{k-1}
+    m_prev2 = 0  # of the lift-off foothold f_{k-2}
+    j_prev = 0
+    legal = True
+    energy = 0.0
+    length = 0.0
+    for k in range(n):
+        step = step_off[k] + m_prev * J + q[k]
+        stride = q[k] + (j_prev if k > 0 else 0)
+        swing = swing_off[k] + m_prev2 * strides[k] + stride
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            legal = False
+        energy += cost[a, step]
+        length += progress[a, step]
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return legal, np.rint(length / energy * 1e12) / 1e12
