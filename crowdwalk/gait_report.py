@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.body import LEG_JOINTS, PROPORTIONS
+from crowdwalk.body import JOINT, LEG_JOINTS, PROPORTIONS
+from crowdwalk.steps import FootstepTable
 
 __all__ = ["CycleKind", "GaitFigures", "WalkerTrack", "cycle_curves", "edge_clearance",
            "foot_points", "gait_figures", "heel_slides", "load_tracks", "references",
@@ -153,12 +154,12 @@ def cycle_curves(values: np.ndarray, strikes: np.ndarray) -> np.ndarray:
     return np.asarray(out).reshape(-1, SAMPLES, values.shape[1])
 
 
-def _cycle_kinds(strike_times: np.ndarray, steps: dict[str, np.ndarray]) -> list[CycleKind]:
+def _cycle_kinds(strike_times: np.ndarray, steps: FootstepTable) -> list[CycleKind]:
     """Level / stairs_up / stairs_down / other for each cycle, from the step heights of the
     footholds placed within it (``footsteps.csv`` rows of this agent)."""
     kinds = []
     for t0, t1 in zip(strike_times[:-1], strike_times[1:], strict=True):
-        h = steps["step_height"][(steps["time"] > t0 - 0.02) & (steps["time"] <= t1 + 0.02)]
+        h = steps.step_height[(steps.time > t0 - 0.02) & (steps.time <= t1 + 0.02)]
         if h.size and np.all(np.abs(h) < 0.02):
             kinds.append(LEVEL)
         elif h.size and np.all(h > 0.08):
@@ -343,9 +344,35 @@ class GaitFigures:
     edge_clearance_median: float = float("nan")
     edge_clearance_max: float = float("nan")
     stances_across_edge: int = 0
+    pelvic_list_peak: float = float("nan")
+    pelvic_list_peak_phase: float = float("nan")
+    pelvic_list_mid_stance: float = float("nan")
+    pelvic_rotation_at_strike: float = float("nan")
+    trunk_rotation_at_strike: float = float("nan")
 
 
-def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed: float,
+def pelvis_list_rotation(track: WalkerTrack, joints=None) -> np.ndarray:
+    """Pelvic list and rotation (F, 2) [deg] of the left side from the hip joints (or the
+    left/right ``joints`` pair, e.g. the shoulders): list + left above the right,
+    rotation + left ahead along the pelvis's path (its displacement over ±0.5 s), Bovi
+    2011's signs for the left leg."""
+    p = track.positions
+    left, right = (LEG_JOINTS[0, 0], LEG_JOINTS[1, 0]) if joints is None else joints
+    axis = p[:, left] - p[:, right]
+    flat = np.linalg.norm(axis[:, :2], axis=1)
+    lst = np.arctan2(axis[:, 2], flat)
+    pelvis = p[:, _PELVIS, :2]
+    k = max(int(round(0.5 * track.fps)), 1)
+    idx = np.arange(len(p))
+    way = pelvis[np.minimum(idx + k, len(p) - 1)] - pelvis[np.maximum(idx - k, 0)]
+    # left hip ahead: the axis (left - right) turned toward the way walked
+    rot = np.arctan2(np.einsum("fi,fi->f", axis[:, :2], way) / np.maximum(flat, 1e-12),
+                     np.abs(way[:, 0] * axis[:, 1] - way[:, 1] * axis[:, 0])
+                     / np.maximum(flat, 1e-12))
+    return np.rad2deg(np.column_stack([lst, rot]))
+
+
+def gait_figures(track: WalkerTrack, steps: FootstepTable, *, free_speed: float,
                  ground, skip_cycles: int = 2) -> GaitFigures:
     """Measure one walker.
 
@@ -353,7 +380,7 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
     ----------
     track : WalkerTrack
         The walker's stored poses.
-    steps : dict of (n,) arrays
+    steps : crowdwalk.steps.FootstepTable
         This walker's ``footsteps.csv`` rows (columns ``time``, ``step_length``,
         ``step_height``).
     free_speed : float
@@ -383,10 +410,10 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
         duration = float(np.sum(track.time[b] - track.time[a]))
         speed = float(np.sum(np.linalg.norm(pelvis[b, :2] - pelvis[a, :2], axis=1)) / duration)
         cadence = 120.0 * level.size / duration
-        in_level = np.zeros(steps["time"].shape, bool)
+        in_level = np.zeros(steps.time.shape, bool)
         for t0, t1 in zip(track.time[a], track.time[b], strict=True):
-            in_level |= (steps["time"] > t0 + 0.02) & (steps["time"] <= t1 + 0.02)
-        step_length = float(np.median(steps["step_length"][in_level]))
+            in_level |= (steps.time > t0 + 0.02) & (steps.time <= t1 + 0.02)
+        step_length = float(np.median(steps.step_length[in_level]))
         mean_curve = curves[level].mean(axis=0).T
         ref, _ = winter_at(cadence)
         rms, r = (np.array(v) for v in zip(*(_rms_r(mean_curve[j], ref[j]) for j in range(3)),
@@ -415,7 +442,7 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
 
     slides, turns, heel_turns = (np.concatenate(v) for v in zip(
         *(heel_slides(track, s) for s in (0, 1)), strict=True))
-    spins = np.abs(steps["spin"]) if "spin" in steps else np.zeros(0)
+    spins = np.abs(steps.spin)  # NaN (no spin turn) in runs written before MetaGait
     toe, lift = (np.concatenate(v) for v in zip(*(swing_clearance(track, s, ground)
                                                   for s in (0, 1)), strict=True))
     over, across = (np.concatenate(v) for v in zip(*(edge_clearance(track, s, ground)
@@ -456,7 +483,28 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
         edge_clearance_median=float(np.median(over)) if over.size else nan,
         edge_clearance_max=float(over.max()) if over.size else nan,
         stances_across_edge=int(across.sum()),
+        **_pelvis_figures(track, strikes, level),
     )
+
+
+def _pelvis_figures(track: WalkerTrack, strikes: np.ndarray, level: np.ndarray) -> dict:
+    """Mean left-cycle pelvic list / rotation figures over the level cycles [deg]: list
+    peak, its phase [1], list at 30-45 % (mid to late stance), rotation at heel strike."""
+    if not level.size:
+        return {}
+    curves = cycle_curves(pelvis_list_rotation(track), strikes)[level].mean(axis=0)
+    shoulders = cycle_curves(pelvis_list_rotation(track, (JOINT["l_shoulder"],
+                                                          JOINT["r_shoulder"])),
+                             strikes)[level].mean(axis=0)
+    grid = np.linspace(0.0, 1.0, SAMPLES)
+    first = grid < 0.5
+    peak = int(np.argmax(np.abs(curves[first, 0])))
+    late = (grid >= 0.30) & (grid <= 0.45)
+    return {"pelvic_list_peak": float(abs(curves[peak, 0])),
+            "pelvic_list_peak_phase": float(grid[peak]),
+            "pelvic_list_mid_stance": float(np.abs(curves[late, 0]).max()),
+            "pelvic_rotation_at_strike": float(0.5 * (curves[0, 1] + curves[-1, 1])),
+            "trunk_rotation_at_strike": float(0.5 * (shoulders[0, 1] + shoulders[-1, 1]))}
 
 
 def run_figures(run_dir: str | Path) -> list[GaitFigures]:
@@ -476,7 +524,7 @@ def run_figures(run_dir: str | Path) -> list[GaitFigures]:
     poses.close()
     out = []
     for agent, track in sorted(tracks.items()):
-        mine = {k: v[steps["agent"] == agent] for k, v in steps.items()}
+        mine = steps.of_agent(agent)
         out.append(gait_figures(track, mine, free_speed=float(free.get(agent, np.nan)),
                                 ground=terrain.height))
     return out
@@ -501,6 +549,11 @@ _ROWS = (  # (figure, target, values of one walker, format of those values)
     ("toe-off plantarflexion [deg]", "~15-20", lambda f: (f.toe_off_plantarflexion,), "{:.1f}"),
     ("pelvis vertical excursion [cm]", "3.5-5.5 (1.33 m/s)",
      lambda f: (f.pelvis_excursion * 100,), "{:.1f}"),
+    ("pelvic list peak [deg] at [% cycle]; 30-45 %", "Bovi ~5 at ~15; ~0",
+     lambda f: (f.pelvic_list_peak, f.pelvic_list_peak_phase * 100, f.pelvic_list_mid_stance),
+     "{:.1f} at {:.0f}; {:.1f}"),
+    ("pelvic / shoulder rotation at heel strike [deg]", "Bovi ~4; Schwartz ~-5",
+     lambda f: (f.pelvic_rotation_at_strike, f.trunk_rotation_at_strike), "{:.1f} / {:.1f}"),
     ("heel slide max [mm]; stances > 10 mm", "<= 10; 0",
      lambda f: (f.heel_slide_max * 1000, f.stances_over_10mm, f.stances), "{:.0f}; {:.0f}/{:.0f}"),
     ("stances turning > 10 deg; spin turns > 10 deg", "spin turns only",

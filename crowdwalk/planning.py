@@ -46,23 +46,33 @@ def read_profile_csv(path: str | Path):
                 and not row[0].strip().startswith("#")]
     cols = (0, 1)
     if rows:
-        header = [cell.strip().lower() for cell in rows[0][1]]
+        line, cells = rows[0]
+        header = [cell.strip().lower() for cell in cells]
         if not _is_number(header[0]):
             if "s" not in header or "z" not in header:
-                raise invalid("ProfileCSV", "header", "columns named s and z", ",".join(header))
+                raise _at(path, line, "header", "columns named s and z", ",".join(header))
             cols = (header.index("s"), header.index("z"))
             rows = rows[1:]
     if len(rows) < 2:
-        raise invalid("ProfileCSV", "rows", f"at least two s,z rows in {path}", len(rows))
+        raise _at(path, rows[-1][0] if rows else 1, "rows", "at least two s,z rows", len(rows))
     s, z = [], []
     for line, row in rows:
         try:
-            s.append(float(row[cols[0]]))
-            z.append(float(row[cols[1]]))
+            s_i, z_i = float(row[cols[0]]), float(row[cols[1]])
         except (IndexError, ValueError):
-            raise invalid("ProfileCSV", f"line {line}", "two numbers s,z [m]",
-                          ",".join(row)) from None
+            raise _at(path, line, "s,z", "two numbers [m]", ",".join(row)) from None
+        if not (math.isfinite(s_i) and math.isfinite(z_i)):
+            raise _at(path, line, "s,z", "finite [m]", ",".join(row))
+        if s and s_i < s[-1]:
+            raise _at(path, line, "s", f"non-decreasing (previous row {s[-1]:g}) [m]", s_i)
+        s.append(s_i)
+        z.append(z_i)
     return GroundProfile(np.array(s), np.array(z))
+
+
+def _at(path: Path, line: int, field: str, constraint: str, value: object) -> InputError:
+    """One-line error naming ``path:line``, the field, its constraint and the value."""
+    return InputError(f"{path}:{line}: profile {field} must be {constraint}; got {value!r}.")
 
 
 def _is_number(text: str) -> bool:

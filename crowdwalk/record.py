@@ -30,16 +30,18 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.errors import invalid
-from crowdwalk.steps import FOOTSTEP_COLUMNS, StepBatch
+from crowdwalk.errors import InputError, invalid
+from crowdwalk.steps import FOOTSTEP_COLUMNS, FootstepTable, StepBatch
 
 __all__ = [
     "FOOTSTEP_COLUMNS",
+    "FootstepTable",
     "RunWriter",
     "Run",
     "Trajectories",
     "Poses",
     "PoseRecord",
+    "WalkableAreas",
     "open_run",
 ]
 
@@ -232,14 +234,16 @@ class RunWriter:
 
     # --- footsteps ------------------------------------------------------------------
 
-    def write_footsteps(self, rows: dict[str, np.ndarray]) -> None:
+    def write_footsteps(self, rows) -> None:
         """Append foot placements.
 
         Parameters
         ----------
-        rows : dict of column name -> (k,) array
-            Every column of :data:`FOOTSTEP_COLUMNS` (units there).
+        rows : FootstepTable, or a mapping of column name -> (k,) array
+            Every column of :data:`FOOTSTEP_COLUMNS` (units in :class:`FootstepTable`).
         """
+        if isinstance(rows, FootstepTable):
+            rows = rows.columns()
         missing = [c for c in FOOTSTEP_COLUMNS if c not in rows]
         if missing:
             raise invalid("RunWriter", "footsteps", f"a table with columns {missing}", sorted(rows))
@@ -464,6 +468,25 @@ class Poses:
         self._con.close()
 
 
+@dataclass(frozen=True, eq=False)
+class WalkableAreas:
+    """The walkable area over a run (doors shut and opened by events): area ``areas[k]``
+    (shapely geometry [m]) holds from time ``start[k]`` [s] (g,) until ``start[k + 1]``;
+    ``start`` increases, ``start[0]`` is the first frame's time. Read from JuPedSim v2's
+    ``frame_data`` (each frame's geometry hash); a run whose area never changes has one."""
+
+    start: np.ndarray
+    areas: tuple
+
+    def index(self, t: float) -> int:
+        """The area current at time ``t`` [s] (the first one before the first frame)."""
+        return max(int(np.searchsorted(self.start, t + 1e-9, side="right")) - 1, 0)
+
+    def at(self, t: float):
+        """The walkable area (shapely geometry [m]) current at time ``t`` [s]."""
+        return self.areas[self.index(t)]
+
+
 class Run:
     """A run folder opened for reading (see :func:`open_run`)."""
 
@@ -517,24 +540,39 @@ class Run:
             wkts = [r[0] for r in con.execute("SELECT wkt FROM geometry")]
         return shapely.union_all([shapely.from_wkt(w) for w in wkts])
 
-    def footsteps(self) -> dict[str, np.ndarray]:
-        """``footsteps.csv`` as columns: numeric columns as float/int arrays, ``foot``,
-        ``planner`` and ``group`` as string arrays. Rows of a partly written last line
-        (an interrupted run) are dropped."""
+    def walkable_areas(self) -> WalkableAreas:
+        """The walkable area current at each frame, as its changes over time."""
+        import shapely
+
+        with closing(_connect(self.trajectory_path)) as con:
+            fps = float(con.execute("SELECT value FROM metadata WHERE key='fps'").fetchone()[0])
+            wkt = dict(con.execute("SELECT hash, wkt FROM geometry"))
+            rows = con.execute("SELECT frame, geometry_hash FROM frame_data "
+                               "ORDER BY frame").fetchall()
+        if not rows:  # no frame written: the area the run started with
+            return WalkableAreas(np.zeros(1), (self.walkable_area(),))
+        start, hashes = [], []
+        for frame, h in rows:  # a row per frame, once per run (no tick loop)
+            if not hashes or h != hashes[-1]:
+                start.append(frame / fps)
+                hashes.append(h)
+        return WalkableAreas(np.asarray(start, float),
+                             tuple(shapely.from_wkt(wkt[h]) for h in hashes))
+
+    def footsteps(self) -> FootstepTable:
+        """``footsteps.csv`` as a :class:`~crowdwalk.steps.FootstepTable`. Rows of a partly
+        written last line (an interrupted run) are dropped. Raises
+        :class:`~crowdwalk.errors.InputError` (``footsteps.csv:1``) when a column is
+        missing."""
         with open(self.footsteps_path, newline="") as fh:
             reader = csv.reader(fh)
-            header = next(reader)
+            header = next(reader, [])
             rows = [r for r in reader if len(r) == len(header)]
-        cols = list(zip(*rows, strict=True)) if rows else [() for _ in header]
-        out: dict[str, np.ndarray] = {}
-        for name, values in zip(header, cols, strict=True):
-            if name in ("foot", "planner", "group"):
-                out[name] = np.array(values, dtype=str)
-            elif name in ("agent", "step", "kind", "on_obstacle"):
-                out[name] = np.array(values, dtype=float).astype(int)
-            else:
-                out[name] = np.array(values, dtype=float)
-        return out
+        try:
+            return FootstepTable.from_text(header, rows)
+        except ValueError as exc:
+            raise InputError(f"{self.footsteps_path}:1: footsteps header must hold every "
+                             f"column of crowdwalk.steps.FOOTSTEP_COLUMNS; {exc}.") from None
 
     def poses(self) -> Poses | None:
         """The pose reader, or ``None`` when the run stored no poses."""

@@ -60,19 +60,21 @@ def test_human_readable_table(tmp_path):
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("s,z\n0,0\n1,abc\n", "ProfileCSV.line 3 must be two numbers s,z [m]; got '1,abc'."),
-        ("s,z\n1,0\n0,0\n", "GroundProfile.s must be non-decreasing [m]"),
-        ("s,z\n0,0\n1,nan\n", "GroundProfile.z must be finite [m]"),
-        ("s,z\n", "ProfileCSV.rows must be at least two s,z rows"),
-        ("s,z\n0,0\n", "ProfileCSV.rows must be at least two s,z rows"),
+        ("s,z\n0,0\n1,abc\n", ":3: profile s,z must be two numbers [m]; got '1,abc'."),
+        ("s,z\n1,0\n0,0\n", ":3: profile s must be non-decreasing (previous row 1) [m]; got 0.0."),
+        ("s,z\n0,0\n1,nan\n", ":3: profile s,z must be finite [m]; got '1,nan'."),
+        ("s,z\n", ":1: profile rows must be at least two s,z rows; got 0."),
+        ("s,z\n0,0\n", ":2: profile rows must be at least two s,z rows; got 1."),
         ("s,z\n-1,0\n0.4,0\n", "walk.profile must be at least one step (0.67 m) long"),
-        ("a,b\n0,0\n", "ProfileCSV.header must be columns named s and z"),
+        ("a,b\n0,0\n", ":1: profile header must be columns named s and z; got 'a,b'."),
     ],
 )
 def test_bad_csv_exits_2_with_one_clear_line(tmp_path, text, message):
     result = runner.invoke(app, ["plan", "--profile", str(write(tmp_path, text))])
     assert result.exit_code == 2
     assert message in result.output
+    if message.startswith(":"):
+        assert f"profile.csv{message}" in result.output  # file:line names the row
     assert "Traceback" not in result.output
     assert len(result.output.strip().splitlines()) == 1
 
