@@ -87,7 +87,7 @@ _DS_FRAC = np.array([0.3089, 0.2526, 0.2558, 0.2385, 0.1882])
 
 
 SPIN_HEEL_LIFT = 0.008  # heel height off the ground at which a spin turn starts [m]
-_SPIN_GRID = np.linspace(0.3, 1.0, 15)  # step fractions searched for the heel rise
+_SPIN_GRID = np.linspace(0.0, 1.0, 26)  # step fractions searched for the heel rise
 
 
 def _column_or(cmd, name: str, default: np.ndarray) -> np.ndarray:
@@ -408,9 +408,11 @@ class KlawEngine:
         w = np.clip((st.toe_clearance - c_lo) / np.where(c_hi > c_lo, c_hi - c_lo, 1.0), 0, 1)
         clearance(lo + w * (hi - lo))
         # the spin turn (MetaGait §6.1) of the stance foot: about its ball, from when its
-        # heel is up SPIN_HEEL_LIFT to the step's end (none if the heel stays down)
+        # heel is up SPIN_HEEL_LIFT to the step's end (none if it never stood flat and
+        # rose: then the trailing foot keeps its yaw)
         s["spin_t0"][a] = self._heel_off(a, b, t_abs, T)
-        s["spin"][a] = _column_or(cmd, "spin", np.zeros(m))
+        s["spin"][a] = np.where(s["spin_t0"][a] < T, _column_or(cmd, "spin", np.zeros(m)),
+                                0.0)
         # the stance foot's state at t4 is the next step's trailing foot
         end = self._legs(a, t_abs + T)
         s["next_p"][a] = end["pitch_a"]
@@ -425,7 +427,11 @@ class KlawEngine:
         times = t_abs[:, None] + _SPIN_GRID[None, :] * T[:, None]
         legs = self._legs(np.repeat(a, _SPIN_GRID.size), times.ravel())
         hb = np.repeat(b.heel_offset + b.ball_offset, _SPIN_GRID.size)
-        up = (hb * np.sin(np.maximum(-legs["pitch_a"], 0.0)) >= SPIN_HEEL_LIFT).reshape(m, -1)
+        pitch = legs["pitch_a"].reshape(m, -1)
+        up = hb.reshape(m, -1) * np.sin(np.maximum(-pitch, 0.0)) >= SPIN_HEEL_LIFT
+        # only a foot that has stood flat (its heel down) rises to spin on its ball
+        flat = np.maximum.accumulate(pitch == 0.0, axis=1)
+        up &= flat & (_SPIN_GRID[None, :] > 0.3)
         return np.where(up.any(axis=1), _SPIN_GRID[np.argmax(up, axis=1)] * T, T)
 
     @staticmethod
