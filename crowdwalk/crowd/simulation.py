@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
@@ -56,7 +57,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
-from crowdwalk.workers import split_rows
+from crowdwalk.workers import row_threads, split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -84,12 +85,18 @@ class CrowdSimulation:
         Receives every decided step and answers :meth:`poses` (None: no poses).
     workers : crowdwalk.workers.Workers or None
         Worker processes that steer parts of a tick's deciding walkers
-        (:func:`crowdwalk.workers.split_rows`; None: all here).
+        (:func:`crowdwalk.workers.split_rows`) when one of them does not pose (None: all
+        in this process).
+    threads : crowdwalk.workers.RowThreads, optional
+        Threads of this process that gather the neighbours of, and steer, parts of a
+        tick's deciding walkers at once (default :func:`crowdwalk.workers.row_threads`:
+        one per core).
     """
 
     def __init__(self, world, population: Population, *, parts: CrowdParts,
                  dt: float = 0.05, fps: float = 10.0, duration: float = 600.0,
-                 params: CrowdParams | None = None, gait=None, workers=None) -> None:
+                 params: CrowdParams | None = None, gait=None, workers=None,
+                 threads=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
@@ -139,6 +146,7 @@ class CrowdSimulation:
             if sc.waiting_areas else None
         self.gait = gait
         self.workers = workers
+        self.threads = row_threads() if threads is None else threads
         # the workers that steer parts of a tick (not the one holding a remote gait engine)
         self._steer_on = [] if workers is None else [
             w for w in range(len(workers)) if w != getattr(gait, "worker", None)]
@@ -315,17 +323,23 @@ class CrowdSimulation:
         route_dir = np.where(back[:, None], -route_dir, route_dir)
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
-                                count=prm.neighbours, reach=prm.neighbour_range)
+                                count=prm.neighbours, reach=prm.neighbour_range,
+                                threads=self.threads)
         outline = self.shape.packed(idx)
         gap = self._gap_steps(idx, pos, nbs)
-        choice = split_rows(
-            self.workers, choose_steps, idx.size, pos, st.stance[idx],
+        rows = dict(
             heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
-            neighbours=nbs, clearance=self.clearance, params=prm.steering,
-            speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
+            neighbours=nbs, speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            on=self._steer_on, gap=gap if prm.speed_model == "contact_gap" else None)
+            gap=gap if prm.speed_model == "contact_gap" else None)
+        if self._steer_on:  # worker processes (given, not posing); the field goes once
+            choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],
+                                clearance=self.clearance, params=prm.steering,
+                                on=self._steer_on, **rows)
+        else:  # the field and the parameters go whole, not cut by rows
+            steer = partial(choose_steps, clearance=self.clearance, params=prm.steering)
+            choice = self.threads.map(steer, idx.size, pos, st.stance[idx], **rows)
         self.wall_steering += _time.perf_counter() - w0
         if gap is not None:
             v, reach = gap.along(choice.direction)
