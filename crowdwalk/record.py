@@ -40,6 +40,7 @@ __all__ = [
     "Trajectories",
     "Poses",
     "PoseRecord",
+    "WalkableAreas",
     "open_run",
 ]
 
@@ -464,6 +465,25 @@ class Poses:
         self._con.close()
 
 
+@dataclass(frozen=True, eq=False)
+class WalkableAreas:
+    """The walkable area over a run (doors shut and opened by events): area ``areas[k]``
+    (shapely geometry [m]) holds from time ``start[k]`` [s] (g,) until ``start[k + 1]``;
+    ``start`` increases, ``start[0]`` is the first frame's time. Read from JuPedSim v2's
+    ``frame_data`` (each frame's geometry hash); a run whose area never changes has one."""
+
+    start: np.ndarray
+    areas: tuple
+
+    def index(self, t: float) -> int:
+        """The area current at time ``t`` [s] (the first one before the first frame)."""
+        return max(int(np.searchsorted(self.start, t + 1e-9, side="right")) - 1, 0)
+
+    def at(self, t: float):
+        """The walkable area (shapely geometry [m]) current at time ``t`` [s]."""
+        return self.areas[self.index(t)]
+
+
 class Run:
     """A run folder opened for reading (see :func:`open_run`)."""
 
@@ -516,6 +536,25 @@ class Run:
         with closing(_connect(self.trajectory_path)) as con:
             wkts = [r[0] for r in con.execute("SELECT wkt FROM geometry")]
         return shapely.union_all([shapely.from_wkt(w) for w in wkts])
+
+    def walkable_areas(self) -> WalkableAreas:
+        """The walkable area current at each frame, as its changes over time."""
+        import shapely
+
+        with closing(_connect(self.trajectory_path)) as con:
+            fps = float(con.execute("SELECT value FROM metadata WHERE key='fps'").fetchone()[0])
+            wkt = dict(con.execute("SELECT hash, wkt FROM geometry"))
+            rows = con.execute("SELECT frame, geometry_hash FROM frame_data "
+                               "ORDER BY frame").fetchall()
+        if not rows:  # no frame written: the area the run started with
+            return WalkableAreas(np.zeros(1), (self.walkable_area(),))
+        start, hashes = [], []
+        for frame, h in rows:  # a row per frame, once per run (no tick loop)
+            if not hashes or h != hashes[-1]:
+                start.append(frame / fps)
+                hashes.append(h)
+        return WalkableAreas(np.asarray(start, float),
+                             tuple(shapely.from_wkt(wkt[h]) for h in hashes))
 
     def footsteps(self) -> dict[str, np.ndarray]:
         """``footsteps.csv`` as columns: numeric columns as float/int arrays, ``foot``,

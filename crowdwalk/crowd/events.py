@@ -200,14 +200,15 @@ class EventTimeline:
             self.applied.append(AppliedEvent(float(t), e.action, target, changed,
                                              time.perf_counter() - w0))
 
-    def _options(self, i: int, ahead: list[str]) -> list[tuple] | None:
+    def _options(self, i: int, stops: list[str]) -> list[tuple] | None:
         """The destination sequences walker ``i`` may take on (None: it keeps its
         destinations): one per exit of its group's exit choice, after the ordered
-        destinations still ahead of it (``ahead``: its route's nodes from the one passed)."""
+        destinations still ahead of it (``stops``: its route's stops still to visit, the
+        last its exit)."""
         g = self.groups[self.pop.group[i]]
         if g.exit_choice is None or self.destinations[i] != self.pop.destinations[i]:
             return None  # no choice, or redirected: it goes where it was sent
-        rest = tuple(d for d in g.destinations if d in ahead[1:])
+        rest = tuple(stops[:-1])
         return [(*rest, e) for e in g.exit_choice.among]
 
     def _reroute(self, sim, t: float, *, through, before) -> None:
@@ -223,15 +224,16 @@ class EventTimeline:
             nodes, at = routes.nodes_of(st.route[i])
             if not nodes:
                 continue
-            passed = max(int(np.searchsorted(at, st.progress[i], side="right")) - 1, 0)
-            ahead = nodes[passed:]
-            options = self._options(int(i), ahead)
+            passed = routes.passed(st.route[i], st.progress[i])
+            ahead = nodes[max(passed, 0):]
+            stops = routes.stops_ahead(st.route[i], passed) or [nodes[-1]]
+            options = self._options(int(i), stops)
             if through is not None:
                 if not any(frozenset(p) == through for p in zip(ahead[:-1], ahead[1:],
                                                                    strict=True)):
                     continue
-            elif _best_cost(routes.graph, ahead[0], options or [(nodes[-1],)]) >= \
-                    _best_cost(before, ahead[0], options or [(nodes[-1],)]) - 1e-6:
+            elif _best_cost(routes.graph, ahead[0], options or [tuple(stops)]) >= \
+                    _best_cost(before, ahead[0], options or [tuple(stops)]) - 1e-6:
                 continue  # the opened corridor shortens nothing for this walker
             if options is None:
                 follow.append(i)
@@ -251,7 +253,7 @@ class EventTimeline:
             start = pop.route_start[i]
             origin = str(pop.origin[i])
             start = None if np.isnan(start).any() else tuple(start)
-            options = self._options(int(i), [origin, *self.destinations[i]]) or \
+            options = self._options(int(i), list(self.destinations[i])) or \
                 [tuple(self.destinations[i])]
             key = (origin, tuple(options), start)
             if key not in made:
@@ -317,14 +319,16 @@ class EventTimeline:
         if way is None:
             return
         v, dests = way
-        seq, here = [v], v
+        seq, here, stops = [v], v, []
         for d in dests:
             if d != here:
                 seq += graph.route(here, d)[1:]
                 here = d
+            stops.append(len(seq) - 1)  # every destination stays a stop of the new route
         if keep_same and seq == nodes[passed + 1:]:
             return
-        routes.assign(st, i, routes.add(np.vstack([walks[v], graph.raw_path(seq)[1:]]), seq))
+        routes.assign(st, i, routes.add(np.vstack([walks[v], graph.raw_path(seq)[1:]]), seq,
+                                        stops))
         st.progress_time[i] = t
 
     def summary(self) -> list[dict]:

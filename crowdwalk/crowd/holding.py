@@ -244,7 +244,9 @@ class WaitingAreas:
         spot, graph, rest = a.slots[s], routes.graph, nodes[j:]
         to_spot = graph.shortest_walk(st.pos1[i], spot)
         on = graph.shortest_walk(spot, graph.node_xy(rest[1]))
-        rid = routes.add(np.vstack([to_spot, on[1:], graph.raw_path(rest[1:])[1:]]), rest)
+        stops = [k - j for k in routes.stops_of(st.route[i]) if k > j]
+        rid = routes.add(np.vstack([to_spot, on[1:], graph.raw_path(rest[1:])[1:]]), rest,
+                         stops)
         table = routes.table
         vs = table.xy[table.start[rid]:table.stop[rid] + 1]
         at = int(np.argmin(np.linalg.norm(vs[:len(to_spot) + 1] - spot, axis=1)))

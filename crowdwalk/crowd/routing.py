@@ -29,7 +29,9 @@ class Routes:
 
     One polyline per distinct (origin, destinations, start): the smoothed graph paths to
     each destination in turn, concatenated, in one :class:`RouteTable`; with the route
-    nodes' arc lengths along each (for re-routing from the last node passed).
+    nodes' arc lengths along each (for re-routing from the last node passed) and which
+    of them are stops (the destinations, in order, that the route has to visit: a new
+    route made from where a walker stands visits those still ahead).
 
     Parameters
     ----------
@@ -47,6 +49,7 @@ class Routes:
         self.graph = graph
         self.table = RouteTable()
         self._nodes: dict[int, tuple[list[str], np.ndarray]] = {}
+        self._stops: dict[int, np.ndarray] = {}  # per route: its stops' indices in its nodes
         self._edges: dict | None = None
         keys: dict[tuple, int] = {}
         n = len(population)
@@ -71,10 +74,33 @@ class Routes:
         """Route ``rid``'s node names and their global arc lengths along it (k,) [m]."""
         return self._nodes.get(int(rid), ([], np.zeros(0)))
 
-    def add(self, line: np.ndarray, nodes: list[str]) -> int:
-        """Add a route polyline (k, 2) [m] through route ``nodes`` (in order); its id."""
+    def stops_of(self, rid: int) -> np.ndarray:
+        """Route ``rid``'s stops: indices (m,) int into its nodes, increasing; the last is
+        its last node."""
+        nodes, _ = self.nodes_of(rid)
+        return self._stops.get(int(rid), np.array([len(nodes) - 1], dtype=np.int64))
+
+    def stops_ahead(self, rid: int, passed: int) -> list[str]:
+        """The stops of route ``rid`` still to visit by a walker whose last node passed is
+        index ``passed`` of its nodes (-1: none yet), in order."""
+        nodes, _ = self.nodes_of(rid)
+        return [nodes[k] for k in self.stops_of(rid) if k > passed]
+
+    def passed(self, rid: int, progress: float) -> int:
+        """Index into route ``rid``'s nodes of the last node passed at ``progress`` [m]
+        (global arc length). The route's first node counts as passed unless it is a stop
+        not yet reached (-1; a route made on the way may start at a stop)."""
+        nodes, at = self.nodes_of(rid)
+        k = int(np.searchsorted(at, progress, side="right")) - 1
+        return k if k >= 0 or self.stops_of(rid)[0] == 0 else 0
+
+    def add(self, line: np.ndarray, nodes: list[str], stops=None) -> int:
+        """Add a route polyline (k, 2) [m] through route ``nodes`` (in order) that visits
+        the stops ``stops`` (indices into ``nodes``; None: its last node only); its id."""
         rid = self.table.add(line)
         self._remember_nodes(rid, nodes)
+        stops = [len(nodes) - 1] if stops is None or not len(stops) else stops
+        self._stops[rid] = np.unique(np.asarray(stops, dtype=np.int64))
         return rid
 
     def assign(self, state, i: int, rid: int) -> None:
@@ -88,7 +114,7 @@ class Routes:
     def route_of(self, origin: str, destinations: tuple, start) -> int:
         """The route (its id) from ``origin`` (or ``start`` (2,) [m] in its area, None: the
         node) through ``destinations`` in order."""
-        here, parts, nodes = origin, [], [origin]
+        here, parts, nodes, stops = origin, [], [origin], []
         for k, dest in enumerate(destinations):
             if dest == here:
                 continue
@@ -96,11 +122,12 @@ class Routes:
             line = self.graph.path(here, dest, **kw)
             parts.append(line if not parts else line[1:])
             nodes += self.graph.route(here, dest)[1:]
+            stops.append(len(nodes) - 1)
             here = dest
         if not parts:  # already at the destination
             p = self.graph.node_xy(origin) if start is None else np.asarray(start)
             parts = [np.stack([p, p])]
-        return self.add(np.concatenate(parts), nodes)
+        return self.add(np.concatenate(parts), nodes, stops)
 
     def _remember_nodes(self, rid: int, nodes: list[str]) -> None:
         """Store a route's node names and their global arc lengths along it [m]."""
@@ -142,13 +169,16 @@ class Routes:
         of the other nodes joined to the node they passed last (not to nodes behind them),
         each by the shortest walk inside the walkable area
         (:meth:`crowdwalk.routes.RouteGraph.shortest_walk`) plus the queue on the
-        corridor from the node passed to it, then along the route graph to
-        the route's last node, every corridor's cost raised by the time its current
-        occupants (``walkers`` (w, 2) [m]) need to get through it (queue length over a
-        specific flow of 1.3 persons/(s·m), Weidmann 1993; converted to metres at 1.34
-        m/s). Back to the node passed last only when there is no other way. The agent
-        switches (``state``'s route fields) only when that differs from its way on (rare:
-        a Python loop over the blocked agents only)."""
+        corridor from the node passed to it, then along the route graph through **every
+        stop still ahead, in order** (:meth:`stops_ahead`: an intermediate destination is
+        never skipped, however much shorter the way to the last one), every corridor's
+        cost raised by the time its current occupants (``walkers`` (w, 2) [m]) need to get
+        through it (queue length over a specific flow of 1.3 persons/(s·m), Weidmann 1993;
+        converted to metres at 1.34 m/s). The way from the next stop on is the same for
+        every choice, so the choice is by the cost to the next stop. Back to the node
+        passed last only when there is no other way. The agent switches (``state``'s route
+        fields) only when that differs from its way on (rare: a Python loop over the
+        blocked agents only)."""
         import networkx as nx
 
         st = state
@@ -163,36 +193,55 @@ class Routes:
         def against(b, a, data):  # the reversed graph's edge b <- a is a -> b
             return data.get("cost", data.get("length", 1.0)) + extra.get((a, b), 0.0)
 
-        fields: dict[str, tuple[dict, dict]] = {}  # per last node: cost and path to it
+        fields: dict[str, tuple[dict, dict]] = {}  # per stop: cost and path to it
+
+        def field(stop: str) -> tuple[dict, dict]:
+            if stop not in fields:
+                fields[stop] = nx.single_source_dijkstra(g.reverse(copy=False), stop,
+                                                         weight=against)
+            return fields[stop]
+
         for i in blocked:
             st.progress_time[i] = t  # look again only after another ``reroute_after``
-            nodes, at = self._nodes.get(int(st.route[i]), ([], np.zeros(0)))
+            rid = int(st.route[i])
+            nodes, at = self._nodes.get(rid, ([], np.zeros(0)))
             if len(nodes) < 2:
                 continue
-            passed = int(np.searchsorted(at, st.progress[i], side="right")) - 1
-            passed = min(max(passed, 0), len(nodes) - 2)
-            last, ahead = nodes[-1], nodes[passed + 1:]
-            if last not in fields:
-                fields[last] = nx.single_source_dijkstra(g.reverse(copy=False), last,
-                                                         weight=against)
-            cost, paths = fields[last]
+            passed = min(self.passed(rid, st.progress[i]), len(nodes) - 2)
+            stops = self.stops_ahead(rid, passed)
+            if not stops:
+                continue
+            base, ahead = nodes[max(passed, 0)], nodes[passed + 1:]
+            cost, paths = field(stops[0])
             here = st.pos1[i]
             behind = set(nodes[:passed + 1])
-            near = [v for v in dict.fromkeys([ahead[0], *g.successors(nodes[passed])])
+            near = [v for v in dict.fromkeys([ahead[0], *g.successors(base)])
                     if v not in behind and v in cost]
             walks = self.walks_from(here, near)
-            if not walks and nodes[passed] in cost:  # no way on but back
-                walks = self.walks_from(here, [nodes[passed]])
+            if not walks and passed >= 0 and base in cost:  # no way on but back
+                walks = self.walks_from(here, [base])
             if not walks:
                 continue
             # the walk to v runs along the corridor from the node passed: its queue counts
             best = min(walks, key=lambda v: _length(walks[v])
-                       + extra.get((nodes[passed], v), 0.0) + cost[v])
-            alt = list(reversed(paths[best]))
-            if alt == ahead:
+                       + extra.get((base, v), 0.0) + cost[v])
+            alt, at_stop = list(reversed(paths[best])), [None]
+            at_stop[0] = len(alt) - 1
+            ok = True
+            for prev, stop in zip(stops[:-1], stops[1:], strict=True):
+                c, p = field(stop)
+                if prev not in c:
+                    ok = False
+                    break
+                alt += list(reversed(p[prev]))[1:]
+                at_stop.append(len(alt) - 1)
+            # the same nodes on are the same way only while the corridor from the node
+            # passed to the next is open (a door shut in it leaves the old line blocked)
+            if not ok or (alt == ahead and (passed < 0 or g.has_edge(base, ahead[0]))):
                 continue
             self.assign(st, i, self.add(np.vstack([walks[best],
-                                                   self.graph.raw_path(alt)[1:]]), alt))
+                                                   self.graph.raw_path(alt)[1:]]), alt,
+                                        at_stop))
             st.reroutes[i] += 1
 
 

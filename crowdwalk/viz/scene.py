@@ -53,7 +53,10 @@ class Scene:
         Route graph (``graph`` with node attributes ``x``, ``y`` or ``pos`` [m]) and
         walkable area.
     walkable_area : shapely geometry, optional
-        Overrides ``routes.walkable_area`` [m].
+        Overrides ``routes.walkable_area`` [m]: everywhere walkable at some time.
+    walkable_areas : crowdwalk.record.WalkableAreas, optional
+        The walkable area over time (doors shut by events): the view outlines the one
+        current at the time shown and draws what is shut then as walls.
     poses : PoseSource, optional
         Agents' joint positions per output frame.
     footsteps : Footsteps, optional
@@ -76,6 +79,7 @@ class Scene:
     terrain: object | None = None
     routes: object | None = None
     walkable_area: object | None = None
+    walkable_areas: object | None = None
     poses: PoseSource | None = None
     footsteps: Footsteps = field(default_factory=Footsteps.empty)
     walkers: Walkers | None = None
@@ -138,7 +142,8 @@ class Scene:
         )
         options.setdefault("title", _run_title(run))
         return cls(
-            terrain=terrain, routes=routes, walkable_area=run.walkable_area(), poses=poses,
+            terrain=terrain, routes=routes, walkable_area=run.walkable_area(),
+            walkable_areas=run.walkable_areas(), poses=poses,
             footsteps=footsteps, walkers=Walkers.from_run(run, footsteps), **options,
         )
 

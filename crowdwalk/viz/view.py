@@ -24,6 +24,7 @@ from crowdwalk.viz.playback import Playback
 from crowdwalk.viz.sources import PoseTimeline
 from crowdwalk.viz.walkers import Walkers, walker_status
 from crowdwalk.viz.world_meshes import (
+    closed_walls,
     flat_ground,
     outline_lines,
     route_lines,
@@ -43,6 +44,7 @@ UNKNOWN_COLOR = np.array([110, 110, 110], dtype=np.uint8)
 HIGHLIGHT_COLOR = "#ff1493"
 ROUTE_COLOR = "#6a3d9a"
 WALKABLE_COLOR = "#37474f"
+CLOSED_COLOR = "#b71c1c"  # a shut door, as a wall
 FADE_SECONDS = 8.0  # footprints fade to light grey over this age [s]
 ENERGY_CMAP = "plasma"
 ENERGY_RANGE = (0.0, 0.85)  # of the colour map: its light yellow end would vanish
@@ -179,6 +181,7 @@ class SceneView:
         if scene.walkable_area is not None and not scene.walkable_area.is_empty:
             outline = outline_lines(scene.walkable_area, scene.terrain)
             if outline.n_points:
+                self._area_index = None
                 self._add("walkable area", outline, color=WALKABLE_COLOR, line_width=3)
                 if bounds is None:
                     bounds = np.array(outline.bounds)
@@ -292,6 +295,9 @@ class SceneView:
             entries.append(("followed walker", pv.Color(HIGHLIGHT_COLOR).float_rgb))
         if "walkable area" in self.actors:
             entries.append(("walkable area", pv.Color(WALKABLE_COLOR).float_rgb))
+        areas = self.scene.walkable_areas
+        if areas is not None and len(areas.areas) > 1:
+            entries.append(("closed (events)", pv.Color(CLOSED_COLOR).float_rgb))
         if "route edges" in self.actors:
             entries.append(("route graph", pv.Color(ROUTE_COLOR).float_rgb))
         for i, (label, color) in enumerate(entries):
@@ -382,9 +388,31 @@ class SceneView:
         b = np.asarray(self.bounds, dtype=float) + [-1.0, 1.0, -1.0, 1.0, -0.5, 2.5]
         self.renderer.ResetCameraClippingRange(*b)
 
+    def _show_area(self, t: float) -> None:
+        """Outline the walkable area current at time ``t`` [s] and draw what is shut then
+        (a closed door) as a wall; rebuilt only when the area changes."""
+        areas = self.scene.walkable_areas
+        if areas is None or len(areas.areas) < 2 or "walkable area" not in self.actors:
+            return
+        k = areas.index(t)
+        if k == getattr(self, "_area_index", None):
+            return
+        self._area_index = k
+        terrain = self.scene.terrain
+        self._add("walkable area", outline_lines(areas.at(t), terrain), color=WALKABLE_COLOR,
+                  line_width=3)
+        walls = closed_walls(self.scene.walkable_area, areas.at(t), terrain)
+        if walls.n_points:
+            self._add("closed", walls, color=CLOSED_COLOR, ambient=0.3)
+        elif "closed" in self.actors:
+            self.plotter.subplot(0, self._subplot)
+            self.plotter.remove_actor(self.actors.pop("closed"), render=False)
+
     def _update(self, t: float) -> None:
-        """Move this view's walkers, footprints, highlight and texts to time ``t``."""
+        """Move this view's walkers, footprints, highlight, walkable area and texts to
+        time ``t``."""
         self._time = t
+        self._show_area(t)
         if self.bodies is not None and t != self._shown_time:
             self._show_time(t)
         if self.footprints is not None:

@@ -17,6 +17,7 @@ __all__ = [
     "flat_ground",
     "terrain_edges",
     "outline_lines",
+    "closed_walls",
     "route_lines",
     "node_positions",
     "polylines",
@@ -120,6 +121,28 @@ def outline_lines(geometry, terrain=None, lift: float = 0.03, spacing: float = 0
             if len(xy) >= 2:
                 rings.append(_drape(_densify(xy, spacing), terrain, lift))
     return polylines(rings)
+
+
+def closed_walls(everywhere, now, terrain=None, height: float = 1.2,
+                 min_area: float = 1e-3) -> pv.PolyData:
+    """What is walkable at some time of a run but not ``now`` (shut doors: ``everywhere``
+    minus ``now``, shapely geometries [m]) as solid walls ``height`` [m] tall standing on
+    the ground; pieces smaller than ``min_area`` [m²] (slivers of the difference) left out.
+    """
+    import shapely
+
+    parts = [p for p in shapely.get_parts(shapely.difference(everywhere, now))
+             if p.geom_type == "Polygon" and p.area >= min_area]
+    walls = pv.PolyData()
+    for part in parts:
+        base = 0.0
+        if terrain is not None:
+            xy = np.asarray(part.representative_point().coords)[:, :2]
+            base = float(np.asarray(terrain.height(xy)).ravel()[0])
+        top = flat_ground(part, z=base)
+        if top.n_points:
+            walls = walls.append_polydata(top.extrude((0.0, 0.0, height), capping=True))
+    return walls
 
 
 def node_positions(graph) -> dict:
