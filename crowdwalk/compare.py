@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from crowdwalk.errors import invalid
+from crowdwalk.steps import FootstepTable
 
 __all__ = ["check_planners", "compare_planners", "terrain_table", "paired_trips", "BOOTSTRAP"]
 
@@ -55,13 +56,13 @@ def _ratio_draws(energy, length, agent, rng) -> np.ndarray:
         return e[pick].sum(axis=1) / n[pick].sum(axis=1)
 
 
-def terrain_table(steps: dict[str, np.ndarray], *, by_direction: bool = False,
+def terrain_table(steps: FootstepTable, *, by_direction: bool = False,
                   draws: bool = False) -> dict[str, dict]:
     """Footstep statistics per terrain type (optionally per step direction).
 
     Parameters
     ----------
-    steps : dict of columns
+    steps : crowdwalk.steps.FootstepTable
         ``footsteps.csv`` as read by ``record.Run.footsteps``.
     by_direction : bool
         Split each terrain type by the step's height change: ``"<type> up"`` and
@@ -79,31 +80,31 @@ def terrain_table(steps: dict[str, np.ndarray], *, by_direction: bool = False,
     """
     names = _kind_names()
     out: dict[str, dict] = {}
-    kind = np.asarray(steps["kind"]).astype(int)
+    kind = np.asarray(steps.kind).astype(int)
     direction = np.zeros(kind.size, dtype=int)  # 0 level, 1 up, 2 down
     if by_direction:
-        rise = np.asarray(steps["step_height"], dtype=float)
+        rise = np.asarray(steps.step_height, dtype=float)
         direction = np.where(rise > LEVEL_RISE, 1, np.where(rise < -LEVEL_RISE, 2, 0))
     suffix = ("", " up", " down")
     groups = sorted(set(zip(kind.tolist(), direction.tolist(), strict=True)))
     rng = np.random.default_rng(0)
-    agent = np.asarray(steps["agent"])
+    agent = np.asarray(steps.agent)
     for code, way in groups:
         m = (kind == code) & (direction == way)
         label = names.get(code, str(code)) + suffix[way]
-        length = float(steps["step_length"][m].sum())
-        boot = _ratio_draws(steps["energy"][m], steps["step_length"][m], agent[m], rng)
+        length = float(steps.step_length[m].sum())
+        boot = _ratio_draws(steps.energy[m], steps.step_length[m], agent[m], rng)
         if np.unique(agent[m]).size < MIN_AGENTS_CI:
             boot = np.full(BOOTSTRAP, np.nan)
         row = {
             "footholds": int(m.sum()),
             "agents": int(np.unique(agent[m]).size),
-            "energy_per_metre": float(steps["energy"][m].sum() / length) if length > 0
+            "energy_per_metre": float(steps.energy[m].sum() / length) if length > 0
             else float("nan"),
             "ci": (tuple(float(x) for x in np.percentile(boot, [2.5, 97.5]))
                    if np.isfinite(boot).all() else (float("nan"), float("nan"))),
-            "mean_step_length": float(steps["step_length"][m].mean()),
-            "on_obstacle": int(steps["on_obstacle"][m].sum()),
+            "mean_step_length": float(steps.step_length[m].mean()),
+            "on_obstacle": int(steps.on_obstacle[m].sum()),
         }
         if draws:
             row["draws"] = boot

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from crowdwalk.body import LEG_JOINTS, PROPORTIONS
+from crowdwalk.steps import FootstepTable
 
 __all__ = ["CycleKind", "GaitFigures", "WalkerTrack", "cycle_curves", "edge_clearance",
            "foot_points", "gait_figures", "heel_slides", "load_tracks", "references",
@@ -153,12 +154,12 @@ def cycle_curves(values: np.ndarray, strikes: np.ndarray) -> np.ndarray:
     return np.asarray(out).reshape(-1, SAMPLES, values.shape[1])
 
 
-def _cycle_kinds(strike_times: np.ndarray, steps: dict[str, np.ndarray]) -> list[CycleKind]:
+def _cycle_kinds(strike_times: np.ndarray, steps: FootstepTable) -> list[CycleKind]:
     """Level / stairs_up / stairs_down / other for each cycle, from the step heights of the
     footholds placed within it (``footsteps.csv`` rows of this agent)."""
     kinds = []
     for t0, t1 in zip(strike_times[:-1], strike_times[1:], strict=True):
-        h = steps["step_height"][(steps["time"] > t0 - 0.02) & (steps["time"] <= t1 + 0.02)]
+        h = steps.step_height[(steps.time > t0 - 0.02) & (steps.time <= t1 + 0.02)]
         if h.size and np.all(np.abs(h) < 0.02):
             kinds.append(LEVEL)
         elif h.size and np.all(h > 0.08):
@@ -345,7 +346,7 @@ class GaitFigures:
     stances_across_edge: int = 0
 
 
-def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed: float,
+def gait_figures(track: WalkerTrack, steps: FootstepTable, *, free_speed: float,
                  ground, skip_cycles: int = 2) -> GaitFigures:
     """Measure one walker.
 
@@ -353,7 +354,7 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
     ----------
     track : WalkerTrack
         The walker's stored poses.
-    steps : dict of (n,) arrays
+    steps : crowdwalk.steps.FootstepTable
         This walker's ``footsteps.csv`` rows (columns ``time``, ``step_length``,
         ``step_height``).
     free_speed : float
@@ -383,10 +384,10 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
         duration = float(np.sum(track.time[b] - track.time[a]))
         speed = float(np.sum(np.linalg.norm(pelvis[b, :2] - pelvis[a, :2], axis=1)) / duration)
         cadence = 120.0 * level.size / duration
-        in_level = np.zeros(steps["time"].shape, bool)
+        in_level = np.zeros(steps.time.shape, bool)
         for t0, t1 in zip(track.time[a], track.time[b], strict=True):
-            in_level |= (steps["time"] > t0 + 0.02) & (steps["time"] <= t1 + 0.02)
-        step_length = float(np.median(steps["step_length"][in_level]))
+            in_level |= (steps.time > t0 + 0.02) & (steps.time <= t1 + 0.02)
+        step_length = float(np.median(steps.step_length[in_level]))
         mean_curve = curves[level].mean(axis=0).T
         ref, _ = winter_at(cadence)
         rms, r = (np.array(v) for v in zip(*(_rms_r(mean_curve[j], ref[j]) for j in range(3)),
@@ -415,7 +416,7 @@ def gait_figures(track: WalkerTrack, steps: dict[str, np.ndarray], *, free_speed
 
     slides, turns, heel_turns = (np.concatenate(v) for v in zip(
         *(heel_slides(track, s) for s in (0, 1)), strict=True))
-    spins = np.abs(steps["spin"]) if "spin" in steps else np.zeros(0)
+    spins = np.abs(steps.spin)  # NaN (no spin turn) in runs written before MetaGait
     toe, lift = (np.concatenate(v) for v in zip(*(swing_clearance(track, s, ground)
                                                   for s in (0, 1)), strict=True))
     over, across = (np.concatenate(v) for v in zip(*(edge_clearance(track, s, ground)
@@ -476,7 +477,7 @@ def run_figures(run_dir: str | Path) -> list[GaitFigures]:
     poses.close()
     out = []
     for agent, track in sorted(tracks.items()):
-        mine = {k: v[steps["agent"] == agent] for k, v in steps.items()}
+        mine = steps.of_agent(agent)
         out.append(gait_figures(track, mine, free_speed=float(free.get(agent, np.nan)),
                                 ground=terrain.height))
     return out

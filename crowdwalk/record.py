@@ -30,11 +30,12 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.errors import invalid
-from crowdwalk.steps import FOOTSTEP_COLUMNS, StepBatch
+from crowdwalk.errors import InputError, invalid
+from crowdwalk.steps import FOOTSTEP_COLUMNS, FootstepTable, StepBatch
 
 __all__ = [
     "FOOTSTEP_COLUMNS",
+    "FootstepTable",
     "RunWriter",
     "Run",
     "Trajectories",
@@ -233,14 +234,16 @@ class RunWriter:
 
     # --- footsteps ------------------------------------------------------------------
 
-    def write_footsteps(self, rows: dict[str, np.ndarray]) -> None:
+    def write_footsteps(self, rows) -> None:
         """Append foot placements.
 
         Parameters
         ----------
-        rows : dict of column name -> (k,) array
-            Every column of :data:`FOOTSTEP_COLUMNS` (units there).
+        rows : FootstepTable, or a mapping of column name -> (k,) array
+            Every column of :data:`FOOTSTEP_COLUMNS` (units in :class:`FootstepTable`).
         """
+        if isinstance(rows, FootstepTable):
+            rows = rows.columns()
         missing = [c for c in FOOTSTEP_COLUMNS if c not in rows]
         if missing:
             raise invalid("RunWriter", "footsteps", f"a table with columns {missing}", sorted(rows))
@@ -556,24 +559,20 @@ class Run:
         return WalkableAreas(np.asarray(start, float),
                              tuple(shapely.from_wkt(wkt[h]) for h in hashes))
 
-    def footsteps(self) -> dict[str, np.ndarray]:
-        """``footsteps.csv`` as columns: numeric columns as float/int arrays, ``foot``,
-        ``planner`` and ``group`` as string arrays. Rows of a partly written last line
-        (an interrupted run) are dropped."""
+    def footsteps(self) -> FootstepTable:
+        """``footsteps.csv`` as a :class:`~crowdwalk.steps.FootstepTable`. Rows of a partly
+        written last line (an interrupted run) are dropped. Raises
+        :class:`~crowdwalk.errors.InputError` (``footsteps.csv:1``) when a column is
+        missing."""
         with open(self.footsteps_path, newline="") as fh:
             reader = csv.reader(fh)
-            header = next(reader)
+            header = next(reader, [])
             rows = [r for r in reader if len(r) == len(header)]
-        cols = list(zip(*rows, strict=True)) if rows else [() for _ in header]
-        out: dict[str, np.ndarray] = {}
-        for name, values in zip(header, cols, strict=True):
-            if name in ("foot", "planner", "group"):
-                out[name] = np.array(values, dtype=str)
-            elif name in ("agent", "step", "kind", "on_obstacle"):
-                out[name] = np.array(values, dtype=float).astype(int)
-            else:
-                out[name] = np.array(values, dtype=float)
-        return out
+        try:
+            return FootstepTable.from_text(header, rows)
+        except ValueError as exc:
+            raise InputError(f"{self.footsteps_path}:1: footsteps header must hold every "
+                             f"column of crowdwalk.steps.FOOTSTEP_COLUMNS; {exc}.") from None
 
     def poses(self) -> Poses | None:
         """The pose reader, or ``None`` when the run stored no poses."""

@@ -30,8 +30,8 @@ def main(run_dir: str) -> None:
     steps = run.footsteps()
     rows = []  # (rise, measured double support fraction, Table 1 T2)
     for agent, track in tracks.items():
-        mine = np.flatnonzero(steps["agent"] == agent)
-        ends = steps["time"][mine]
+        mine = np.flatnonzero(steps.agent == agent)
+        ends = steps.time[mine]
         leg = float(normal_mode.leg_length_from_height(track.body_height))
         both = track.contact.all(axis=1)
         for k in range(1, mine.size):
@@ -39,7 +39,7 @@ def main(run_dir: str) -> None:
             inside = (track.time >= t0) & (track.time < t1)
             if t1 - t0 <= 0 or inside.sum() < 6 or t0 < track.time[0]:
                 continue
-            h = float(steps["step_height"][mine[k]])
+            h = float(steps.step_height[mine[k]])
             rows.append((h, float(both[inside].mean()),
                          float(phase_fractions(h, leg)[1])))
     rows = np.array(rows)

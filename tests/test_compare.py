@@ -50,13 +50,13 @@ def test_runs_use_the_same_agents_and_differ_only_in_planner(report):
 
 def test_fixed_walkers_step_on_the_obstacle_planned_do_not(report):
     steps = {p: open_run(report.parent / p).footsteps() for p in (PLANNED, "fixed")}
-    assert steps[PLANNED]["on_obstacle"].sum() == 0
+    assert steps[PLANNED].on_obstacle.sum() == 0
     # at least one fixed walker lands on it (whether both do depends on where their
     # neutral steps fall: with the normal-mode steps one of the two strides it by chance)
-    assert steps["fixed"]["on_obstacle"].sum() >= 1
+    assert steps["fixed"].on_obstacle.sum() >= 1
     text = report.read_text()
     fixed_row = next(line for line in text.splitlines() if line.startswith("| fixed | 2/2"))
-    assert fixed_row.split("|")[6].strip() == str(steps["fixed"]["on_obstacle"].sum())
+    assert fixed_row.split("|")[6].strip() == str(steps["fixed"].on_obstacle.sum())
 
 
 def test_cli_rejects_unknown_planner_with_exit_2(tmp_path):
@@ -99,12 +99,15 @@ def test_paired_trips_only_pairs_agents_that_arrived_in_both_runs():
 
 def test_terrain_rows_split_by_direction_keep_the_totals():
     from crowdwalk.compare import terrain_table
+    from crowdwalk.steps import FOOTSTEP_COLUMNS, FootstepTable
 
-    steps = {"kind": np.array([0, 0, 2, 2, 2, 0]), "agent": np.array([0, 0, 0, 1, 1, 1]),
-             "step_length": np.array([0.6, 0.6, 0.3, 0.3, 0.3, 0.6]),
-             "step_height": np.array([0.0, 0.0, 0.17, 0.17, -0.17, -0.17]),
-             "energy": np.array([4.0, 4.0, 9.5, 9.5, 4.5, 6.0]),
-             "on_obstacle": np.zeros(6, dtype=int)}
+    cols = {c: np.zeros(6) for c in FOOTSTEP_COLUMNS}
+    cols.update(kind=np.array([0, 0, 2, 2, 2, 0]), agent=np.array([0, 0, 0, 1, 1, 1]),
+                step_length=np.array([0.6, 0.6, 0.3, 0.3, 0.3, 0.6]),
+                step_height=np.array([0.0, 0.0, 0.17, 0.17, -0.17, -0.17]),
+                energy=np.array([4.0, 4.0, 9.5, 9.5, 4.5, 6.0]),
+                on_obstacle=np.zeros(6, dtype=int))
+    steps = FootstepTable(**cols)
     split = terrain_table(steps, by_direction=True)
     assert list(split) == ["flat", "flat down", "stairs up", "stairs down"]
     assert split["stairs up"]["energy_per_metre"] == pytest.approx(19 / 0.6)

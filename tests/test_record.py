@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from crowdwalk.record import FOOTSTEP_COLUMNS, RunWriter, open_run
+from crowdwalk.errors import InputError
+from crowdwalk.record import FOOTSTEP_COLUMNS, FootstepTable, RunWriter, open_run
 
 SQUARE = "POLYGON ((0 0, 10 0, 10 5, 0 5, 0 0))"
 
@@ -63,9 +64,9 @@ def test_round_trip(tmp_path):
     assert run.fps == 10.0
     assert run.walkable_area().area == pytest.approx(50.0)
     steps = run.footsteps()
-    assert steps["agent"].tolist() == [0, 1, 2]
-    assert steps["foot"].tolist() == ["left", "right", "left"]
-    np.testing.assert_allclose(steps["x"], [1, 1.5, 2])
+    assert steps.agent.tolist() == [0, 1, 2]
+    assert steps.foot.tolist() == ["left", "right", "left"]
+    np.testing.assert_allclose(steps.x, [1, 1.5, 2])
     assert run.summary["agents"]["3"]["distance"] == 2.5
     poses = run.poses()
     assert poses.names == ["root", "l_hip", "l_knee"]
@@ -99,6 +100,36 @@ def test_footsteps_need_every_column(tmp_path):
     with pytest.raises(ValueError, match="RunWriter.footsteps must be"):
         w.write_footsteps(rows)
     w.close()
+
+
+def test_footsteps_read_back_as_a_typed_frozen_table(tmp_path):
+    _write(tmp_path)
+    steps = open_run(tmp_path).footsteps()
+    assert isinstance(steps, FootstepTable) and len(steps) == 3
+    assert steps.agent.dtype.kind == "i" and steps.kind.dtype.kind == "i"
+    assert steps.foot.dtype.kind == "U" and steps.energy.dtype.kind == "f"
+    with pytest.raises(AttributeError):
+        steps.x = np.zeros(3)  # frozen
+    one = steps.of_agent(1)
+    assert len(one) == 1 and one.x.tolist() == [1.5] and one.foot.tolist() == ["right"]
+    with pytest.raises(ValueError, match="FootstepTable.x"):
+        FootstepTable(**{**steps.columns(), "x": np.zeros(2)})  # ragged
+
+
+def test_footsteps_of_old_and_broken_files(tmp_path):
+    _write(tmp_path)
+    path = tmp_path / "footsteps.csv"
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    keep = [k for k, c in enumerate(header) if c not in ("toe_out", "spin")]
+    path.write_text("\n".join(",".join(line.split(",")[k] for k in keep)
+                               for line in lines) + "\n")
+    steps = open_run(tmp_path).footsteps()  # written before MetaGait's columns: NaN
+    assert np.isnan(steps.spin).all() and np.isnan(steps.toe_out).all()
+    np.testing.assert_allclose(steps.x, [1, 1.5, 2])
+    path.write_text(lines[0].replace("energy,", "") + "\n")
+    with pytest.raises(InputError, match=r"footsteps.csv:1: .*'energy'"):
+        open_run(tmp_path).footsteps()
 
 
 def test_bad_fps_is_rejected(tmp_path):
@@ -145,7 +176,7 @@ def test_killed_writer_leaves_readable_files(tmp_path):
     assert traj.frame.size >= 30
     assert np.array_equal(traj.frame, np.arange(traj.frame.size))
     assert run.poses().frames.size >= 30
-    assert run.footsteps()["agent"].size >= 30
+    assert run.footsteps().agent.size >= 30
     pedpy = pytest.importorskip("pedpy")
     assert len(pedpy.load_trajectory_from_jupedsim_sqlite(
         trajectory_file=tmp_path / "trajectories.sqlite").data) >= 30
@@ -192,7 +223,7 @@ def test_killed_crowdwalk_run_stays_readable(tmp_path):
     traj = run.trajectories()
     assert traj.frame.max() >= 20 and len(np.unique(traj.id)) >= 2
     steps = run.footsteps()
-    assert steps["agent"].size > 0 and np.isfinite(steps["x"]).all()
+    assert steps.agent.size > 0 and np.isfinite(steps.x).all()
     pedpy = pytest.importorskip("pedpy")
     data = pedpy.load_trajectory_from_jupedsim_sqlite(
         trajectory_file=tmp_path / "trajectories.sqlite")

@@ -29,7 +29,7 @@ def test_scenario_runs_a_few_seconds(path, tmp_path):
     traj = run.trajectories()
     assert traj.frame.size > 0 and np.isfinite(traj.x).all() and np.isfinite(traj.z).all()
     steps = run.footsteps()
-    assert steps["agent"].size > 0 and np.isfinite(steps["energy"]).all()
+    assert steps.agent.size > 0 and np.isfinite(steps.energy).all()
     assert summary["max_overlap_m"] <= 0.01
     if poses:
         stored = run.poses()

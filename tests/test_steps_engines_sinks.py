@@ -54,9 +54,9 @@ def test_a_sink_sees_every_footstep_the_run_folder_holds(tmp_path):
                            overrides=RunOverrides(duration=4.0, max_agents=6, poses=True))
     assert rec.calls == ["begin", "end"] and rec.summary is summary
     steps = StepBatch.concat(rec.batches)
-    table = open_run(tmp_path).footsteps()
+    table = open_run(tmp_path).footsteps().columns()
     assert list(table) == list(FOOTSTEP_COLUMNS)
-    cols = steps.footstep_columns()
+    cols = steps.footstep_columns().columns()
     assert len(steps) == table["agent"].size > 20
     for name in FOOTSTEP_COLUMNS:
         if cols[name].dtype.kind == "f":

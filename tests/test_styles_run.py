@@ -110,9 +110,9 @@ def _measure(name, track, run, agent):
     if name == "knee_impact":  # at the heel strikes of footsteps.csv, extrapolated from
         # the two frames before each (terminal swing is linear in the knee angle)
         steps = run.footsteps()
-        mine = (steps["agent"] == agent) & (steps["time"] > times[0] + 1.5)
+        mine = (steps.agent == agent) & (steps.time > times[0] + 1.5)
         out = []
-        for t, foot in zip(steps["time"][mine], steps["foot"][mine], strict=True):
+        for t, foot in zip(steps.time[mine], steps.foot[mine], strict=True):
             i = np.searchsorted(times, t) - 1
             if i < 1 or i + 1 >= times.size:
                 continue
@@ -193,9 +193,9 @@ def _measure(name, track, run, agent):
         return float(np.mean(out))
     if name == "stride_width":
         steps = run.footsteps()
-        mine = steps["agent"] == agent
-        xy = np.stack([steps["x"][mine], steps["y"][mine]], axis=1)[3:]
-        h = steps["heading"][mine][3:]
+        mine = steps.agent == agent
+        xy = np.stack([steps.x[mine], steps.y[mine]], axis=1)[3:]
+        h = steps.heading[mine][3:]
         d = np.diff(xy, axis=0)
         return float(np.median(np.abs(-np.sin(h[1:]) * d[:, 0] + np.cos(h[1:]) * d[:, 1])))
     raise KeyError(name)
@@ -278,8 +278,8 @@ def test_locked_and_normal_mode_reach_the_steps(lanes):
     assert base["cadence_steps_per_s"] == pytest.approx(float(expected), rel=0.08)
     # proud: velocity 4 km/h locked, step length 0.75 m held by the planned footholds
     proud = agents[names["elevation_angles-proud"]]
-    mine = (steps["agent"] == names["elevation_angles-proud"]) & (steps["step"] > 3)
-    assert np.median(steps["step_length"][mine]) == pytest.approx(0.75, abs=0.04)
+    mine = (steps.agent == names["elevation_angles-proud"]) & (steps.step > 3)
+    assert np.median(steps.step_length[mine]) == pytest.approx(0.75, abs=0.04)
     assert proud["free_speed_m_s"] == pytest.approx(1.11)
     assert "styles" in summary and summary["styles"]["marching"]["agents"] == 1
 

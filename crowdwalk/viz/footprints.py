@@ -158,11 +158,16 @@ class Footsteps:
 
     @classmethod
     def from_table(cls, table) -> Footsteps:
-        """From a mapping of columns (a pandas DataFrame or dict of arrays).
+        """From a :class:`~crowdwalk.steps.FootstepTable` (``Run.footsteps()``) or a
+        mapping of columns (a pandas DataFrame or dict of arrays).
 
         Needs the columns ``agent, time, x, y, z, energy, planner``; uses ``heading``
         [rad], ``group`` and ``step_length`` [m] when present.
         """
+        from crowdwalk.steps import FootstepTable
+
+        if isinstance(table, FootstepTable):
+            table = table.columns()
         needed = ("agent", "time", "x", "y", "z", "energy", "planner")
         missing = [c for c in needed if c not in table]
         if missing:

@@ -11,7 +11,7 @@ from planners.energy import step_energy
 def _energy_to(steps, x):
     """Summed footstep energy [J/kg] up to the point where the footholds pass ``x`` [m]
     (the step across ``x`` pro rata): the same stretch of a route walked along +x."""
-    return float(np.interp(x, steps["x"], np.cumsum(steps["energy"])))
+    return float(np.interp(x, steps.x, np.cumsum(steps.energy)))
 
 
 @pytest.mark.parametrize("scenario", ["rimea1_corridor", "stairs_up_down"])
@@ -21,7 +21,7 @@ def test_lone_planned_walker_spends_no_more_than_the_fixed_one_on_the_same_route
     steps = {p: r[1].footsteps() for p, r in runs.items()}
     for p, (summary, _) in runs.items():
         assert summary["agents_arrived"] == 1, p
-    end = min(float(s["x"].max()) for s in steps.values())
+    end = min(float(s.x.max()) for s in steps.values())
     planned, fixed = (_energy_to(steps[p], end) for p in ("best_first_multistart", "fixed"))
     assert planned <= fixed * (1 + 1e-9)
     if scenario == "rimea1_corridor":  # level ground: the neutral step is the optimum
@@ -38,13 +38,13 @@ def test_every_footstep_is_charged_eq_4_of_the_step_taken(run_of, planner):
     agent = summary["agents"][0]
     cfg = PlannerConfig(n_steps=3, min_step_ratio=0.15)
     leg = Leg.from_body_height(round(agent["body_height_m"] / 0.02) * 0.02)
-    L, H = steps["step_length"], steps["step_height"]
+    L, H = steps.step_length, steps.step_height
     zero = np.zeros_like(L)
     summit = np.maximum(H, 0) + leg.ankle_height + 0.75 * cfg.swing_lift
     speed = round(agent["free_speed_m_s"] / 0.05) * 0.05
     expected = step_energy(zero, zero, L, H, summit, leg, speed, cfg)[3]
-    assert np.allclose(steps["energy"], expected, rtol=2e-3)
-    assert agent["energy_J_per_kg"] == pytest.approx(float(steps["energy"].sum()), rel=1e-6)
+    assert np.allclose(steps.energy, expected, rtol=2e-3)
+    assert agent["energy_J_per_kg"] == pytest.approx(float(steps.energy.sum()), rel=1e-6)
 
 
 def test_steps_the_planner_did_not_plan_are_charged_like_planned_ones():

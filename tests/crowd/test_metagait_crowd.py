@@ -29,18 +29,18 @@ def corner(tmp_path_factory):
 
 def test_steps_carry_metagait_orientation(corner):
     steps = corner.footsteps()
-    assert np.all(np.isfinite(steps["toe_out"])) and np.all(np.isfinite(steps["spin"]))
+    assert np.all(np.isfinite(steps.toe_out)) and np.all(np.isfinite(steps.spin))
     # round the corner some steps turn more than T: their stance foot spins, and a spin
     # is never more than the turn beyond T of its step
-    turn = np.zeros(steps["agent"].size)
-    for a in np.unique(steps["agent"]):
-        rows = np.flatnonzero(steps["agent"] == a)
-        h = steps["heading"][rows]
+    turn = np.zeros(steps.agent.size)
+    for a in np.unique(steps.agent):
+        rows = np.flatnonzero(steps.agent == a)
+        h = steps.heading[rows]
         turn[rows[1:]] = np.angle(np.exp(1j * np.diff(h)))
-    spun = np.abs(steps["spin"]) > 1e-9
+    spun = np.abs(steps.spin) > 1e-9
     assert spun.sum() >= 2
-    assert np.all(np.abs(steps["spin"]) <= np.abs(turn) + np.radians(30.0))
-    assert np.all(np.sign(steps["spin"][spun]) == np.sign(turn[spun]))
+    assert np.all(np.abs(steps.spin) <= np.abs(turn) + np.radians(30.0))
+    assert np.all(np.sign(steps.spin[spun]) == np.sign(turn[spun]))
 
 
 def test_a_planted_foot_turns_only_on_its_ball(corner):

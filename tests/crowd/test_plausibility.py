@@ -38,8 +38,8 @@ def _measured_range(column: str, speed: float, band: float = 0.13):
 def test_step_length_and_cadence_lie_in_the_measured_range(run_of):
     summary, run = run_of("rimea1_corridor")
     steps = run.footsteps()
-    level = steps["step_length"][2:-2]  # steady walking: drop the start and the stop
-    durations = np.diff(steps["time"])[2:-2]
+    level = steps.step_length[2:-2]  # steady walking: drop the start and the stop
+    durations = np.diff(steps.time)[2:-2]
     lo, hi = _measured_range("StepLength", 1.33)  # [m]
     assert lo <= level.mean() <= hi
     clo, chi = _measured_range("Cadence", 1.33)  # [steps/min]
@@ -60,28 +60,28 @@ def test_every_stair_foothold_rests_fully_on_one_tread(run_of):
 
     summary, steps, terrain = _stair_run(run_of)
     leg = Leg.from_body_height(summary["agents"][0]["body_height_m"])
-    xy = np.column_stack([steps["x"], steps["y"]])
-    d = np.column_stack([np.cos(steps["heading"]), np.sin(steps["heading"])])
-    on_stairs = steps["kind"] == 2
+    xy = np.column_stack([steps.x, steps.y])
+    d = np.column_stack([np.cos(steps.heading), np.sin(steps.heading)])
+    on_stairs = steps.kind == 2
     assert on_stairs.sum() >= 12  # both flights were walked on
     # heel, ankle and toe points all at the foothold's height: the whole foot on a tread
     # (to 1 mm: a riser line belongs to one tread, and plans are reused to 0.5 mm)
     for offset in np.linspace(-leg.heel_offset + 1e-3, leg.toe_offset - 1e-3, 9):
         z = terrain.height(xy + offset * d)
-        np.testing.assert_allclose(z, steps["z"], atol=1e-3)
+        np.testing.assert_allclose(z, steps.z, atol=1e-3)
 
 
 def test_descending_the_flight_is_faster_than_climbing_it(run_of):
     summary, steps, terrain = _stair_run(run_of)
     assert summary["agents"][0]["arrived"]
-    up = (steps["kind"] == 2) & (steps["step_height"] > 0)
-    down = (steps["kind"] == 2) & (steps["step_height"] < 0)
+    up = (steps.kind == 2) & (steps.step_height > 0)
+    down = (steps.kind == 2) & (steps.step_height < 0)
     assert up.sum() >= 5 and down.sum() >= 5
 
     def horizontal_speed(mask):
         i = np.flatnonzero(mask)
-        dx = steps["x"][i[-1]] - steps["x"][i[0]]
-        return dx / (steps["time"][i[-1]] - steps["time"][i[0]])
+        dx = steps.x[i[-1]] - steps.x[i[0]]
+        return dx / (steps.time[i[-1]] - steps.time[i[0]])
 
     v_up, v_down = horizontal_speed(up), horizontal_speed(down)
     assert v_down > v_up
@@ -93,9 +93,9 @@ def test_planned_walker_strides_over_the_obstacle_the_fixed_one_steps_on_it(run_
     """Chen & Li, Fig. 11."""
     summary, run = run_of("obstacle_stride")
     steps = run.footsteps()
-    planned = steps["group"] == "planned"
-    assert steps["on_obstacle"][planned].sum() == 0
-    assert steps["on_obstacle"][~planned].sum() >= 1
+    planned = steps.group == "planned"
+    assert steps.on_obstacle[planned].sum() == 0
+    assert steps.on_obstacle[~planned].sum() >= 1
     agents = {a["group"]: a for a in summary["agents"]}
     assert agents["planned"]["energy_per_metre_J_per_kg_m"] < \
         agents["unplanned"]["energy_per_metre_J_per_kg_m"]
