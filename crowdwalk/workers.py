@@ -300,10 +300,12 @@ def _part(value, rows: slice, m: int):
 
 def _join(parts: list):
     """The results of the parts joined as one call's: arrays and lists concatenated,
-    dataclasses field by field."""
+    tuples and dataclasses item by item."""
     first = parts[0]
     if isinstance(first, np.ndarray):
         return np.concatenate(parts)
+    if isinstance(first, tuple):
+        return tuple(_join(list(values)) for values in zip(*parts, strict=True))
     if isinstance(first, list):
         return [x for p in parts for x in p]
     if dataclasses.is_dataclass(first):
@@ -321,7 +323,8 @@ def split_rows(workers: Workers | None, fn: Callable, m: int, /, *args,
     split; everything else goes whole (shared objects by key, :meth:`Workers.share`).
     ``fn`` must be row-independent (row i of the result depends only on row i of the
     arguments) and importable by name; the result an array, a list or a dataclass of
-    them. Without workers, or with fewer than :data:`MIN_SPLIT_ROWS` rows, one call here.
+    them (or a tuple of those). Without workers, or with fewer than :data:`MIN_SPLIT_ROWS`
+    rows, one call here.
     """
     on = list(range(len(workers))) if workers is not None and on is None else on
     if workers is None or not on or m < MIN_SPLIT_ROWS:

@@ -115,6 +115,8 @@ class ClearanceField:
         grid the clearance is strongly negative."""
         xy = np.asarray(xy, dtype=float)
         flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        if not flat.flags.writeable:  # one kernel signature (a read-only view compiles anew)
+            flat = flat.copy()
         out = np.empty(flat.shape[0])
         _sample(self.distance, float(self.origin[0]), float(self.origin[1]), float(self.cell),
                 flat, out)

@@ -312,10 +312,10 @@ class CrowdSimulation:
                 idx, te, pos = idx[~held], te[~held], pos[~held]
                 if idx.size == 0:
                     return
-        target, route_dir = steering_targets(
-            table, route=st.route[idx], progress=st.progress[idx], xy=pos,
-            heading=st.heading[idx], radius=self.radius[idx], clearance=self.clearance,
-            params=prm)
+        target, route_dir = self.threads.map(
+            partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
+            route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
+            radius=self.radius[idx])
         # a walker held up for long looks backwards on every other decision (the
         # candidate fan turned around), so that clogs can loosen
         clogged = st.stuck[idx] >= prm.steering.clog_after
@@ -359,8 +359,8 @@ class CrowdSimulation:
             go = np.flatnonzero(plan.move)
             if go.size and nbs.valid.shape[1]:
                 end = st.stance[idx[go]] + 0.5 * plan.length[go, None] * choice.direction[go]
-                clash = clashes_with_neighbours(
-                    nbs, go, start=pos[go], end=end,
+                clash = self.threads.map(
+                    partial(clashes_with_neighbours, nbs), go.size, go, start=pos[go], end=end,
                     duration=self._durations(idx[go], plan.take(go)), elapsed=t - te[go],
                     yaw=st.yaw1[idx[go]], yaw_end=choice.yaw[go], shape=outline[go])
                 move = plan.move.copy()
@@ -402,7 +402,7 @@ class CrowdSimulation:
         batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
                            yaw=yaw[go], plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
-                           foot_half_width=self.half_width[a], turn=turn)
+                           foot_half_width=self.half_width[a], turn=turn, threads=self.threads)
         self._decided.append(batch)
         if self.gait is not None:
             if self._pending and np.isin(a, np.concatenate([b.agent for b in self._pending])).any():
@@ -418,10 +418,11 @@ class CrowdSimulation:
         st = self.state
         heading = np.arctan2(direction[:, 1], direction[:, 0])
         body = st.stance[a] + (0.5 * length)[:, None] * direction
-        _, ahead = steering_targets(
-            self.routes.table, route=st.route[a], progress=st.progress[a] + length, xy=body,
-            heading=heading, radius=self.radius[a], clearance=self.clearance,
-            params=self.params)
+        _, ahead = self.threads.map(
+            partial(steering_targets, self.routes.table, clearance=self.clearance,
+                    params=self.params), a.size,
+            route=st.route[a], progress=st.progress[a] + length, xy=body, heading=heading,
+            radius=self.radius[a])
         return self.metagait.orient(a, swing_foot=st.foot[a], heading=heading,
                                     heading_next=np.arctan2(ahead[:, 1], ahead[:, 0]),
                                     base_toe_out=self.pop.style.foot_angle[a])
