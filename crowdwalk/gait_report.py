@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.body import LEG_JOINTS, PROPORTIONS
+from crowdwalk.body import JOINT, LEG_JOINTS, PROPORTIONS
 from crowdwalk.steps import FootstepTable
 
 __all__ = ["CycleKind", "GaitFigures", "WalkerTrack", "cycle_curves", "edge_clearance",
@@ -344,6 +344,32 @@ class GaitFigures:
     edge_clearance_median: float = float("nan")
     edge_clearance_max: float = float("nan")
     stances_across_edge: int = 0
+    pelvic_list_peak: float = float("nan")
+    pelvic_list_peak_phase: float = float("nan")
+    pelvic_list_mid_stance: float = float("nan")
+    pelvic_rotation_at_strike: float = float("nan")
+    trunk_rotation_at_strike: float = float("nan")
+
+
+def pelvis_list_rotation(track: WalkerTrack, joints=None) -> np.ndarray:
+    """Pelvic list and rotation (F, 2) [deg] of the left side from the hip joints (or the
+    left/right ``joints`` pair, e.g. the shoulders): list + left above the right,
+    rotation + left ahead along the pelvis's path (its displacement over ±0.5 s), Bovi
+    2011's signs for the left leg."""
+    p = track.positions
+    left, right = (LEG_JOINTS[0, 0], LEG_JOINTS[1, 0]) if joints is None else joints
+    axis = p[:, left] - p[:, right]
+    flat = np.linalg.norm(axis[:, :2], axis=1)
+    lst = np.arctan2(axis[:, 2], flat)
+    pelvis = p[:, _PELVIS, :2]
+    k = max(int(round(0.5 * track.fps)), 1)
+    idx = np.arange(len(p))
+    way = pelvis[np.minimum(idx + k, len(p) - 1)] - pelvis[np.maximum(idx - k, 0)]
+    # left hip ahead: the axis (left - right) turned toward the way walked
+    rot = np.arctan2(np.einsum("fi,fi->f", axis[:, :2], way) / np.maximum(flat, 1e-12),
+                     np.abs(way[:, 0] * axis[:, 1] - way[:, 1] * axis[:, 0])
+                     / np.maximum(flat, 1e-12))
+    return np.rad2deg(np.column_stack([lst, rot]))
 
 
 def gait_figures(track: WalkerTrack, steps: FootstepTable, *, free_speed: float,
@@ -457,7 +483,28 @@ def gait_figures(track: WalkerTrack, steps: FootstepTable, *, free_speed: float,
         edge_clearance_median=float(np.median(over)) if over.size else nan,
         edge_clearance_max=float(over.max()) if over.size else nan,
         stances_across_edge=int(across.sum()),
+        **_pelvis_figures(track, strikes, level),
     )
+
+
+def _pelvis_figures(track: WalkerTrack, strikes: np.ndarray, level: np.ndarray) -> dict:
+    """Mean left-cycle pelvic list / rotation figures over the level cycles [deg]: list
+    peak, its phase [1], list at 30-45 % (mid to late stance), rotation at heel strike."""
+    if not level.size:
+        return {}
+    curves = cycle_curves(pelvis_list_rotation(track), strikes)[level].mean(axis=0)
+    shoulders = cycle_curves(pelvis_list_rotation(track, (JOINT["l_shoulder"],
+                                                          JOINT["r_shoulder"])),
+                             strikes)[level].mean(axis=0)
+    grid = np.linspace(0.0, 1.0, SAMPLES)
+    first = grid < 0.5
+    peak = int(np.argmax(np.abs(curves[first, 0])))
+    late = (grid >= 0.30) & (grid <= 0.45)
+    return {"pelvic_list_peak": float(abs(curves[peak, 0])),
+            "pelvic_list_peak_phase": float(grid[peak]),
+            "pelvic_list_mid_stance": float(np.abs(curves[late, 0]).max()),
+            "pelvic_rotation_at_strike": float(0.5 * (curves[0, 1] + curves[-1, 1])),
+            "trunk_rotation_at_strike": float(0.5 * (shoulders[0, 1] + shoulders[-1, 1]))}
 
 
 def run_figures(run_dir: str | Path) -> list[GaitFigures]:
@@ -502,6 +549,11 @@ _ROWS = (  # (figure, target, values of one walker, format of those values)
     ("toe-off plantarflexion [deg]", "~15-20", lambda f: (f.toe_off_plantarflexion,), "{:.1f}"),
     ("pelvis vertical excursion [cm]", "3.5-5.5 (1.33 m/s)",
      lambda f: (f.pelvis_excursion * 100,), "{:.1f}"),
+    ("pelvic list peak [deg] at [% cycle]; 30-45 %", "Bovi ~5 at ~15; ~0",
+     lambda f: (f.pelvic_list_peak, f.pelvic_list_peak_phase * 100, f.pelvic_list_mid_stance),
+     "{:.1f} at {:.0f}; {:.1f}"),
+    ("pelvic / shoulder rotation at heel strike [deg]", "Bovi ~4; Schwartz ~-5",
+     lambda f: (f.pelvic_rotation_at_strike, f.trunk_rotation_at_strike), "{:.1f} / {:.1f}"),
     ("heel slide max [mm]; stances > 10 mm", "<= 10; 0",
      lambda f: (f.heel_slide_max * 1000, f.stances_over_10mm, f.stances), "{:.0f}; {:.0f}/{:.0f}"),
     ("stances turning > 10 deg; spin turns > 10 deg", "spin turns only",

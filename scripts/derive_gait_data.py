@@ -1,8 +1,11 @@
 """Derive crowdwalk's shipped gait data from the measured data in ../shared/data/gait.
 
 Writes ``crowdwalk/data/elevation_datasets.npz`` (sagittal elevation-angle datasets from
-Bovi et al. 2011) and ``crowdwalk/data/normative.json`` (spatiotemporal references), and
-prints a summary table. Run from anywhere::
+Bovi et al. 2011), ``crowdwalk/data/normative.json`` (spatiotemporal references) and
+``crowdwalk/data/pelvis_motion.json`` (Fourier coefficients of Bovi's level pelvic list and
+rotation, the §4.3 hip complex's L(t) and the pelvis's transverse rotation) and
+``crowdwalk/data/trunk_motion.json`` (Schwartz et al. 2008's trunk rotation and sagittal
+tilt wave), and prints a summary table. Run from anywhere::
 
     python scripts/derive_gait_data.py [--gait-dir DIR] [--out-dir DIR] [--check]
 
@@ -52,6 +55,16 @@ DERIVED = [  # (name, kind, Bovi task) in order of increasing level stride lengt
 ]
 SEGMENTS = ["Foot Flex/Extension", "Shank Flex/Extension", "Thigh Flex/Extension"]
 PELVIS = "Pelvic Ant/Posterior Tilt"
+OBLIQUITY = "Pelvic Up/Down Obliquity"  # + ipsilateral side up (checked: + in loading)
+ROTATION = "Pelvic Int/External Rotation"  # + ipsilateral side forward (+ at heel strike)
+LEVEL_TASKS = ["XS", "S", "Natural", "M", "L"]
+HARMONICS = (1, 3, 5)  # odd harmonics: L(t + 0.5) = -L(t), the two legs' halves agree
+TILT_HARMONICS = (2, 4)  # a sagittal wave repeats every step: even harmonics
+SCHWARTZ_FILE = "schwartz2008_speed_reference_original.xls"
+SCHWARTZ = ("Schwartz MH, Rozumalski A, Trost JP (2008). The effect of walking speed on the "
+            "gait of typically developing children. J Biomech 41(8):1639-1650. "
+            "Supplementary data, 'Free' speed mean (Plug-in Gait trunk = thorax in the lab).")
+SCHWARTZ_FREE_MEAN = 9  # column: angle, % cycle, then (-1sd, mean, +1sd) per speed
 ADULT_FIRST_COLUMN = 2 + 3 * len(BOVI_TASKS)  # after variable, %cycle and the Young block
 N_SAMPLES = 100  # t = k / 100, k = 0..99
 
@@ -77,7 +90,8 @@ def read_bovi_curves(path: Path) -> dict[str, dict[str, np.ndarray]]:
     for task in BOVI_TASKS:
         col = _mean_column(task)
         curves = {}
-        for var in [*SEGMENTS, PELVIS, "Hip Flex/Extension", "Knee Flex/Extension"]:
+        for var in [*SEGMENTS, PELVIS, "Hip Flex/Extension", "Knee Flex/Extension", OBLIQUITY,
+                    ROTATION]:
             rows = rot[names == var]
             cycle = rows[1].to_numpy(float)
             if len(cycle) != 101 or not np.allclose(cycle, np.linspace(0, 1, 101)):
@@ -202,6 +216,92 @@ def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
         entry["fk_step_height"] = round(float(sh / entry["body_height"]), 4)
         entry["step_height"] = 0.0 if entry["kind"] == "level" else entry["fk_step_height"]
     return angles, meta
+
+
+def _odd_harmonics(curve: np.ndarray, harmonics=HARMONICS) -> tuple[list[float], float]:
+    """Cosine and sine coefficients [deg] of ``harmonics`` of a periodic (N,) curve, and the
+    RMS [deg] of what they leave of its half-period-antisymmetric part (odd harmonics;
+    for even ``harmonics`` the symmetric part less its mean)."""
+    n = curve.size
+    t = np.arange(n) / n
+    sign = -1.0 if harmonics[0] % 2 else 1.0
+    odd = 0.5 * (curve + sign * np.roll(curve, -n // 2))  # (c(t) -/+ c(t + 0.5)) / 2
+    odd = odd - (0.0 if sign < 0 else odd.mean())
+    coef, fit = [], np.zeros(n)
+    for k in harmonics:
+        a = 2.0 * np.mean(odd * np.cos(2 * np.pi * k * t))
+        b = 2.0 * np.mean(odd * np.sin(2 * np.pi * k * t))
+        coef += [round(float(a), 3), round(float(b), 3)]
+        fit += a * np.cos(2 * np.pi * k * t) + b * np.sin(2 * np.pi * k * t)
+    return coef, float(np.sqrt(np.mean((odd - fit) ** 2)))
+
+
+def derive_pelvis_motion(gait_dir: Path) -> dict:
+    """Pelvic list (obliquity) and transverse rotation of Bovi's adult level tasks as odd
+    Fourier harmonics over the dataset stride t (the elevation datasets' periodic closure
+    and time warp), t = 0 at the ipsilateral heel strike, positive = ipsilateral side up /
+    forward. Only the part with c(t + 0.5) = -c(t) is kept: ElevWalker's stance leg reads
+    t in [0, 0.5) and the other leg's half is the same curve mirrored."""
+    path = gait_dir / BOVI_FILE
+    curves = read_bovi_curves(path)
+    params = read_bovi_parameters(path)
+    tasks = {}
+    for task in LEVEL_TASKS:
+        cfs = params[task]["Controlateral Foot Strike [% cycle]"] / 100
+        both = np.stack([make_periodic(curves[task][v]) for v in (OBLIQUITY, ROTATION)],
+                        axis=-1)
+        both = np.pad(both, ((0, 0), (0, 2)))  # warp_to_half takes (N, 4) curves
+        warped, _ = warp_to_half(both, cfs)
+        entry = {"speed_m_s": None}
+        for key, col in (("list", 0), ("rotation", 1)):
+            coef, resid = _odd_harmonics(warped[:, col])
+            entry[key] = {"coefficients_deg": coef, "residual_rms_deg": round(resid, 3)}
+        p = params[task]
+        height = p["Stride length [m]"] / (p["Stride length / BH [%BH]"] / 100)
+        entry["speed_m_s"] = round(p["Gait speed / BH [%BH / s]"] / 100 * height, 4)
+        tasks[task] = entry
+    return {
+        "source": f"{BOVI} Variables {OBLIQUITY!r} and {ROTATION!r}, tasks "
+                  f"{', '.join(LEVEL_TASKS)}.",
+        "t": "dataset stride time (elevation_datasets.npz), t = 0 at ipsilateral heel strike",
+        "harmonics": list(HARMONICS),
+        "form": "c(t) = sum_k a_k cos(2 pi k t) + b_k sin(2 pi k t), coefficients "
+                "[a_1, b_1, a_3, b_3, a_5, b_5] in degrees",
+        "sign": "list: + ipsilateral side up; rotation: + ipsilateral side forward",
+        "generator": "scripts/derive_gait_data.py",
+        "tasks": tasks,
+    }
+
+
+def derive_trunk_motion(gait_dir: Path) -> dict:
+    """Trunk rotation (odd harmonics, + ipsilateral side forward) and the sagittal trunk
+    tilt's wave (even harmonics, mean removed: Plug-in Gait's thorax axis reads about 21°
+    forward at every speed, a marker-frame offset, not a lean) of Schwartz 2008's Free
+    speed, over the cycle from ipsilateral foot strike (t = 0). Bovi 2011 has no trunk."""
+    rot = _read_excel(gait_dir / SCHWARTZ_FILE, "Joint Rotations")
+    names = rot[0].ffill().astype(str).str.split().str.join(" ")
+    out = {}
+    for key, var, harmonics in (("rotation", "Trunk Int/External Rotation", HARMONICS),
+                                ("tilt", "Trunk Ant/Posterior Tilt", TILT_HARMONICS)):
+        rows = rot[names == var]
+        cycle = rows[1].to_numpy(float)
+        if len(cycle) != 51 or not np.allclose(cycle, np.linspace(0, 1, 51)):
+            raise ValueError(f"Schwartz sheet layout changed for {var!r}")
+        curve = rows[SCHWARTZ_FREE_MEAN].to_numpy(float)
+        closed = (curve - (curve[-1] - curve[0]) * cycle)[:50]
+        coef, resid = _odd_harmonics(closed, harmonics)
+        out[key] = {"harmonics": list(harmonics), "coefficients_deg": coef,
+                    "residual_rms_deg": round(resid, 3), "mean_deg": round(float(closed.mean()), 3)}
+    return {
+        "source": SCHWARTZ,
+        "t": "gait cycle fraction from ipsilateral foot strike",
+        "form": "c(t) = sum_k a_k cos(2 pi k t) + b_k sin(2 pi k t), coefficients "
+                "[a_k, b_k, ...] in degrees; tilt: the wave about its mean (mean_deg is "
+                "Plug-in Gait's thorax offset, not shipped as a lean)",
+        "sign": "rotation: + ipsilateral side forward; tilt: + anterior",
+        "generator": "scripts/derive_gait_data.py",
+        **out,
+    }
 
 
 def derive_normative(gait_dir: Path) -> dict:
@@ -350,6 +450,12 @@ def _fields(meta: dict) -> dict:
     }
 
 
+def write_pelvis(out_dir: Path, pelvis: dict, trunk: dict) -> None:
+    """Write ``pelvis_motion.json`` and ``trunk_motion.json``."""
+    for name, data in (("pelvis_motion.json", pelvis), ("trunk_motion.json", trunk)):
+        (out_dir / name).write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+
+
 def write(out_dir: Path, angles: np.ndarray, meta: dict, norm: dict) -> None:
     """Write the npz and the json."""
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -388,15 +494,29 @@ def main(argv: list[str] | None = None) -> int:
               f"r = {c['corr']:.3f}, mean difference {c['mean_diff_deg']:+.1f} deg")
     diffs = ", ".join(f"{k} {v * 100:+.1f}" for k, v in check["step_length_vs_wbds"].items())
     print(f"step length minus WBDS fit at the same speed [cm]: {diffs}")
+    pelvis = derive_pelvis_motion(args.gait_dir)
+    trunk = derive_trunk_motion(args.gait_dir)
+    print(f"trunk (Schwartz Free) rotation {trunk['rotation']['coefficients_deg']}, tilt wave "
+          f"{trunk['tilt']['coefficients_deg']} about {trunk['tilt']['mean_deg']} deg")
+    for task, entry in pelvis["tasks"].items():
+        print(f"pelvis {task:8s} list {entry['list']['coefficients_deg']} "
+              f"(residual {entry['list']['residual_rms_deg']:.2f} deg), rotation "
+              f"{entry['rotation']['coefficients_deg']} "
+              f"(residual {entry['rotation']['residual_rms_deg']:.2f} deg)")
     if args.check:
         with np.load(args.out_dir / "elevation_datasets.npz") as shipped:
             same = np.array_equal(shipped["angles"], angles) and json.loads(
                 str(shipped["meta"])) == json.loads(json.dumps(_fields(meta)))
         same &= json.loads((args.out_dir / "normative.json").read_text()) == norm
+        for name, data in (("pelvis_motion.json", pelvis), ("trunk_motion.json", trunk)):
+            same &= json.loads((args.out_dir / name).read_text()) == json.loads(
+                json.dumps(data))
         print("shipped files match" if same else "shipped files DIFFER")
         return 0 if same else 1
     write(args.out_dir, angles, meta, norm)
-    print(f"wrote {args.out_dir / 'elevation_datasets.npz'} and normative.json")
+    write_pelvis(args.out_dir, pelvis, trunk)
+    print(f"wrote {args.out_dir / 'elevation_datasets.npz'}, normative.json, "
+          "pelvis_motion.json and trunk_motion.json")
     if args.plots:
         from crowdwalk.gait.datasets import _load_npz, load_datasets
         from crowdwalk.gait.elevinterp import ElevInterp, SagittalLeg

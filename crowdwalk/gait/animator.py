@@ -62,7 +62,7 @@ from crowdwalk.body import JOINT_NAMES, LEG_JOINTS, PARENTS, Body, matrix_to_qua
 from crowdwalk.errors import invalid
 from crowdwalk.gait.datasets import sample
 from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
-from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose
+from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose, pelvis_shapes
 from crowdwalk.gait.engine import GroundHeight, PoseFrame
 from crowdwalk.gait.foot import StanceFoot, direction, foot_points, stance_foot_pose, wrap_angle
 from crowdwalk.steps import StepBatch
@@ -237,12 +237,13 @@ class _StepState:
     psi0: np.ndarray  # (n,) heading at the start of the step [rad]
     psi1: np.ndarray  # (n,) ... at its end [rad]
     spin_start: np.ndarray  # (n,) step phase τ at which a spin turn starts [1]
+    first: np.ndarray  # (n,) bool, the agent's first step (a walk from standing)
 
     @classmethod
     def zeros(cls, n: int, samples: int) -> _StepState:
         return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.full(n, 0.6),
                    np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n),
-                   np.ones(n))
+                   np.ones(n), np.ones(n, bool))
 
 
 @dataclass(eq=False)
@@ -488,6 +489,7 @@ class Animator:
         step.t0[a] = cmd.time
         step.duration[a] = cmd.duration
         step.stance_left[a] = cmd.swing_foot != 0
+        step.first[a] = ~had
         st.ball[a], st.yaw[a], st.slope[a] = stance.ball, stance.yaw, stance.slope
         # Spin turn (§6.1, MetaGait's): on the ball of the stance foot, once its heel is up
         st.spin[a] = 0.0 if cmd.spin is None else cmd.spin
@@ -512,10 +514,20 @@ class Animator:
 
     def _swing_hip_lead(self, a: np.ndarray, body: Body) -> np.ndarray:
         """How far (k,) [m] the swing hip is ahead of the stance hip at heel strike: the
-        pelvic rotation ρ (the style's; none without) turns the hip axis, 2 (w/2) sin ρ."""
+        pelvic rotation ρ (the style's; none without) turns the hip axis, 2 (w/2) sin ρ,
+        ρ the rotation at the landing (its shape's value there, ``pelvis_shapes``)."""
         if self.attributes is None:
             return np.zeros(a.size)
-        return body.hip_separation * np.sin(self.attributes.pelvic_rotation[a])
+        at_landing = -pelvis_shapes(self.style, np.array([0.5]))[1][0]
+        return body.hip_separation * np.sin(self.attributes.pelvic_rotation[a] * at_landing)
+
+    def _swing_hip_rise(self, a: np.ndarray, body: Body) -> np.ndarray:
+        """How far (k,) [m] the swing hip is above the stance hip at heel strike: the
+        pelvic list there (``pelvis_shapes``; 0 for the sine list), w sin L(0.5)."""
+        at = self.attributes
+        amplitude = np.full(a.size, self.style.pelvic_list) if at is None else at.pelvic_list[a]
+        stance_up = pelvis_shapes(self.style, np.array([0.5]))[0][0]
+        return -body.hip_separation * np.sin(amplitude * stance_up)
 
     def _cleared(self, a: np.ndarray, body: Body, data, height: np.ndarray) -> np.ndarray:
         """The step's datasets (k, N, 4) with the swing sole lifted to
@@ -578,7 +590,10 @@ class Animator:
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
         to_land = ankle_land - hip1
         reach = np.linalg.norm(to_land, axis=1)
-        data_reach = np.linalg.norm(ankle1 - hip1, axis=1)  # the data's own landing leg
+        # the data's own landing leg, and the swing hip's rise under the pelvic list at the
+        # landing (Eq. 10's pelvis term, vertical part: the planar data do not carry it)
+        data_reach = (np.linalg.norm(ankle1 - hip1, axis=1)
+                      + np.maximum(self._swing_hip_rise(a, body), 0.0))
         short = np.maximum(reach - np.maximum(_REACH * (body.thigh + body.shank), data_reach),
                            0.0)
         sw.hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
@@ -935,6 +950,8 @@ class Animator:
             hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
+        # a walk starts from standing: the pelvis is level and lists in over the first step
+        list_scale = np.where(self._step.first[a], _smoothstep(tau), 1.0)
         toe_out = self._swing_toe(a, tau, psi)
         if toe_fix is not None:
             toe_out = toe_out + toe_fix
@@ -944,6 +961,7 @@ class Animator:
             swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
             swing_toe_angle=toes,
             attributes=None if self.attributes is None else self.attributes.take(a),
+            list_scale=list_scale,
         )  # fmt: skip
 
     def _lift_envelope(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray | None:

@@ -44,6 +44,10 @@ __all__ = [
     "dataset_by_name",
     "sample",
     "normative",
+    "PelvisMotion",
+    "pelvis_motion",
+    "TrunkMotion",
+    "trunk_motion",
 ]
 
 ANGLE_NAMES: tuple[str, ...] = ("foot", "shank", "thigh", "pelvis")
@@ -235,3 +239,95 @@ def normative() -> dict:
         support fractions), each entry with ``source``. Units are in the key names (SI).
     """
     return json.loads(_load_normative())
+
+
+@dataclass(frozen=True, eq=False)
+class PelvisMotion:
+    """Pelvic list and transverse rotation over the stride, unit peak (Bovi 2011, adult
+    natural level walking; ``crowdwalk/data/pelvis_motion.json``).
+
+    ``list_shape(t)`` and ``rotation_shape(t)`` (shape of t) [1] are the measured curves
+    divided by their largest magnitude over the stride: + the leg's own side up / forward,
+    t the dataset stride time (t = 0 at its heel strike), and c(t + 0.5) = −c(t), so the
+    other leg reads the same curve. ``list_peak``, ``rotation_peak`` [rad] are the
+    measured amplitudes (the style's pelvic_list / pelvic_rotation scale the shapes).
+    """
+
+    harmonics: tuple[int, ...]
+    list_coefficients: np.ndarray
+    rotation_coefficients: np.ndarray
+    list_peak: float
+    rotation_peak: float
+
+    @staticmethod
+    def _series(coef: np.ndarray, harmonics, t) -> np.ndarray:
+        t = np.asarray(t, dtype=float)[..., None]
+        k = np.asarray(harmonics, dtype=float)
+        return np.sum(coef[0::2] * np.cos(2 * np.pi * k * t)
+                      + coef[1::2] * np.sin(2 * np.pi * k * t), axis=-1)
+
+    def list_shape(self, t) -> np.ndarray:
+        """Pelvic list at stride times t, + own side up, peak 1 [1]."""
+        return self._series(self.list_coefficients, self.harmonics, t)
+
+    def rotation_shape(self, t) -> np.ndarray:
+        """Pelvic rotation at stride times t, + own side forward, peak 1 [1]."""
+        return self._series(self.rotation_coefficients, self.harmonics, t)
+
+
+@cache
+def pelvis_motion(task: str = "Natural") -> PelvisMotion:
+    """The shipped pelvic list / rotation shapes of one of Bovi's level tasks (``"XS"``,
+    ``"S"``, ``"Natural"``, ``"M"``, ``"L"``), normalised to unit peak."""
+    ref = resources.files("crowdwalk").joinpath("data", "pelvis_motion.json")
+    data = json.loads(ref.read_text(encoding="utf-8"))
+    if task not in data["tasks"]:
+        raise invalid("pelvis_motion", "task", f"one of {list(data['tasks'])}", task)
+    entry, harmonics = data["tasks"][task], tuple(data["harmonics"])
+    grid = np.arange(1000) / 1000
+    out = {}
+    for key in ("list", "rotation"):
+        coef = np.deg2rad(np.asarray(entry[key]["coefficients_deg"], dtype=float))
+        peak = float(np.abs(PelvisMotion._series(coef, harmonics, grid)).max())
+        out[key] = (coef / peak, peak)
+    return PelvisMotion(harmonics, out["list"][0], out["rotation"][0], out["list"][1],
+                        out["rotation"][1])
+
+
+@dataclass(frozen=True, eq=False)
+class TrunkMotion:
+    """Trunk (thorax) rotation and sagittal tilt wave over the stride (Schwartz et al.
+    2008, Free speed; ``crowdwalk/data/trunk_motion.json``; Bovi 2011 has no trunk).
+
+    ``rotation_shape(t)`` [1]: + the leg's own side forward, unit peak, c(t + 0.5) =
+    −c(t) (against the pelvis: −0.99 at heel strike); ``rotation_peak`` [rad];
+    ``tilt_wave(t)`` [rad]: + anterior, about the cycle mean (the mean, Plug-in Gait's
+    thorax offset, is not a lean and is not used).
+    """
+
+    rotation_harmonics: tuple[int, ...]
+    rotation_coefficients: np.ndarray
+    rotation_peak: float
+    tilt_harmonics: tuple[int, ...]
+    tilt_coefficients: np.ndarray
+
+    def rotation_shape(self, t) -> np.ndarray:
+        """Trunk rotation at stride times t, + own side forward, peak 1 [1]."""
+        return PelvisMotion._series(self.rotation_coefficients, self.rotation_harmonics, t)
+
+    def tilt_wave(self, t) -> np.ndarray:
+        """Trunk tilt about its mean at stride times t, + anterior [rad]."""
+        return PelvisMotion._series(self.tilt_coefficients, self.tilt_harmonics, t)
+
+
+@cache
+def trunk_motion() -> TrunkMotion:
+    """The shipped trunk rotation shape (unit peak) and tilt wave."""
+    ref = resources.files("crowdwalk").joinpath("data", "trunk_motion.json")
+    data = json.loads(ref.read_text(encoding="utf-8"))
+    rot, tilt = data["rotation"], data["tilt"]
+    coef = np.deg2rad(np.asarray(rot["coefficients_deg"], dtype=float))
+    harmonics = tuple(rot["harmonics"])
+    peak = float(np.abs(PelvisMotion._series(coef, harmonics, np.arange(1000) / 1000)).max())
+    return TrunkMotion(harmonics, coef / peak, peak, tuple(tilt["harmonics"]),
+                       np.deg2rad(np.asarray(tilt["coefficients_deg"], dtype=float)))

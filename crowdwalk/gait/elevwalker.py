@@ -67,6 +67,7 @@ __all__ = [
     "foot_points",
     "joint_flexion",
     "walk_cycle",
+    "pelvis_shapes",
 ]
 
 # Skew ankle axes per side (row 0 left, row 1 right), unit vectors in the parent frame.
@@ -104,6 +105,18 @@ class GaitStyle:
     level_clearance : bool
         The Animator lifts the data's swing sole to ``toe_clearance`` over level ground
         (an extension, docs/architecture.md "Level steps"); False: the data's swing.
+    pelvis_from_data : bool
+        Pelvic list L(t) and the pelvis's transverse rotation follow the measured curves
+        of Bovi 2011 (adult natural walking, :func:`~crowdwalk.gait.datasets.pelvis_motion`;
+        list greatest in loading response, level again by mid-stance), scaled by the
+        amplitudes ``pelvic_list`` / the style's ``pelvic_rotation``; False: L(t) =
+        amplitude · sin 2πt and rotation = amplitude · cos 2πt.
+    trunk_from_data : bool
+        With KLAW attributes, the trunk's counter-rotation follows Schwartz 2008's
+        measured thorax rotation (scaled by ``shoulder_rotation``) and its forward tilt
+        carries the measured wave about ``torso_tilt``
+        (:func:`~crowdwalk.gait.datasets.trunk_motion`); False: ``shoulder_rotation`` ·
+        cos 2πt and a constant tilt.
     """
 
     step_width: float = 0.05
@@ -116,6 +129,8 @@ class GaitStyle:
     max_iterations: int = 12
     toe_clearance: float = 0.013
     level_clearance: bool = True
+    pelvis_from_data: bool = True
+    trunk_from_data: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
@@ -315,6 +330,7 @@ def elevwalker_pose(
     swing_goal: np.ndarray | None = None,
     swing_toe_angle: np.ndarray | None = None,
     attributes=None,
+    list_scale: np.ndarray | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -357,6 +373,8 @@ def elevwalker_pose(
         flat at the swing leg's t = 0.5, straightening by toe-off.
     attributes : crowdwalk.style.Style, optional
         The k walkers' KLAW attributes (:func:`styled`); None: ``style`` alone.
+    list_scale : (k,), optional
+        Factor [1] on the pelvic list (the Animator starts a walk from a level pelvis).
 
     Returns
     -------
@@ -376,8 +394,9 @@ def elevwalker_pose(
     sway = style.sway * h * np.sin(2.0 * np.pi * phase)
     half_width = 0.5 * (style.step_width * h if attributes is None else attributes.stride_width)
     list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
+    list_shape, rotation_shape = pelvis_shapes(style, phase)
     rotation = 0.0 if attributes is None else (
-        -side_st * attributes.pelvic_rotation * np.cos(2.0 * np.pi * phase))
+        -side_st * attributes.pelvic_rotation * rotation_shape)
     if attributes is not None:
         dip = _bounce_dip(body, attributes, phase)
         stance_hip_offset = dip if stance_hip_offset is None else stance_hip_offset + dip
@@ -410,7 +429,9 @@ def elevwalker_pose(
     )  # fmt: skip
 
     # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
-    lst = side_st * list_amplitude * np.sin(2.0 * np.pi * phase)
+    lst = side_st * list_amplitude * list_shape
+    if list_scale is not None:
+        lst = lst * np.asarray(list_scale, dtype=float)
     tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
     r_pelvis = rotation_z(heading + rotation) @ rotation_x(lst) @ rotation_y(tilt)
@@ -459,7 +480,7 @@ def elevwalker_pose(
         thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
         thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
         _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
-                           attributes)
+                           attributes, style)
 
     positions, rotations = forward_kinematics(body, root, r_pelvis, local)
     swing_phase = phase + 0.5
@@ -481,6 +502,17 @@ def elevwalker_pose(
     )
 
 
+def pelvis_shapes(style: GaitStyle, phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pelvic list and rotation at stance phases (k,) [1], peak 1, + stance side up /
+    forward: Bovi's measured shapes (``style.pelvis_from_data``) or sin / cos 2πt."""
+    if style.pelvis_from_data:
+        from crowdwalk.gait.datasets import pelvis_motion
+
+        motion = pelvis_motion()
+        return motion.list_shape(phase), motion.rotation_shape(phase)
+    return np.sin(2.0 * np.pi * phase), np.cos(2.0 * np.pi * phase)
+
+
 # KLAW attributes on this engine (crowdwalk.style; docs/architecture.md). The arm follows
 # the opposite thigh's elevation normalised over the natural-speed cycle (Bovi 2011 level
 # walking, the shipped `level_natural` data: thigh elevation -17.4° .. +25.3°); bounciness
@@ -499,16 +531,24 @@ def _bounce_dip(body: Body, attributes, phase: np.ndarray) -> np.ndarray:
 
 
 def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
-                       attributes) -> None:
+                       attributes, style: GaitStyle | None = None) -> None:
     """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
     KLAW attributes: trunk tilt and sway over the stance leg, shoulders against the
     pelvis, arms with the opposite thigh (abducted by arm_out), elbows between their
     least (arm back) and greatest (arm forward) flexion; the head stays upright."""
     a = attributes
-    shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
+    tilt = a.torso_tilt
+    if style is not None and style.trunk_from_data:
+        from crowdwalk.gait.datasets import trunk_motion
+
+        motion = trunk_motion()  # + stance side forward: negative at heel strike
+        shoulder = -side_st * a.shoulder_rotation * motion.rotation_shape(phase)
+        tilt = tilt + motion.tilt_wave(phase)
+    else:
+        shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
     sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
     yaw = rotation_z(heading + shoulder)
-    trunk = yaw @ rotation_x(sway) @ rotation_y(a.torso_tilt)
+    trunk = yaw @ rotation_x(sway) @ rotation_y(tilt)
     local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ trunk
     local[:, JOINT["skullbase"]] = np.swapaxes(trunk, 1, 2) @ rotation_z(heading)
     for side, thigh, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):

@@ -172,3 +172,35 @@ def test_dataset_and_region_plots_are_written(tmp_path):
                                tmp_path / "region.png", requests=[[0.6, 0.0], [1.2, 0.3]])
     for path in (a, b):
         assert path.exists() and path.stat().st_size > 10_000
+
+
+def test_pelvis_motion_shapes_are_the_two_legs_halves():
+    """Unit-peak list and rotation with c(t + 0.5) = -c(t) (ElevWalker reads the stance
+    leg's t in [0, 0.5) and swaps sides at 0.5, so the pelvis is continuous there); the
+    list is greatest in loading response and the rotation at heel strike (Bovi 2011)."""
+    from crowdwalk.gait.datasets import pelvis_motion
+
+    m = pelvis_motion()
+    t = np.linspace(0.0, 1.0, 400, endpoint=False)
+    for shape in (m.list_shape, m.rotation_shape):
+        np.testing.assert_allclose(shape(t + 0.5), -shape(t), atol=1e-12)
+        assert abs(np.abs(shape(t)).max() - 1.0) < 1e-3
+    assert 0.08 <= t[np.argmax(m.list_shape(t))] <= 0.2
+    assert abs(m.list_shape(0.4)) < 0.3 and m.rotation_shape(0.0) > 0.9
+    assert np.deg2rad(3) < m.list_peak < np.deg2rad(7)
+    assert np.deg2rad(2) < m.rotation_peak < np.deg2rad(6)
+
+
+def test_trunk_motion_counter_rotates_and_its_tilt_is_a_wave():
+    """Schwartz 2008's thorax rotation: own side back at heel strike (against the pelvis),
+    c(t + 0.5) = -c(t); the tilt wave repeats every step, about zero, under 1 deg."""
+    from crowdwalk.gait.datasets import pelvis_motion, trunk_motion
+
+    m = trunk_motion()
+    t = np.linspace(0.0, 1.0, 400, endpoint=False)
+    np.testing.assert_allclose(m.rotation_shape(t + 0.5), -m.rotation_shape(t), atol=1e-12)
+    assert m.rotation_shape(0.0) < -0.9 < 0.9 < pelvis_motion().rotation_shape(0.0)
+    assert np.deg2rad(3) < m.rotation_peak < np.deg2rad(7)
+    wave = m.tilt_wave(t)
+    np.testing.assert_allclose(m.tilt_wave(t + 0.5), wave, atol=1e-12)
+    assert abs(wave.mean()) < 1e-9 and 0 < np.abs(wave).max() < np.deg2rad(1.0)

@@ -108,3 +108,33 @@ def test_warp_puts_contralateral_strike_at_half(script):
     # Still periodic and smooth: the wrap-around step is like any other step.
     steps = np.abs(np.diff(np.vstack([warped, warped[:1]]), axis=0))
     assert steps[-1].max() <= 1.1 * steps[:-1].max()
+
+
+def test_shipped_pelvis_motion_matches_rederivation_and_bovi(script):
+    """pelvis_motion.json is what the script derives, and its harmonics rebuild Bovi's
+    adult natural obliquity and rotation (their half-period-antisymmetric part) to within
+    0.3 deg; + own side up in loading response, own side forward at heel strike."""
+    pelvis = script.derive_pelvis_motion(GAIT_DIR)
+    assert json.loads((DATA / "pelvis_motion.json").read_text()) == json.loads(
+        json.dumps(pelvis))
+    curves = script.read_bovi_curves(GAIT_DIR / script.BOVI_FILE)["Natural"]
+    from crowdwalk.gait.datasets import pelvis_motion
+
+    motion = pelvis_motion("Natural")
+    t = np.linspace(0.0, 1.0, 101)[:100]
+    for column, shape, peak in ((script.OBLIQUITY, motion.list_shape, motion.list_peak),
+                                (script.ROTATION, motion.rotation_shape, motion.rotation_peak)):
+        raw = curves[column][:100]
+        odd = 0.5 * (raw - np.roll(raw, -50))
+        # the time warp moves samples by < 1 % of the stride: compare on the raw grid
+        assert np.sqrt(np.mean((np.rad2deg(peak) * shape(t) - odd) ** 2)) < 0.3
+    assert motion.list_shape(0.15) > 0.9 and motion.rotation_shape(0.0) > 0.9
+
+
+def test_shipped_trunk_motion_matches_rederivation(script):
+    """trunk_motion.json is what the script derives from Schwartz 2008 (Free speed)."""
+    trunk = script.derive_trunk_motion(GAIT_DIR)
+    assert json.loads((DATA / "trunk_motion.json").read_text()) == json.loads(
+        json.dumps(trunk))
+    assert trunk["rotation"]["residual_rms_deg"] < 0.2
+    assert trunk["tilt"]["residual_rms_deg"] < 0.2

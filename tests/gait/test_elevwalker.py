@@ -187,3 +187,30 @@ def test_pelvic_list_drops_the_swing_side():
     _, _, pose = _walk(np.full(1, 1.75), 0.2, left=True)
     hips = pose.positions[0, [JOINT["l_hip"], JOINT["r_hip"]], 2]
     assert hips[1] < hips[0]  # right (swing) hip lower
+
+
+def test_trunk_follows_the_measured_rotation_with_attributes():
+    """With KLAW attributes the trunk's yaw against the heading is shoulder_rotation times
+    Schwartz 2008's thorax rotation shape (own side back at heel strike); with
+    ``trunk_from_data=False`` it is the cosine, which differs by up to ~1 deg."""
+    from crowdwalk.gait.datasets import trunk_motion
+    from crowdwalk.style import Style
+
+    n = 8
+    phase = np.linspace(0.0, 0.45, n)
+    body = Body.from_heights(np.full(n, 1.75))
+    attrs = Style.default(body.height, 1.3)
+    ds = NATURAL
+    psi = np.zeros(n)
+    foot = StanceFoot.from_foothold(body, np.zeros((n, 3)), psi, np.zeros(n))
+    yaws = {}
+    for data in (True, False):
+        pose = elevwalker_pose(body, np.ones(n, bool), phase, sample(ds, phase),
+                               sample(ds, phase + 0.5), psi, foot, np.full(n, 0.12),
+                               WarmStart.neutral(n), GaitStyle(trunk_from_data=data),
+                               attributes=attrs)
+        trunk = pose.rotations[:, JOINT["vl5"]]
+        yaws[data] = np.arctan2(trunk[:, 1, 0], trunk[:, 0, 0])
+    want = -attrs.shoulder_rotation * trunk_motion().rotation_shape(phase)
+    np.testing.assert_allclose(yaws[True], want, atol=np.deg2rad(0.2))
+    assert np.abs(yaws[True] - yaws[False]).max() > np.deg2rad(0.5)
