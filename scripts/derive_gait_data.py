@@ -323,6 +323,9 @@ def derive_normative(gait_dir: Path) -> dict:
     resid_n = sl / leg - (b0 + b1 * froude)
     # Cadence vs speed: power law f = c0 * v**c1 (fit in log space).
     c1, log_c0 = np.polyfit(np.log(v), np.log(cad), 1)
+    # The highest cadence of any trial (young and older, up to the fastest treadmill
+    # speed): the crowd's ceiling on the cadence of a planned step.
+    cad_max = float(wbds["Cadence"].max())
 
     normals = pd.read_csv(gait_dir / "spatiotemporal_normals_by_age_pace.txt", sep=";", header=None)
     rows = normals.iloc[2:]
@@ -362,6 +365,11 @@ def derive_normative(gait_dir: Path) -> dict:
             "exponent": round(float(c1), 4),
             "speed_range_m_s": [round(float(v.min()), 3), round(float(v.max()), 3)],
             "source": WBDS + " Young adults, least squares in log-log.",
+        },
+        "cadence_max": {
+            "steps_per_s": round(cad_max / 60.0, 4),
+            "n_trials": int(len(wbds)),
+            "source": WBDS + " Highest cadence of all trials (young and older adults).",
         },
         "adult_normal_pace": {
             "velocity_m_s": span(4, 0.01),

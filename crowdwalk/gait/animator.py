@@ -75,6 +75,8 @@ _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off �
 _PHASE_END = 0.5 - 1e-6
 _BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
+_C1_RISE = 0.05  # steps rising or falling this much [m] (stairs) join the root C¹ ...
+_VEL_PHASE = 0.02  # ... with velocities measured over this stance-phase interval [1]
 _SPIN_HEEL_LIFT = 0.008  # heel height above its ground at which a spin turn starts [m]
 _SPIN_GRID = np.linspace(0.0, 1.0, 41)  # step phases searched for the heel rise
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
@@ -238,12 +240,13 @@ class _StepState:
     psi1: np.ndarray  # (n,) ... at its end [rad]
     spin_start: np.ndarray  # (n,) step phase τ at which a spin turn starts [1]
     first: np.ndarray  # (n,) bool, the agent's first step (a walk from standing)
+    rise: np.ndarray  # (n,) commanded step height [m]
 
     @classmethod
     def zeros(cls, n: int, samples: int) -> _StepState:
         return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.full(n, 0.6),
                    np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n),
-                   np.ones(n), np.ones(n, bool))
+                   np.ones(n), np.ones(n, bool), np.zeros(n))
 
 
 @dataclass(eq=False)
@@ -281,6 +284,7 @@ class _SwingState:
     use_bezier: np.ndarray  # (n,) bool
     lift_need: np.ndarray  # (n, G) anticipated lift at the _LIFT_GRID phases [m]
     hip_fix: np.ndarray  # (n, 3) root continuity offset [m]
+    hip_vel: np.ndarray  # (n, 3) root velocity jump the offset starts with [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
 
     @classmethod
@@ -288,7 +292,7 @@ class _SwingState:
         return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
                    np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.zeros((n, 3)))
 
 
 @dataclass(eq=False)
@@ -328,12 +332,14 @@ class _LastPose:
 @dataclass(frozen=True, eq=False)
 class _Landed:
     """Where the previous step of m agents left the root (m, 3) [m] and the landed foot:
-    heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw (m,) [rad]."""
+    heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw (m,) [rad]; the root's
+    velocity at the end (m, 3) [m/s] (zero where not measured)."""
 
     root: np.ndarray
     heel: np.ndarray
     yaw: np.ndarray
     old_yaw: np.ndarray
+    root_velocity: np.ndarray
 
 
 class Animator:
@@ -408,12 +414,15 @@ class Animator:
             raise invalid("StepCommand", "agent", "without repeated agents", a)
         body = self.body.take(a)
         had = self._step.commanded[a].copy()
-        landed = self._landed(a, had)
+        # stair steps (this one or the last rises or falls _C1_RISE): C¹ root join
+        c1 = had & ((np.abs(self._step.rise[a]) >= _C1_RISE)
+                    | (np.abs(cmd.step_height) >= _C1_RISE))
+        landed = self._landed(a, had, c1)
         st = self._stance
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
-        self._join_root(a, had, landed.root)
+        self._join_root(a, had, landed, c1)
         self._swing_ends(cmd, body, had, data, trail)
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
@@ -422,11 +431,19 @@ class Animator:
             self._anticipate_lift(a[bumpy])
         self.stats["commands"] += a.size
 
-    def _landed(self, a: np.ndarray, had: np.ndarray) -> _Landed:
+    def _landed(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray) -> _Landed:
         """Where the previous step (of the agents ``had`` a step) left the root and the
-        foot that landed, at its end."""
+        foot that landed, at its end; the root's velocity there for the agents ``c1``."""
         m = a.size
-        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m))
+        out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m),
+                      np.zeros((m, 3)))
+        if c1.any():
+            ac = a[c1]
+            k = ac.size
+            ends = self._walk(np.concatenate([ac, ac]), np.concatenate(
+                [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]), corrected=True)
+            out.root_velocity[c1] = (ends.root_position[:k] - ends.root_position[k:]) / (
+                2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
         if had.any():
             ah = a[had]
             k = ah.size
@@ -487,6 +504,7 @@ class Animator:
         step.psi0[a] = psi0
         step.psi1[a] = cmd.heading
         step.t0[a] = cmd.time
+        step.rise[a] = cmd.step_height
         step.duration[a] = cmd.duration
         step.stance_left[a] = cmd.swing_foot != 0
         step.first[a] = ~had
@@ -505,6 +523,7 @@ class Animator:
             had, np.clip(2.0 * (data.stance_fraction - 0.5), 0.0, 0.45), 0.0
         )
         sw.hip_fix[a] = 0.0
+        sw.hip_vel[a] = 0.0
         sw.hip_drop[a] = 0.0
         sw.use_bezier[a] = False
         sw.lift_need[a] = 0.0
@@ -547,12 +566,23 @@ class Animator:
                                     clearance=self.style.toe_clearance)
         return out
 
-    def _join_root(self, a: np.ndarray, had: np.ndarray, root_end: np.ndarray) -> None:
+    def _join_root(self, a: np.ndarray, had: np.ndarray, landed: _Landed,
+                   c1: np.ndarray) -> None:
         """Root continuity: the stance hip starts where the previous step left the root
-        and blends to the data over the first half of the step."""
+        and blends to the data over the first half of the step. On stair steps (``c1``)
+        the join is C¹: the offset also starts with the root velocity the data lack at the
+        heel strike and loses it over the same blend (docs/architecture.md, deviations)."""
         if had.any():
             start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
-            self._swing.hip_fix[a[had]] = root_end[had] - start_pose.root_position
+            self._swing.hip_fix[a[had]] = landed.root[had] - start_pose.root_position
+        if c1.any():
+            ac = a[c1]
+            k = ac.size
+            both = self._walk(np.concatenate([ac, ac]), np.concatenate(
+                [np.zeros(k), np.full(k, _VEL_PHASE)]), corrected=False)
+            v_data = (both.root_position[k:] - both.root_position[:k]) / (
+                2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
+            self._swing.hip_vel[ac] = landed.root_velocity[c1] - v_data
 
     def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray, data, trail) -> None:
         """The data-driven swing ankle at toe-off and at the landing (no swing corrections
@@ -947,6 +977,10 @@ class Animator:
         hip_fix = None
         if corrected:
             hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
+            # C¹ term: T b x (1 - x)² (x = τ / b) has the velocity jump as d/dt at t0
+            x = np.clip(tau / _HIP_BLEND, 0.0, 1.0)
+            hip_fix += self._swing.hip_vel[a] * (self._step.duration[a] * _HIP_BLEND
+                                                  * x * (1.0 - x) ** 2)[:, None]
             hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip

@@ -100,3 +100,19 @@ def test_planned_walker_strides_over_the_obstacle_the_fixed_one_steps_on_it(run_
     assert agents["planned"]["energy_per_metre_J_per_kg_m"] < \
         agents["unplanned"]["energy_per_metre_J_per_kg_m"]
     assert agents["unplanned"]["climb_m"] > 0 == agents["planned"]["climb_m"]
+
+
+def test_no_step_is_quicker_than_the_quickest_measured(run_of):
+    """Planned steps keep to the highest cadence WBDS measured (2.48 steps/s; issue 11
+    item 5): on the rough park the planners plan steps of 0.1-0.27 m, which at the
+    walking speed lasted 0.06-0.19 s (163 of 2,470 steps) — about two frames at 25 fps,
+    too quick for a pose to follow."""
+    from crowdwalk.gait.datasets import normative
+
+    _, run = run_of("uneven_park", duration=15.0)
+    steps = run.footsteps()
+    shortest = 1.0 / normative()["cadence_max"]["steps_per_s"]
+    assert 0.39 < shortest < 0.42  # WBDS: 148.8 steps/min at most
+    for agent in np.unique(steps.agent):
+        t = np.sort(steps.time[steps.agent == agent])
+        assert np.all(np.diff(t) >= shortest - 2e-5)  # footsteps.csv keeps 10 µs
