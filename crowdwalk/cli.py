@@ -344,7 +344,7 @@ def verify(
     seeds: int = typer.Option(0, "--seeds", min=0, help="Seeds of the counterflow case "
                               "(0: 1 fast, 5 full)."),
     speed_model: str = typer.Option("", "--speed-model", help="Crowd speed model: free "
-                                    "(the default), time_gap or contact_gap."),
+                                    "(the default), time_gap, contact_gap or headway."),
 ) -> None:
     """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
     from dataclasses import replace
@@ -353,7 +353,7 @@ def verify(
     from crowdwalk.errors import invalid
     from crowdwalk.verify import run_verification
 
-    models = ("free", "time_gap", "contact_gap")
+    models = ("free", "time_gap", "contact_gap", "headway")
     if speed_model and speed_model not in models:
         raise invalid("verify", "speed_model", f"one of {', '.join(models)}", speed_model)
     params = replace(CrowdParams(), speed_model=speed_model) if speed_model else None

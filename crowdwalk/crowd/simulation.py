@@ -289,6 +289,14 @@ class CrowdSimulation:
         h = self.state.heading[idx]
         own = np.stack([np.cos(h), np.sin(h)], axis=-1)
         followed = nbs.valid & (np.einsum("kmj,kj->km", nbs.velocity, own) >= -0.1)
+        if prm.speed_model == "headway":  # Seyfried et al. 2005's required length
+            # followed: the neighbours walking (or facing, when standing) the same way;
+            # the others are avoided by steering, not followed
+            if nbs.heading is not None:
+                followed = nbs.valid & (np.cos(nbs.heading - h[:, None]) > 0.0)
+            lane = prm.headway_lane * self.shape.bound[idx]
+            return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
+                            free, leg, prm.headway_time, lane=lane)
         return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                         free, leg, prm.contact_time_gap)
 
@@ -337,7 +345,7 @@ class CrowdSimulation:
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            gap=gap if prm.speed_model == "contact_gap" else None)
+            gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None)
         if self._steer_on:  # worker processes (given, not posing); the field goes once
             choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],
                                 clearance=self.clearance, params=prm.steering,

@@ -18,6 +18,8 @@ shorter than the WBDS step length at that speed; without it 1.000).
 ``CrowdParams.speed_model = "time_gap"`` adds :func:`time_gap_speed` (Tordeux et al.
 2016): the step's speed is limited by the gap to the walker ahead, and its length to what
 that speed covers in one step at the measured cadence for it.
+``speed_model = "headway"`` (:func:`headway_speed`) uses Seyfried et al. 2005's
+single-file required length d = a + b v instead, following only same-way walkers.
 ``speed_model = "contact_gap"`` (:func:`contact_gap_speed`) measures the gap as the
 distance to the first contact along the walking line (Moussaïd et al. 2011's d_h), so a
 walker beside-ahead counts by how far one can walk before touching it, and steering
@@ -33,7 +35,7 @@ import numpy as np
 from planners import normal_mode
 
 __all__ = ["STAIR_UP_FACTOR", "STAIR_DOWN_FACTOR", "step_durations", "time_gap_speed",
-           "contact_gap_speed", "GapSteps"]
+           "contact_gap_speed", "headway_speed", "GapSteps"]
 
 #: Weidmann (1993): horizontal speed on stairs, up and down, over level speed 1.34 m/s.
 STAIR_UP_FACTOR = 0.610 / 1.34
@@ -116,6 +118,31 @@ def contact_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np
     return v if direction.ndim == 3 else v[:, 0]
 
 
+def headway_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.ndarray,
+                  others: np.ndarray, others_radius: np.ndarray, valid: np.ndarray,
+                  free_speed: np.ndarray, time_gap: float, lane: np.ndarray) -> np.ndarray:
+    """Speed [m/s] from the required length of Seyfried et al. (2005, "The fundamental
+    diagram of pedestrian movement revisited", J. Stat. Mech. P10002): in single file a
+    walker moving at v needs d = a + b v of line, a = 0.36 m and b = 1.06 s (their linear
+    fit of the inverse density against speed), so v = min(v0, max(0, (s − a) / b)).
+
+    s is the distance along the walking line to the nearest neighbour ahead whose centre
+    lies within ``lane`` (k,) [m] of that line, and a = r_i + r_j, the two radii (0.36 m
+    for two 1.71 m persons: the same standstill spacing). A neighbour further off the
+    line is not followed: only the hard swept-body test keeps the two apart.
+    ``time_gap`` is b. Shapes as :func:`contact_gap_speed`.
+    """
+    d = direction if direction.ndim == 3 else direction[:, None, :]
+    rel = (others - position[:, None, :])[:, None, :, :]  # (k, 1, m, 2)
+    along = np.einsum("kcmj,kcj->kcm", rel, d)
+    lateral = rel[..., 0] * d[:, :, None, 1] - rel[..., 1] * d[:, :, None, 0]
+    need = (radius[:, None] + others_radius)[:, None, :]
+    ahead = valid[:, None, :] & (along > 0) & (np.abs(lateral) < lane[:, None, None])
+    gap = np.where(ahead, along - need, np.inf).min(axis=2)  # (k, C)
+    v = np.minimum(free_speed[:, None], np.maximum(gap, 0.0) / time_gap)
+    return v if direction.ndim == 3 else v[:, 0]
+
+
 @dataclass(frozen=True, eq=False)
 class GapSteps:
     """A gap speed model's step for m deciding walkers (struct-of-arrays).
@@ -132,9 +159,11 @@ class GapSteps:
     free_speed, leg_length : (m,)
         [m/s], [m].
     time_gap : float
-        T [s].
+        T [s] (b of the headway model).
     contact : bool
         :func:`contact_gap_speed` (else :func:`time_gap_speed`, one direction each).
+    lane : (m,) float, optional
+        Given: :func:`headway_speed` with this lateral extent [m].
     """
 
     position: np.ndarray
@@ -147,6 +176,7 @@ class GapSteps:
     leg_length: np.ndarray
     time_gap: float
     contact: bool = True
+    lane: np.ndarray | None = None
 
     def along(self, direction: np.ndarray, *, everyone: bool = False
               ) -> tuple[np.ndarray, np.ndarray]:
@@ -155,10 +185,13 @@ class GapSteps:
         normal-mode cadence for it (WBDS relation), unlimited at the free speed.
         ``everyone``: count every neighbour, not only the followed ones."""
         speed = contact_gap_speed if self.contact else time_gap_speed
+        extra = {}
+        if self.lane is not None:
+            speed, extra = headway_speed, {"lane": self.lane}
         v = speed(position=self.position, direction=direction, radius=self.radius,
                   others=self.others, others_radius=self.others_radius,
                   valid=self.valid if everyone else self.followed,
-                  free_speed=self.free_speed, time_gap=self.time_gap)
+                  free_speed=self.free_speed, time_gap=self.time_gap, **extra)
         col = (slice(None),) + (None,) * (v.ndim - 1)
         short = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[col])
         return v, np.where(v < self.free_speed[col], short, np.inf)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from crowdwalk.crowd import CrowdParams
-from crowdwalk.crowd.speed import contact_gap_speed, time_gap_speed
+from crowdwalk.crowd.speed import contact_gap_speed, headway_speed, time_gap_speed
 from crowdwalk.verify import free_speed, ring_corridor_speed, weidmann_speed
 
 
@@ -62,6 +62,29 @@ def test_contact_gap_speed_counts_the_distance_to_first_contact():
     assert vc[0, 1] == 1.34
 
 
+def test_headway_speed_follows_only_the_walker_in_its_lane():
+    # Seyfried et al. 2005: v = (s - a) / b, a = r_i + r_j, b = 1.06 s
+    me = np.zeros((4, 2))
+    ahead = np.array([[1.0, 0.0]] * 4)
+    others = np.array([[[1.2, 0.0]],     # in line, 1.2 m ahead
+                       [[0.6, 0.1]],     # 0.1 m off the line: within the lane
+                       [[0.5, 0.25]],    # 0.25 m off: the next lane of a zipper
+                       [[-0.5, 0.0]]])   # behind
+    v = headway_speed(position=me, direction=ahead, radius=np.full(4, 0.18),
+                      others=others, others_radius=np.full((4, 1), 0.18),
+                      valid=np.ones((4, 1), bool), free_speed=np.full(4, 1.34),
+                      time_gap=1.06, lane=np.full(4, 0.18))
+    np.testing.assert_allclose(v, [(1.2 - 0.36) / 1.06, (0.6 - 0.36) / 1.06, 1.34, 1.34])
+
+
+def test_headway_model_follows_weidmann_at_2_per_m2(tmp_path):
+    # a and b come from Seyfried et al.'s single-file data; Weidmann is validation
+    params = replace(CrowdParams(), speed_model="headway")
+    density, speed = ring_corridor_speed(2.0, tmp_path, params=params)
+    assert 1.4 < density < 2.6
+    assert speed == pytest.approx(float(weidmann_speed(density)), abs=0.15)
+
+
 def test_verify_names_an_unknown_speed_model_in_one_line(tmp_path):
     from typer.testing import CliRunner
 
@@ -70,5 +93,6 @@ def test_verify_names_an_unknown_speed_model_in_one_line(tmp_path):
     result = CliRunner().invoke(app, ["verify", "--speed-model", "fast", "--only", "rimea1",
                                       "--out", str(tmp_path / "v.md")])
     assert result.exit_code == 2
-    assert "speed_model must be one of free, time_gap, contact_gap; got 'fast'" in result.output
+    assert ("speed_model must be one of free, time_gap, contact_gap, headway; got 'fast'"
+            in result.output)
     assert not (tmp_path / "v.md").exists()

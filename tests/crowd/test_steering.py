@@ -159,3 +159,22 @@ def test_gap_reach_makes_a_follower_fall_in_beside_the_walker_ahead():
     assert behind.move[0] and beside.move[0]
     assert abs(behind.direction[0][1]) < 1e-9
     assert abs(beside.direction[0][1]) > 0.1
+
+
+def test_an_oncoming_walker_behind_the_nearest_group_mates_is_avoided():
+    # twelve group-mates walking the same way, all nearer than the oncoming walker: the
+    # evasion must not look at the nearest neighbours only (they are the group's own)
+    mates = np.array([[x, y] for x in (-0.5, -0.9, -1.3) for y in (-0.9, -0.5, 0.5, 0.9)])
+    oncoming = np.array([[2.5, 0.0]])
+    now = np.vstack([mates, oncoming])
+    velocity = np.vstack([np.tile([1.3, 0.0], (12, 1)), [[-1.3, 0.0]]])
+    nbs = Neighbours(valid=np.ones((1, 13), bool), now=now[None], end=now[None],
+                     velocity=velocity[None], radius=np.full((1, 13), R))
+    choice = choose_steps(
+        position=np.zeros((1, 2)), stance=np.array([[0.1, 0.0]]), heading=np.array([0.0]),
+        radius=np.array([R]), route_direction=np.array([[1.0, 0.0]]),
+        target=np.array([[3.0, 0.0]]), nominal_step=np.array([0.7]), neighbours=nbs,
+        clearance=ROOM, speed=np.array([1.3]))
+    assert choice.move[0]
+    assert choice.direction[0][1] < -0.1  # evades, to its right
+
