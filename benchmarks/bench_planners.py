@@ -15,8 +15,10 @@ Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N] [--agents 
    (``best_first_multistart`` for several numbers of starts).
 
 ``--targets-only ROUNDS`` measures the target cells alone (single plans on flat ground and
-stairs, the batch), ROUNDS times in turn, and prints each cell's median over the rounds
-and the spread (lowest and highest round): run it alternately against another checkout
+stairs, the batch of ``--agents`` walkers, 1,000 by default, as issue 15 names it), ROUNDS
+times in turn, and prints each cell's median over the rounds and the spread (lowest and
+highest round), then the counted work per plan of each cell (lattice steps evaluated,
+key-frame solves, swing curves built, nodes expanded): run it alternately against another checkout
 (``PYTHONPATH=OTHER python benchmarks/bench_planners.py --targets-only 5``) for a
 comparison in the same minutes on a shared machine.
 """
@@ -141,18 +143,31 @@ def table_2(repeat: int) -> dict:
     return medians
 
 
-def batch_runs(profiles, legs, speeds, planner: str, agents: int):
+#: The counted work the target table shows (Plan.stats), with its column headers.
+WORK = (("lattice_steps", "steps"), ("key_frame_solves", "IK"), ("swing_curves", "swings"),
+        ("nodes_expanded", "nodes"))
+
+
+def work(plans) -> dict:
+    """Mean counted work per plan of ``plans`` (:data:`WORK`)."""
+    return {k: float(np.mean([p.stats[k] for p in plans])) for k, _ in WORK}
+
+
+def batch_runs(profiles, legs, speeds, planner: str, agents: int, counted: dict | None = None):
     """Time ``plan_batch`` of the walkers twice (ms per plan, amortised): first with every
-    walker's leg new to the planners' per-leg caches, then again (as a crowd re-plans)."""
+    walker's leg new to the planners' per-leg caches, then again (as a crowd re-plans).
+    ``counted`` gets the mean counted work per plan of each run."""
     warm = [Leg.from_body_height(1.6 + 0.01 * i) for i in range(16)]  # compiles, not legs
     plan_batch(profiles[:16], warm, speeds[:16], planner)
     runs = []
     for label in (f"batch of {agents}, random terrain, new legs",
                   f"batch of {agents}, random terrain, again"):
         t0, c0 = time.perf_counter(), time.process_time()
-        plan_batch(profiles, legs, speeds, planner)
+        plans = plan_batch(profiles, legs, speeds, planner)
         runs.append((label, 1e3 * (time.perf_counter() - t0) / agents,
                      1e3 * (time.process_time() - c0) / agents))
+        if counted is not None:
+            counted[label, planner] = work(plans)
     return runs
 
 
@@ -219,7 +234,8 @@ def quality(count: int) -> None:
 
 
 def targets_only(rounds: int, repeat: int, agents: int) -> None:
-    """The target cells, ``rounds`` times in turn; median and spread over the rounds."""
+    """The target cells, ``rounds`` times in turn; median and spread over the rounds, and
+    each cell's counted work per plan."""
     leg = Leg.from_body_height(1.75)
     grounds = terrains()
     rng = np.random.default_rng(7)
@@ -227,19 +243,23 @@ def targets_only(rounds: int, repeat: int, agents: int) -> None:
     legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
     speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
     cells: dict = {}
+    counted: dict = {}
     for _ in range(rounds):
         for name in ("flat ground", "upstairs", "downstairs"):
             for planner in SEARCHES:
-                wall, cpu, _ = timed(grounds[name], leg, planner, PlannerConfig(), repeat)
-                cells.setdefault((f"single plan, {name} (median)", planner), []).append(
+                wall, cpu, p = timed(grounds[name], leg, planner, PlannerConfig(), repeat)
+                label = f"single plan, {name} (median)"
+                cells.setdefault((label, planner), []).append(
                     (float(np.median(wall)), float(np.median(cpu))))
+                counted[label, planner] = work([p])
         for planner in SEARCHES:
-            for label, wall, cpu in batch_runs(profiles, legs, speeds, planner, agents):
+            for label, wall, cpu in batch_runs(profiles, legs, speeds, planner, agents,
+                                               counted):
                 cells.setdefault((label, planner), []).append((wall, cpu))
     limits = {"flat ground": 0.5, "upstairs": 1.5, "downstairs": 1.5, "batch": 0.1}
     print(f"Speed targets (issue 15) [ms per plan]: wall time, median of {rounds} rounds "
           f"[lowest, highest round], and CPU time (all threads; median); {repeat} plans "
-          "per single-plan round")
+          f"per single-plan round; batches amortised over {agents} plans")
     print(f"{'target':<42}{'limit':>6}" + "".join(f"{p:>32}" for p in SEARCHES))
     for label in dict.fromkeys(key[0] for key in cells):
         limit = next(v for k, v in limits.items() if k in label)
@@ -249,6 +269,15 @@ def targets_only(rounds: int, repeat: int, agents: int) -> None:
             row += (f"{np.median(v[:, 0]):>8.3f} [{v[:, 0].min():.3f}, {v[:, 0].max():.3f}]"
                     f" cpu {np.median(v[:, 1]):.3f}")
         print(f"{label:<42}{limit:>6.2f}{row}")
+    print("\nCounted work per plan (Plan.stats, the batches' means): "
+          + ", ".join(f"{h} = {k}" for k, h in WORK))
+    print(f"{'target':<42}" + "".join(f"{p:>32}" for p in SEARCHES))
+    for label in dict.fromkeys(key[0] for key in cells):
+        row = ""
+        for planner in SEARCHES:
+            c = counted[label, planner]
+            row += f"{' / '.join(f'{c[k]:.0f}' for k, _ in WORK):>32}"
+        print(f"{label:<42}{row}")
     print(f"(machine load average {os.getloadavg()[0]:.1f})")
 
 

@@ -2,7 +2,8 @@
 
 One search per agent, from ``q_init = (s_init, ..., s_init)`` (the neutral step), over the
 grid neighbours of a configuration: one step length one interval longer or shorter
-(2n neighbours). Compiled with numba; the step tables are looked up, never recomputed.
+(2n neighbours). Compiled with numba; a step or a swing of the lattice is evaluated when
+the search first reads it (:mod:`planners.lattice_kernel`), agents in parallel.
 """
 
 from __future__ import annotations
@@ -12,30 +13,41 @@ from functools import lru_cache
 import numba as nb
 import numpy as np
 
-from planners.lattice import StepTables
-from planners.search import SearchResult, evaluate_one
+from planners.lattice import StepTables, run_parts
+from planners.lattice_kernel import (
+    config_efficiency,
+    config_legal,
+    probe,
+    probe_efficiency,
+)
+from planners.lattice_kernel import inline as _inline
+from planners.search import SearchResult
 
 __all__ = ["best_first", "bfp", "fifo_order", "find_init"]
 
 
 def best_first(tables: StepTables) -> SearchResult:
-    """FIND_INIT then BFP for every agent of ``tables`` (counts add up)."""
-    init = find_init(tables)
-    climb = bfp(tables, init)
-    return SearchResult(climb.configs, init.found, init.expanded + climb.expanded,
-                        init.checks + climb.checks)
-
-
-def _run(kernel, tables: StepTables, configs: np.ndarray, found: np.ndarray) -> SearchResult:
-    st = tables.struct
+    """FIND_INIT then BFP for every agent of ``tables`` (counts add up), one compiled
+    pass."""
     A = tables.neutral.size
+    orders, which, configs = _orders(tables)
+    found = np.zeros(A, dtype=np.bool_)
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
-    kernel(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
-           np.ascontiguousarray(tables.progress), st.J,
-           np.asarray(st.step_offset, dtype=np.int64), np.asarray(st.swing_offset, dtype=np.int64),
-           np.asarray(st.swing_strides, dtype=np.int64), configs, found, expanded, checks)
+    run_parts(_best_first, A, tables.lattice, orders, which, configs, found, expanded, checks,
+              3)
     return SearchResult(configs, found, expanded, checks)
+
+
+def _orders(tables: StepTables):
+    """Fig. 3's queue orders of the agents' q_init (K, J**n, n), each agent's order
+    (A,) and the configurations q_init (A, n)."""
+    n, J = tables.struct.n, tables.struct.J
+    centres = tables.neutral.astype(np.int64)
+    distinct, which = np.unique(centres, return_inverse=True)
+    orders = (fifo_order(int(distinct[0]), n, J)[None] if distinct.size == 1
+              else np.stack([fifo_order(int(c), n, J) for c in distinct]))
+    return orders, which.astype(np.int64), np.repeat(centres[:, None], n, axis=1)
 
 
 def find_init(tables: StepTables) -> SearchResult:
@@ -53,20 +65,13 @@ def find_init(tables: StepTables) -> SearchResult:
     ``(q_init, J, n)`` (:func:`fifo_order`, cached) and each search walks it, looking
     every configuration up until the first legal one.
     """
-    A, n, J = tables.neutral.size, tables.struct.n, tables.struct.J
-    centres = tables.neutral.astype(np.int64)
-    distinct, which = np.unique(centres, return_inverse=True)
-    orders = (fifo_order(int(distinct[0]), n, J)[None] if distinct.size == 1
-              else np.stack([fifo_order(int(c), n, J) for c in distinct]))
-    configs = np.repeat(centres[:, None], n, axis=1)
+    A = tables.neutral.size
+    orders, which, configs = _orders(tables)
     found = np.zeros(A, dtype=np.bool_)
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
-    st = tables.struct
-    _find_init(tables.step_legal, tables.swing_ok, J, np.asarray(st.step_offset, dtype=np.int64),
-               np.asarray(st.swing_offset, dtype=np.int64),
-               np.asarray(st.swing_strides, dtype=np.int64), orders,
-               which.astype(np.int64), configs, found, expanded, checks)
+    run_parts(_best_first, A, tables.lattice, orders, which, configs, found, expanded, checks,
+              1)
     return SearchResult(configs, found, expanded, checks)
 
 
@@ -93,26 +98,14 @@ def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
     Counted: ``expanded`` -- configurations popped; ``checks`` -- in-grid neighbours
     looked up. Agents not ``init.found`` keep their configuration.
     """
-    return _run(_bfp, tables, init.configs.copy(), init.found.copy())
-
-
-@nb.njit(cache=True, nogil=True)
-def _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
-    """Legality of configuration ``q`` (n,) for agent ``a`` (stops at the first illegal
-    step)."""
-    m_prev = 0
-    m_prev2 = 0
-    j_prev = 0
-    for k in range(q.size):
-        step = step_off[k] + m_prev * J + q[k]
-        swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
-        if not (step_legal[a, step] and swing_ok[a, swing]):
-            return False
-        if k > 0:
-            m_prev2 += j_prev
-        m_prev += q[k]
-        j_prev = q[k]
-    return True
+    configs, found = init.configs.copy(), init.found.copy()
+    A = found.size
+    expanded = np.zeros(A, dtype=np.int64)
+    checks = np.zeros(A, dtype=np.int64)
+    orders = np.zeros((1, 1, configs.shape[1]), dtype=np.int8)
+    run_parts(_best_first, A, tables.lattice, orders, np.zeros(A, dtype=np.int64), configs,
+              found, expanded, checks, 2)
+    return SearchResult(configs, found, expanded, checks)
 
 
 @nb.njit(cache=True, nogil=True)
@@ -163,84 +156,105 @@ def _fifo(centre, n, J, order):
 
 
 @nb.njit(cache=True, nogil=True)
-def _find_init(step_legal, swing_ok, J, step_off, swing_off, strides, orders, which,
-               configs, found, expanded, checks):
-    """Walk each agent's FIFO order ``orders[which[a]]`` to the first legal
-    configuration, counting the look-ups and the illegal (expanded) configurations."""
-    A, n = configs.shape
+def _best_first(L, orders, which, configs, found, expanded, checks, phases, part, parts):
+    """FIND_INIT (``phases`` & 1) and BFP (& 2) of every agent
+    (every ``parts``-th from ``part``, :func:`~planners.lattice.run_parts`)."""
+    for a in range(part, configs.shape[0], parts):
+        if phases & 1:
+            _find_init(L, a, orders[which[a]], configs[a], found, expanded, checks)
+        if phases & 2 and found[a]:
+            _bfp(L, a, configs[a], expanded, checks)
+
+
+@_inline
+def _find_init(L, a, order, config, found, expanded, checks):
+    """Walk the FIFO order ``order`` to agent ``a``'s first legal configuration, counting
+    the look-ups and the illegal (expanded) configurations."""
+    n = config.size
+    J = L.flat_Ej.shape[1]
     q = np.empty(n, dtype=np.int64)
-    for a in range(A):
-        order = orders[which[a]]
-        for i in range(order.shape[0]):
-            for k in range(n):
-                q[k] = order[i, k]
-            checks[a] += 1
-            if _legal(a, q, step_legal, swing_ok, J, step_off, swing_off, strides):
-                configs[a, :] = q
-                found[a] = True
-                break
-            expanded[a] += 1
+    sd, rs, wd, wo = L.step_done, L.reason, L.swing_done, L.swing_ok
+    so, wf, ws = L.step_offset, L.swing_offset, L.swing_strides
+    for i in range(order.shape[0]):
+        for k in range(n):
+            q[k] = order[i, k]
+        checks[a] += 1
+        legal = probe(sd, rs, wd, wo, so, wf, ws, J, a, q)
+        if legal < 0:
+            legal = config_legal(L, a, q)
+        if legal:
+            config[:] = q
+            found[a] = True
+            return
+        expanded[a] += 1
 
 
-@nb.njit(cache=True, nogil=True)
-def _bfp(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
-         configs, found, expanded, checks):
-    A, n = configs.shape
+@_inline
+def _bfp(L, a, config, expanded, checks):
+    """BFP from agent ``a``'s legal ``config`` (n,), which it replaces by the result."""
+    n = config.size
+    J = L.flat_Ej.shape[1]
     total = J**n
+    sd, rs, wd, wo = L.step_done, L.reason, L.swing_done, L.swing_ok
+    co, pr, so, wf, ws = L.cost, L.progress, L.step_offset, L.swing_offset, L.swing_strides
     visited = np.zeros(total, dtype=np.bool_)
     open_code = np.empty(total, dtype=np.int64)
     open_eff = np.empty(total)
     q = np.empty(n, dtype=np.int64)
     r = np.empty(n, dtype=np.int64)
-    for a in range(A):
-        if not found[a]:
-            continue
-        visited[:] = False
-        init = _code(configs[a], J)
-        visited[init] = True
-        _, e0 = evaluate_one(a, configs[a], step_legal, swing_ok, cost, progress, J, step_off,
-                          swing_off, strides)
-        open_code[0] = init
-        open_eff[0] = e0
-        size = 1
-        best_code, best_eff = init, e0
-        result = -1
-        while size > 0:
-            pick = 0
-            for i in range(1, size):
-                if open_eff[i] > open_eff[pick]:
-                    pick = i
-            c, e = open_code[pick], open_eff[pick]
-            for i in range(pick, size - 1):  # keep insertion order among the rest
-                open_code[i] = open_code[i + 1]
-                open_eff[i] = open_eff[i + 1]
-            size -= 1
-            if e > best_eff:
-                best_code, best_eff = c, e
-            _decode(c, n, J, q)
-            expanded[a] += 1
-            all_worse = True
-            for k in range(n):
-                for d in (-1, 1):
-                    v = q[k] + d
-                    if v < 0 or v >= J:
-                        continue
-                    r[:] = q
-                    r[k] = v
-                    checks[a] += 1
-                    legal, e2 = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
-                                          step_off, swing_off, strides)
-                    if not legal:
-                        continue
-                    if e2 >= e:
-                        all_worse = False
-                    c2 = _code(r, J)
-                    if e2 > e and not visited[c2]:
-                        open_code[size] = c2
-                        open_eff[size] = e2
-                        size += 1
-                        visited[c2] = True
-            if all_worse:
-                result = c
-                break
-        _decode(result if result >= 0 else best_code, n, J, configs[a])
+    init = _code(config, J)
+    visited[init] = True
+    _, e0 = config_efficiency(L, a, config)
+    open_code[0] = init
+    open_eff[0] = e0
+    size = 1
+    best_code, best_eff = init, e0
+    result = -1
+    while size > 0:
+        pick = 0
+        for i in range(1, size):
+            if open_eff[i] > open_eff[pick]:
+                pick = i
+        c, e = open_code[pick], open_eff[pick]
+        for i in range(pick, size - 1):  # keep insertion order among the rest
+            open_code[i] = open_code[i + 1]
+            open_eff[i] = open_eff[i + 1]
+        size -= 1
+        if e > best_eff:
+            best_code, best_eff = c, e
+        _decode(c, n, J, q)
+        expanded[a] += 1
+        all_worse = True
+        for k in range(n):
+            for d in (-1, 1):
+                v = q[k] + d
+                if v < 0 or v >= J:
+                    continue
+                r[:] = q
+                r[k] = v
+                checks[a] += 1
+                legal, e2 = _efficiency(L, a, r, sd, rs, wd, wo, co, pr, so, wf, ws, J)
+                if not legal:
+                    continue
+                if e2 >= e:
+                    all_worse = False
+                c2 = _code(r, J)
+                if e2 > e and not visited[c2]:
+                    open_code[size] = c2
+                    open_eff[size] = e2
+                    size += 1
+                    visited[c2] = True
+        if all_worse:
+            result = c
+            break
+    _decode(result if result >= 0 else best_code, n, J, config)
+
+
+@_inline
+def _efficiency(L, a, q, sd, rs, wd, wo, co, pr, so, wf, ws, J):
+    """:func:`~planners.lattice_kernel.config_efficiency` from the arrays of ``L``
+    (taken once per search), evaluating through ``L`` only what is missing."""
+    legal, e = probe_efficiency(sd, rs, wd, wo, co, pr, so, wf, ws, J, a, q)
+    if legal >= 0:
+        return legal == 1, e
+    return config_efficiency(L, a, q)

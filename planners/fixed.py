@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
-from planners.lattice import StepTables
+from planners.lattice import StepTables, run_parts
+from planners.lattice_kernel import step_legal, swing_legal
 from planners.search import SearchResult
 
 __all__ = ["fixed"]
@@ -26,11 +28,64 @@ def fixed(tables: StepTables) -> SearchResult:
     j = np.arange(J)
     # Preference order per agent: distance to neutral, then shorter first.
     order = np.argsort(np.abs(j[None, :] - tables.neutral[:, None]) * 2 * J + j[None, :],
-                       axis=1, kind="stable")
+                       axis=1, kind="stable").astype(np.int64)
     configs = np.zeros((A, n), dtype=np.int64)
-    found = np.ones(A, dtype=bool)
+    found = np.ones(A, dtype=np.bool_)
     checks = np.zeros(A, dtype=np.int64)
-    rows = np.arange(A)
+    run_parts(_fixed, A, tables.lattice, order, configs, found, checks)
+    expanded = np.full(A, n, dtype=np.int64)
+    stuck = np.flatnonzero(~found)
+    if stuck.size:
+        # a dead end: the whole table (as a search may read it), the step-by-step pass
+        # again over it (its counts), then depth-first backtracking
+        tables.complete(stuck)
+        configs[stuck], checks[stuck] = _greedy_rows(tables, stuck, order[stuck])
+    for a in stuck:
+        result, pushes, looked = _backtrack(tables, a, order[a])
+        expanded[a] += pushes
+        checks[a] += looked
+        if result is not None:
+            configs[a], found[a] = result, True
+    return SearchResult(configs, found, expanded, checks)
+
+
+@nb.njit(cache=True, nogil=True)
+def _fixed(L, order, configs, found, checks, part, parts):
+    """The step-by-step pass of every agent, its steps and swings read up to the first
+    depth without a legal step (:func:`fixed`'s dead ends are handled there)."""
+    J = L.flat_Ej.shape[1]
+    for a in range(part, configs.shape[0], parts):
+        m_prev, m_prev2, j_prev = 0, 0, 0
+        for k in range(configs.shape[1]):
+            pick = -1
+            for i in range(J):
+                j = order[a, i]
+                step = L.step_offset[k] + m_prev * J + j
+                swing = L.swing_offset[k] + m_prev2 * L.swing_strides[k] + j + (
+                    j_prev if k > 0 else 0)
+                if step_legal(L, a, step) and swing_legal(L, a, swing):
+                    pick = j
+                    checks[a] += i + 1
+                    break
+            if pick < 0:
+                found[a] = False
+                break
+            configs[a, k] = pick
+            if k > 0:
+                m_prev2 += j_prev
+            m_prev += pick
+            j_prev = pick
+
+
+def _greedy_rows(tables: StepTables, rows: np.ndarray, order: np.ndarray):
+    """The step-by-step pass over the complete tables of agents ``rows`` (C,) with
+    preference orders (C, J): configurations (C, n) (the first choice where no step is
+    legal) and candidate steps looked up (C,)."""
+    st = tables.struct
+    C, n, J = rows.size, st.n, st.J
+    configs = np.zeros((C, n), dtype=np.int64)
+    checks = np.zeros(C, dtype=np.int64)
+    at = np.arange(C)
     for k in range(n):
         trial = np.repeat(configs[:, None, :], J, axis=1)
         trial[:, :, k] = order
@@ -38,18 +93,10 @@ def fixed(tables: StepTables) -> SearchResult:
         ok = (tables.step_legal[rows[:, None], steps[:, :, k]]
               & tables.swing_ok[rows[:, None], swings[:, :, k]])
         first = np.argmax(ok, axis=1)
-        has = ok[rows, first]
+        has = ok[at, first]
         checks += np.where(has, first + 1, J)
-        configs[:, k] = order[rows, first]
-        found &= has
-    expanded = np.full(A, n, dtype=np.int64)
-    for a in np.flatnonzero(~found):
-        result, pushes, looked = _backtrack(tables, a, order[a])
-        expanded[a] += pushes
-        checks[a] += looked
-        if result is not None:
-            configs[a], found[a] = result, True
-    return SearchResult(configs, found, expanded, checks)
+        configs[:, k] = order[at, first]
+    return configs, checks
 
 
 def _backtrack(tables: StepTables, agent: int, order: np.ndarray):

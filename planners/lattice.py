@@ -1,40 +1,78 @@
-"""Precomputed step tables on the foothold lattice (one compiled pass per batch).
+"""Step tables on the foothold lattice, evaluated in full or where the search reads them.
 
 After k steps of lengths ``L_min + j*dL`` (j = 0..J-1) every foothold lies on the lattice
 ``k*L_min + m*dL`` (m = 0..(J-1)k). Legality and energy of step k depend only on the
 stance foothold f_{k-1} and the step's own length (a *step* entry), except the swing
 curve, which depends on the lift-off foothold f_{k-2} and the touch-down foothold f_k
-(a *swing* entry). Every node, step and swing of the horizon is evaluated once per agent
-(:mod:`planners.lattice_kernel`, agents in parallel); the searches then only look tables
-up.
+(a *swing* entry). Each entry is evaluated once per agent, by
+:mod:`planners.lattice_kernel`: all of them up front (``build_tables(..., lazy=False)``,
+agents in parallel), or each when a search first reads it (``lazy=True``: the searches'
+kernels read the tables through the kernel's accessors, and a value does not depend on
+when it was evaluated).
 """
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
+import numba as nb
 import numpy as np
 
 from planners.config import PlannerConfig
 from planners.grids import leg_grids, swing_basis
-from planners.lattice_kernel import build_agents, build_agents_serial
+from planners.lattice_kernel import (
+    Lattice,
+    build_agents,
+    build_agents_serial,
+    complete_agents,
+    prepare_agents,
+)
+from planners.legality import Reason
 from planners.profile import RASTER_CELL
 from planners.swing import TABLE_LEVELS
 
-__all__ = ["Structure", "StepTables", "TableWork", "structure", "build_tables"]
+__all__ = ["Structure", "StepTables", "TableWork", "build_tables", "run_parts", "structure"]
 
 
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
 LOOKUP_CONFIGS = 65536
-#: Batches of at least this many agents build their tables on every core (smaller ones
-#: on one: starting the threads costs more than it saves).
+#: Batches of at least this many agents run their kernels on every core (smaller ones on
+#: one: handing work to the threads costs more than it saves).
 PARALLEL_AGENTS = 8
+#: Threads the kernels run on (numba's thread count: NUMBA_NUM_THREADS, default the
+#: cores).
+THREADS = nb.config.NUMBA_NUM_THREADS
+_POOL: list = []
+
+
+def run_parts(kernel, count: int, *args) -> None:
+    """``kernel(*args, part, parts)`` for part = 0..parts-1 on ``parts`` threads (the
+    kernels release the GIL and take every ``parts``-th of ``count`` independent agents
+    or groups), or ``kernel(*args, 0, 1)`` below :data:`PARALLEL_AGENTS`."""
+    parts = min(THREADS, count) if count >= PARALLEL_AGENTS else 1
+    if parts <= 1:
+        kernel(*args, 0, 1)
+        return
+    if not _POOL:
+        _POOL.append(ThreadPoolExecutor(THREADS - 1, thread_name_prefix="planners"))
+    futures = [_POOL[0].submit(kernel, *args, part, parts) for part in range(1, parts)]
+    kernel(*args, 0, parts)
+    for future in futures:
+        future.result()
 #: Evaluate only the steps whose stance foothold a legal sequence of steps from the start
 #: reaches (the others get E = +inf and ``Reason.UNREACHED``) and the swing curves of
 #: pairs a legal sequence can use (False: every step, and the swings of every pair of
-#: supported footholds; the plans are the same, only slower).
+#: supported footholds, up front; the plans are the same, only slower).
 PRUNE = True
+#: The planners whose plans evaluate the lattice lazily, where the search reads it: those
+#: that read a small part of it. ``optimal`` and ``best_first_multistart`` (whose starts
+#: include a DP over the whole lattice) read nearly every entry the pruned tables hold
+#: (705 of 717 steps on random terrain) and get the tables up front, in one pass, which
+#: is faster than entry by entry. Empty: every plan evaluates its tables up front (the
+#: plans are the same).
+LAZY = frozenset({"best_first", "fixed"})
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,7 +298,14 @@ class StepTables:
     reach : ndarray, shape (A,)
         Farthest last foothold of the lattice, relative to the stance foot [m].
     work : TableWork
-        What building the tables did, per agent.
+        What evaluating the tables did, per agent (so far, for lazy tables).
+    lattice : Lattice
+        The arrays above and the kernels' inputs (:mod:`planners.lattice_kernel`), for
+        the searches' kernels.
+    lazy : bool
+        Entries are evaluated where a search reads them; an entry not evaluated
+        (``evaluated`` False) is illegal, E = +inf, ``Reason.UNREACHED``, its other
+        values undefined. :meth:`complete` evaluates what a search may read.
     """
 
     struct: Structure
@@ -285,12 +330,33 @@ class StepTables:
     progress: np.ndarray
     terminal: np.ndarray
     reach: np.ndarray
-    work: TableWork
+    lattice: Lattice
+    lazy: bool
 
-    @cached_property
+    @property
+    def work(self) -> TableWork:
+        """What evaluating the tables did, per agent (counted in the kernels)."""
+        w = self.lattice.work
+        return TableWork(w[:, 4].copy(), w[:, 0].copy(), w[:, 1].copy(), w[:, 2].copy(),
+                         w[:, 3].copy())
+
+    @property
     def step_legal(self) -> np.ndarray:
-        """Legal steps (A, Ns), bool."""
-        return self.step_reason == 0
+        """Legal steps (A, Ns), bool (evaluated so far, for lazy tables; cached for
+        tables evaluated up front)."""
+        if self.lazy:
+            return self.step_reason == 0
+        if "_legal" not in self.__dict__:
+            object.__setattr__(self, "_legal", self.step_reason == 0)
+        return self.__dict__["_legal"]
+
+    def complete(self, agents: np.ndarray | None = None) -> None:
+        """Evaluate every entry a search may read (:data:`PRUNE`) for ``agents``
+        (default all); what a lazy search evaluated already is kept."""
+        agents = (np.arange(self.neutral.size) if agents is None
+                  else np.asarray(agents, dtype=np.int64))
+        if agents.size:
+            run_parts(complete_agents, agents.size, self.lattice, agents)
 
     def evaluate(self, agents: np.ndarray, configs: np.ndarray):
         """Legality and efficiency of configurations.
@@ -322,8 +388,9 @@ class StepTables:
 
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
-                 origins: np.ndarray, config: PlannerConfig) -> StepTables:
-    """Evaluate legality and energy of every node, step and swing for every agent.
+                 origins: np.ndarray, config: PlannerConfig, lazy: bool = False) -> StepTables:
+    """Step tables of every agent: evaluated up front, or (``lazy``) left for the
+    searches to evaluate where they read them.
 
     Parameters
     ----------
@@ -337,6 +404,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     origins : ndarray, shape (A,)
         Arc length of the stance foot on each profile [m].
     config : PlannerConfig
+    lazy : bool
+        Evaluate only the nodes (footholds, support, terminal energies) and leave every
+        step and swing to the searches (else every entry :data:`PRUNE` allows, in one
+        compiled pass per agent, agents in parallel).
 
     Notes
     -----
@@ -349,6 +420,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     g = leg_grids(legs, speeds, config)
     if trailing is None:
         trailing = -(g.lo + g.delta * g.neutral)
+    trailing = np.asarray(trailing, dtype=float)
     # each agent's own profile, shifted so that its stance foot lies on a raster cell
     # boundary (rasters then align with the agent's origin, whatever the batch)
     offsets = np.floor(origins / RASTER_CELL) * RASTER_CELL - origins
@@ -361,14 +433,6 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     first, second, valid = st.pair_steps
     basis, influence = swing_basis(config.bezier_samples)
     Nn, Ns, Np = st.node_depth.size, st.step_stance.size, st.swing_back.size
-    node_s, node_z, terminal = np.empty((A, Nn)), np.empty((A, Nn)), np.zeros((A, Nn))
-    length, rise, En, Ev, Ej, E, cost, progress = (np.empty((A, Ns)) for _ in range(8))
-    reason = np.empty((A, Ns), dtype=np.int64)
-    far = np.empty(A)
-    swing_ok = np.zeros((A, Np), dtype=np.bool_)
-    controls = np.zeros((A, Np, 4, 2))
-    rounds = np.empty((A, Np), dtype=np.int64)
-    work = np.zeros((A, 5), dtype=np.int64)
     fparams = np.array([config.max_step_rise, config.max_foot_slope, config.support_tolerance,
                         config.edge_margin, config.swing_lift, config.pelvis_height_ratio,
                         float(np.cos(np.pi - config.knee_max_flexion)), config.min_step_ratio,
@@ -378,17 +442,47 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                         config.max_adjustments, TABLE_LEVELS], dtype=np.int64)
     weights = np.array([w.alpha, w.beta, w.gamma, w.down_ratio, w.vertical == "linear",
                         w.frequency * w.alpha, w.c_thigh, w.c_calf], dtype=float)
-    kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
-    kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, np.asarray(trailing, dtype=float),
-           np.asarray(speeds, dtype=float), g.normal, g.per_metre,
-           g.lo + g.delta * g.neutral, g.legs, g.flat_Ej, g.flat_reach,
-           g.flat_ctrl, g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
-           st.step_front, st.step_j, st.step_depth, np.asarray(st.step_offset, dtype=np.int64),
-           st.swing_back, st.swing_front, st.swing_stride, first, second, valid, basis,
-           influence, fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E,
-           reason, cost, progress, terminal, far, swing_ok, controls, rounds, work)
-    return StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, node_s, node_z, length, rise,
-                      En, Ev, Ej, E, reason, swing_ok, controls, rounds, config, cost,
-                      progress, terminal, far,
-                      TableWork(work[:, 4], work[:, 0], work[:, 1], work[:, 2],
-                                work[:, 3]))
+    # the swing raster of an agent spans its nodes (each within half an increment of the
+    # grid) and two foot lengths either side
+    reach_s = st.n * (g.lo + g.delta * st.J) - np.minimum(trailing, 0.0)
+    cells = int(np.ceil(((reach_s + 4 * g.legs[:, 2]) / RASTER_CELL).max())) + 4
+    empty, zeros = np.empty, np.zeros
+    lattice = Lattice(
+        st.node_depth, st.node_m, st.step_stance, st.step_front, st.step_j, st.step_depth,
+        np.asarray(st.step_offset, dtype=np.int64), st.swing_back, st.swing_front,
+        st.swing_stride, np.asarray(st.swing_offset, dtype=np.int64),
+        np.asarray(st.swing_strides, dtype=np.int64), first, second, valid,
+        prof_s, prof_z, bounds, base,
+        g.lo, g.delta, trailing, np.asarray(speeds, dtype=float), g.normal, g.per_metre,
+        g.lo + g.delta * g.neutral, g.legs, g.flat_Ej, g.flat_reach, g.flat_ctrl,
+        g.flat_ok, g.flat_slack, basis, influence, fparams, iparams, weights,
+        zeros(A, dtype=np.bool_), empty(prof_s.size), empty(prof_s.size),
+        zeros(A, dtype=np.int64), empty((A, 7)), empty((A, Nn), dtype=np.int64), empty(A),
+        zeros(A, dtype=np.int64), zeros(A, dtype=np.int64), empty((A, TABLE_LEVELS * cells)),
+        empty((A, cells + 1), dtype=np.int64), zeros(A, dtype=np.bool_),
+        empty((A, Nn)), empty((A, Nn)), empty((A, Nn)), empty(A),
+        empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)),
+        np.full((A, Ns), np.inf), np.full((A, Ns), int(Reason.UNREACHED), dtype=np.int64),
+        np.full((A, Ns), np.inf), empty((A, Ns)), zeros((A, Ns), dtype=np.bool_),
+        zeros((A, Np), dtype=np.bool_), zeros((A, Np, 4, 2)), np.full((A, Np), -1),
+        zeros((A, Np), dtype=np.bool_), zeros((A, 5), dtype=np.int64))
+    L = lattice
+    tables = StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, L.node_s, L.node_z,
+                        L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,
+                        L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
+                        lattice, lazy)
+    run_parts(prepare_agents, A, lattice)
+    if not lazy:  # the one-pass kernel (faster than entry by entry where most are read)
+        L = lattice
+        kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
+        kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, trailing, L.speeds, g.normal,
+               g.per_metre, L.neutral_len, g.legs, g.flat_Ej, g.flat_reach, g.flat_ctrl,
+               g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
+               st.step_front, st.step_j, st.step_depth, L.step_offset, st.swing_back,
+               st.swing_front, st.swing_stride, first, second, valid, basis, influence,
+               fparams, iparams, weights, L.node_s, L.node_z, L.length, L.rise, L.En, L.Ev,
+               L.Ej, L.E, L.reason, L.cost, L.progress, L.terminal, L.far, L.swing_ok,
+               L.controls, L.rounds, L.work)
+        np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
+        np.greater_equal(L.rounds, 0, out=L.swing_done)
+    return tables

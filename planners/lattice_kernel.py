@@ -1,17 +1,23 @@
-"""The compiled pass of :func:`planners.lattice.build_tables`: one agent per iteration.
+"""The compiled lattice: each agent's nodes, steps and swings, evaluated when first read.
 
-Every node, step and swing of one agent's lattice is evaluated on the agent's own ground
-profile (shifted so that its stance foot lies on a raster cell boundary), with the same
-arithmetic, in the same order, as the vectorised definitions it replaces
+An agent's nodes (footholds, snapping, support) and terminal energies are computed first,
+for every agent of a batch (:func:`prepare_agents`); a step's legality and energy
+(:func:`eval_step`) and a swing curve (:func:`eval_swing`) when a search first reads them
+(:func:`step_legal`, :func:`swing_legal`, :func:`config_efficiency`), once each: the
+searches' kernels take the :data:`Lattice` and read it through these. :func:`complete`
+evaluates everything a search may read (the eager tables). Each agent is evaluated on its
+own ground profile (shifted so that its stance foot lies on a raster cell boundary), with
+the same arithmetic, in the same order, as the vectorised definitions it replaces
 (:meth:`~planners.profile.GroundProfile.height` and ``span_heights``,
 :func:`~planners.legality.foot_support`, :func:`~planners.legality.snap_to_support`,
 :func:`~planners.energy.step_energy`, :func:`~planners.energy.terminal_energy`,
-:meth:`~planners.profile.GroundProfile.raster`, :func:`~planners.swing.adjust_swings`).
-Agents run in parallel (``prange``); the caller supplies the per-leg caches (flat-ground
-joint energies and swing curves) and every parameter as an argument.
+:meth:`~planners.profile.GroundProfile.raster`, :func:`~planners.swing.adjust_swings`),
+so a value does not depend on when, or whether, the other entries were evaluated.
 """
 
 from __future__ import annotations
+
+from collections import namedtuple
 
 import numba as nb
 import numpy as np
@@ -20,13 +26,19 @@ from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, leg_constants
 from planners.swing import adjust_one
 
-__all__ = ["build_agents", "build_agents_serial"]
+__all__ = ["Lattice", "build_agents", "build_agents_serial", "complete", "complete_agents",
+           "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
+           "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_legal"]
 
 _EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
 _VERTICAL = 1e-12
 # Reason flags (planners.legality.Reason)
 _EDGE, _SLOPE, _STEP_HEIGHT, _KNEE_REACH, _UNREACHED = 1, 2, 4, 8, 32
 _jit = nb.njit(cache=True, nogil=True)
+#: Functions that take the Lattice: inlined into the kernels (a call passes every array
+#: of the tuple, several microseconds).
+inline = nb.njit(cache=True, nogil=True, inline="always")
+_inline = inline
 
 
 @_jit
@@ -238,19 +250,19 @@ def _cumulative(s, ds, cost, cum, x):
 
 
 @_jit
-def _raster(s, z, slope, start, cell, count, levels):
-    """GroundProfile.raster(start, start + count*cell) cells, their range-maximum table
-    (levels, count) and the cumulative vertex count per cell (count + 1,)."""
+def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
+    """GroundProfile.raster(start, start + count*cell) cells: fills their range-maximum
+    table ``table`` (levels, count) and the cumulative vertex count per cell
+    ``vertex_cum`` (count + 1,)."""
     edges = start + cell * np.arange(count + 1)
     at = np.empty(count + 1)
     for k in range(count + 1):
         at[k] = _height(s, z, slope, edges[k])
-    table = np.empty((levels, count))
     cells = table[0]
     for k in range(count):
         cells[k] = max(at[k], at[k + 1])
     scale = 1.0 / cell
-    vertex_cum = np.zeros(count + 1, dtype=np.int64)
+    vertex_cum[:] = 0
     for v in range(s.size):
         sv = s[v]
         vertex_cum[min(max(int((sv - start) * scale), 0), count - 1) + 1] += 1
@@ -277,7 +289,391 @@ def _raster(s, z, slope, start, cell, count, levels):
         for i in range(split, count):
             table[k, i] = table[k - 1, i]
         width *= 2
-    return table, vertex_cum
+
+
+#: The arrays of a batch's lattice (:func:`planners.lattice.build_tables` fills the
+#: inputs; the kernels below fill the rest, an agent's nodes when it is first touched,
+#: a step or a swing when it is first read). Shapes: A agents, Nn nodes, Ns steps,
+#: Np swings, J step lengths, S = 2J - 1 strides, V profile vertices of the batch.
+Lattice = namedtuple("Lattice", [
+    # structure (planners.lattice.Structure)
+    "node_depth", "node_m", "step_stance", "step_front", "step_j", "step_depth",
+    "step_offset", "swing_back", "swing_front", "swing_stride", "swing_offset",
+    "swing_strides", "pair_first", "pair_second", "pair_valid",
+    # profiles (V,), bounds (A + 1,), the stance foot's shifted arc length (A,) [m]
+    "prof_s", "prof_z", "bounds", "base",
+    # per agent: grid, trailing foot, speed, normal step, energy per metre, neutral
+    # step (A,); legs (A, 6); flat-ground caches (A, J), (A, 2, S, ...)
+    "lo", "delta", "trailing", "speeds", "normal", "per_metre", "neutral_len", "legs",
+    "flat_Ej", "flat_reach", "flat_ctrl", "flat_ok", "flat_slack", "basis", "influence",
+    "fparams", "iparams", "weights",
+    # filled when an agent is first touched: slopes (V,), edges (V,) and their count
+    # (A,), leg constants (A, 7), support flags (A, Nn), the swing raster's start,
+    # cell count and levels (A,), its table (A, levels * cells) and vertex counts
+    # (A, cells + 1), whether built (A,)
+    "ready", "slope", "edges", "edge_count", "consts", "support", "r_start", "r_count",
+    "r_levels", "r_table", "r_vcum", "r_built",
+    # tables (planners.lattice.StepTables) and what is evaluated
+    "node_s", "node_z", "terminal", "far", "length", "rise", "En", "Ev", "Ej", "E",
+    "reason", "cost", "progress", "step_done", "swing_ok", "controls", "rounds",
+    "swing_done", "work"])
+
+
+@_jit
+def prepare_agents(L, part, parts):
+    """:func:`prepare` of every ``parts``-th agent from ``part``
+    (:func:`planners.lattice.run_parts`)."""
+    for a in range(part, L.base.size, parts):
+        prepare(L, a)
+
+
+@_inline
+def prepare(L, a):
+    """Agent ``a``'s slopes, edges, nodes (snapping and support), terminal energies and
+    raster extent (before any entry of its lattice is evaluated)."""
+    L.ready[a] = True
+    fparams, iparams = L.fparams, L.iparams
+    max_slope, tolerance, margin, lift = fparams[1], fparams[2], fparams[3], 0.75 * fparams[4]
+    min_ratio, max_ratio, cell = fparams[7], fparams[8], fparams[12]
+    snap, terminal_cost, levels = iparams[0] > 0, iparams[1] > 0, iparams[4]
+    J = L.flat_Ej.shape[1]
+    n = L.step_offset.size
+    Nn = L.node_depth.size
+    last0 = Nn - ((J - 1) * n + 1)  # first node of depth n
+    b, e_ = L.bounds[a], L.bounds[a + 1]
+    s, z = L.prof_s[b:e_], L.prof_z[b:e_]
+    slope = L.slope[b:e_]
+    m_v = s.size
+    n_edges = 0
+    for i in range(m_v - 1):
+        d = s[i + 1] - s[i]
+        slope[i] = 0.0
+        if d > _VERTICAL:
+            slope[i] = (z[i + 1] - z[i]) / d
+        elif abs(z[i + 1] - z[i]) > tolerance:
+            L.edges[b + n_edges] = s[i]
+            n_edges += 1
+    slope[m_v - 1] = 0.0
+    L.edge_count[a] = n_edges
+    edges = L.edges[b:b + n_edges]
+    leg = L.legs[a]
+    heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
+    constants = leg_constants(leg[0], leg[1], toe_off, ankle, fparams[5], fparams[6])
+    for i in range(7):
+        L.consts[a, i] = constants[i]
+    b0 = L.base[a]
+    lo_a, delta_a = L.lo[a], L.delta[a]
+    lowest, highest = np.inf, -np.inf
+    for v in range(Nn):
+        depth = L.node_depth[v]
+        x = L.trailing[a] if depth == -1 else max(depth, 0) * lo_a + L.node_m[v] * delta_a
+        if snap and v >= 2:
+            x = _snap(b0 + x, 0.5 * delta_a, heel_off, toe_off, s, z, slope, edges,
+                      margin, tolerance, max_slope) - b0
+        L.node_s[a, v] = x
+        L.node_z[a, v] = _height(s, z, slope, b0 + x)
+        L.support[a, v] = 0
+        if v >= 2:
+            L.support[a, v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges,
+                                       margin, tolerance, max_slope)
+        lowest = min(lowest, b0 + x)
+        highest = max(highest, b0 + x)
+    far_a = -np.inf
+    for v in range(last0, Nn):
+        far_a = max(far_a, L.node_s[a, v])
+    L.far[a] = far_a
+    L.terminal[a, :] = 0.0
+    if terminal_cost:
+        lo_i = max(_right(s, b0 + L.trailing[a] - 2.0) - 1, 0)
+        hi_i = min(_left(s, b0 + far_a + 2.0), m_v - 1)
+        starts = np.empty(Nn - last0)
+        for v in range(last0, Nn):
+            starts[v - last0] = b0 + L.node_s[a, v]
+        _terminal(s, z, lo_i, hi_i, starts, b0 + far_a, L.terminal[a, last0:], leg,
+                  L.speeds[a], L.normal[a], L.per_metre[a], L.neutral_len[a], L.weights,
+                  L.weights[6], L.weights[7], constants, lift, max_slope, min_ratio,
+                  max_ratio)
+    # the swing raster covers every curve of the lattice (built when a curve needs it)
+    span = 2 * leg[2]
+    start = np.floor((lowest - span) / cell) * cell
+    count = max(1, int(np.ceil((highest + span - start) / cell)))
+    L.r_start[a] = start
+    L.r_count[a] = count
+    L.r_levels[a] = min(levels, _bit_length(count))
+    L.r_built[a] = False
+
+
+@_inline
+def eval_step(L, a, t):
+    """Legality and energy of step ``t`` of agent ``a`` (once; the agent must be
+    ready)."""
+    if L.step_done[a, t]:
+        return
+    L.step_done[a, t] = True
+    fparams = L.fparams
+    max_rise = fparams[0]
+    lift = 0.75 * fparams[4]
+    n = L.step_offset.size
+    b, e_ = L.bounds[a], L.bounds[a + 1]
+    s, z, slope = L.prof_s[b:e_], L.prof_z[b:e_], L.slope[b:e_]
+    b0 = L.base[a]
+    leg = L.legs[a]
+    ankle = leg[5]
+    st_v, fr_v = L.step_stance[t], L.step_front[t]
+    ss, fs = L.node_s[a, st_v], L.node_s[a, fr_v]
+    zs, zf = L.node_z[a, st_v], L.node_z[a, fr_v]
+    r = zf - zs
+    length = fs - ss
+    L.length[a, t], L.rise[a, t] = length, r
+    final = L.iparams[1] > 0 and L.step_depth[t] == n
+    L.progress[a, t] = L.far[a] - ss if final else length
+    j = L.step_j[t]
+    ej = L.flat_Ej[a, j]
+    highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
+    nominal = L.lo[a] + L.delta[a] * j
+    level = r == 0 and highest == zs and abs(length - nominal) <= 1e-12
+    support = L.support[a, fr_v]
+    hopeless = support != 0 or abs(r) > max_rise
+    reachable = L.flat_reach[a, j]
+    if not level and not hopeless:
+        c = L.consts[a]
+        constants = (c[0], c[1], c[2], c[3], c[4], c[5], c[6])
+        th, ca, reachable = key_frame(ss, zs, fs, zf, ss, highest + ankle + lift, leg[0],
+                                      leg[1], leg[4], ankle, ankle + lift, constants)
+        ej = L.weights[6] * th + L.weights[7] * ca
+        L.work[a, 0] += 1
+    en, ev, et = _energy(length, r, ej, L.speeds[a], L.normal[a], L.weights)
+    if hopeless and not level:
+        et = np.inf
+    L.En[a, t], L.Ev[a, t], L.Ej[a, t], L.E[a, t] = en, ev, ej, et
+    flags = support
+    if abs(r) > max_rise:
+        flags |= _STEP_HEIGHT
+    if not reachable:
+        flags |= _KNEE_REACH
+    L.reason[a, t] = flags
+    L.cost[a, t] = et + L.terminal[a, fr_v] if final else et
+    L.work[a, 4] += 1
+
+
+@_inline
+def eval_swing(L, a, q):
+    """Swing curve ``q`` of agent ``a``: taken from the flat-ground cache where it
+    applies, else built by the §5.2 adjustment (once; the agent is prepared)."""
+    if L.swing_done[a, q]:
+        return
+    L.swing_done[a, q] = True
+    fparams = L.fparams
+    max_slope, cell = fparams[1], fparams[12]
+    b, e_ = L.bounds[a], L.bounds[a + 1]
+    s, z, slope = L.prof_s[b:e_], L.prof_z[b:e_], L.slope[b:e_]
+    b0 = L.base[a]
+    leg = L.legs[a]
+    heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
+    lo_a, delta_a = L.lo[a], L.delta[a]
+    bk, fr = L.swing_back[q], L.swing_front[q]
+    start, end = b0 + L.node_s[a, bk], b0 + L.node_s[a, fr]
+    z0, z1 = L.node_z[a, bk], L.node_z[a, fr]
+    stride = L.swing_stride[q]
+    if stride < 0:
+        behind = (-L.trailing[a] - lo_a) / delta_a
+        if (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
+                and behind < fparams[9] + 0.5):
+            stride = np.int64(np.rint(behind)) + L.node_m[fr]
+    vertices = _left(s, end + toe_off) - _right(s, start - heel_off)
+    grade = (z1 - z0) / (end - start)
+    nominal = 2 * lo_a + max(stride, 0) * delta_a
+    if (stride >= 0 and vertices == 0 and abs(grade) <= max_slope
+            and abs(end - start - nominal) <= 1e-9):
+        c = 0 if grade == 0 else 1
+        if L.flat_ok[a, c, stride] and (abs(grade) * max(heel_off, toe_off)
+                                        <= L.flat_slack[a, c, stride]):
+            for i in range(4):
+                c0 = L.flat_ctrl[a, c, stride, i, 0]
+                L.controls[a, q, i, 1] = L.flat_ctrl[a, c, stride, i, 1] + (z0 + grade * c0)
+                L.controls[a, q, i, 0] = c0 + L.node_s[a, bk]
+            L.rounds[a, q] = 0
+            L.swing_ok[a, q] = True
+            L.work[a, 2] += 1
+            return
+    count, levels = L.r_count[a], L.r_levels[a]
+    table = L.r_table[a, :levels * count].reshape((levels, count))
+    vertex_cum = L.r_vcum[a, :count + 1]
+    if not L.r_built[a]:
+        _raster(s, z, slope, L.r_start[a], cell, count, levels, table, vertex_cum)
+        L.r_built[a] = True
+    T = L.basis.shape[1]
+    scratch = np.empty((3, T))
+    summit = np.empty(2)
+    ctrl = L.controls[a, q]
+    ok, used = adjust_one(start, z0, end, z1, heel_off, toe_off, ankle, leg[2], L.r_start[a],
+                          cell, table, vertex_cum, L.basis, L.influence, fparams[10],
+                          fparams[4], fparams[11], max_slope, L.iparams[3], ctrl, summit,
+                          scratch)
+    for i in range(4):
+        ctrl[i, 0] -= b0
+    L.swing_ok[a, q] = ok
+    L.rounds[a, q] = used
+    L.work[a, 1] += 1
+    L.work[a, 3] += used
+
+
+@_inline
+def step_legal(L, a, t):
+    """Whether step ``t`` of agent ``a`` is legal (evaluated on first read)."""
+    eval_step(L, a, t)
+    return L.reason[a, t] == 0
+
+
+@_inline
+def swing_legal(L, a, q):
+    """Whether swing ``q`` of agent ``a`` clears the ground (built on first read)."""
+    eval_swing(L, a, q)
+    return L.swing_ok[a, q]
+
+
+@_inline
+def complete(L, a):
+    """Every table entry of agent ``a`` a search or a diagnosis may read: with
+    ``prune`` (iparams[2]) the steps whose stance foothold a legal sequence of steps
+    reaches and the swings of pairs a legal sequence can use (the others stay
+    unevaluated: illegal, E = +inf, ``Reason.UNREACHED``), else every step and the
+    swings between supported footholds."""
+    prune = L.iparams[2] > 0
+    Nn = L.node_depth.size
+    J = L.flat_Ej.shape[1]
+    reach = np.zeros(Nn, dtype=np.bool_)
+    reach[0] = True
+    reach[1] = True
+    for t in range(L.step_stance.size):  # steps are ordered by depth
+        if prune and not reach[L.step_stance[t]]:
+            continue
+        if step_legal(L, a, t):
+            reach[L.step_front[t]] = True
+    for q in range(L.swing_back.size):
+        bk, fr = L.swing_back[q], L.swing_front[q]
+        if prune:
+            through = False
+            for jp in range(J):
+                if (L.pair_valid[q, jp] and L.step_done[a, L.pair_first[q, jp]]
+                        and L.reason[a, L.pair_first[q, jp]] == 0
+                        and L.step_done[a, L.pair_second[q, jp]]
+                        and L.reason[a, L.pair_second[q, jp]] == 0):
+                    through = True
+                    break
+            if not (through and reach[bk]):
+                continue
+        elif L.support[a, fr] != 0 or L.support[a, bk] != 0:
+            continue
+        eval_swing(L, a, q)
+
+
+@_jit
+def complete_agents(L, agents, part, parts):
+    """:func:`complete` of every ``parts``-th agent in ``agents`` from ``part``
+    (:func:`planners.lattice.run_parts`)."""
+    for i in range(part, agents.size, parts):
+        complete(L, agents[i])
+
+
+@_jit
+def probe(step_done, reason, swing_done, swing_ok, step_off, swing_off, strides, J, a, q):
+    """Legality of configuration ``q`` (n,) of agent ``a`` from what is evaluated: 1
+    legal, 0 illegal, -1 an entry before the first illegal one is not evaluated yet
+    (then :func:`config_legal`). Plain arrays: the searches' hot path."""
+    m_prev = 0
+    m_prev2 = 0
+    j_prev = 0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        if not step_done[a, step]:
+            return -1
+        if reason[a, step] != 0:
+            return 0
+        swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
+        if not swing_done[a, swing]:
+            return -1
+        if not swing_ok[a, swing]:
+            return 0
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return 1
+
+
+@_jit
+def probe_efficiency(step_done, reason, swing_done, swing_ok, cost, progress, step_off,
+                     swing_off, strides, J, a, q):
+    """:func:`probe` and, where legal, the efficiency of :func:`config_efficiency`:
+    (1 legal, 0 illegal, -1 not evaluated yet; efficiency)."""
+    legal = probe(step_done, reason, swing_done, swing_ok, step_off, swing_off, strides, J,
+                  a, q)
+    if legal != 1:
+        return legal, 0.0
+    m_prev = 0
+    energy = 0.0
+    length = 0.0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        energy += cost[a, step]
+        length += progress[a, step]
+        m_prev += q[k]
+    return 1, np.rint(length / energy * 1e12) / 1e12
+
+
+@_inline
+def config_legal(L, a, q):
+    """Legality of configuration ``q`` (n,) of agent ``a``, evaluating its steps and
+    swings in order up to the first illegal one."""
+    J = L.flat_Ej.shape[1]
+    step_off, swing_off, strides = L.step_offset, L.swing_offset, L.swing_strides
+    step_done, reason = L.step_done, L.reason
+    swing_done, swing_ok = L.swing_done, L.swing_ok
+    m_prev = 0
+    m_prev2 = 0
+    j_prev = 0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        if not step_done[a, step]:
+            eval_step(L, a, step)
+        if reason[a, step] != 0:
+            return False
+        swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
+        if not swing_done[a, swing]:
+            eval_swing(L, a, swing)
+        if not swing_ok[a, swing]:
+            return False
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += q[k]
+        j_prev = q[k]
+    return True
+
+
+@_inline
+def config_efficiency(L, a, q):
+    """Legality and efficiency of configuration ``q`` (n,) of agent ``a``: sum of
+    ``progress`` over sum of ``cost``, rounded to 1e-12 as
+    :meth:`~planners.lattice.StepTables.evaluate`; 0 where illegal (evaluated up to
+    the first illegal step or swing)."""
+    J = L.flat_Ej.shape[1]
+    legal, eff = probe_efficiency(L.step_done, L.reason, L.swing_done, L.swing_ok, L.cost,
+                                  L.progress, L.step_offset, L.swing_offset,
+                                  L.swing_strides, J, a, q)
+    if legal >= 0:
+        return legal == 1, eff
+    if not config_legal(L, a, q):
+        return False, 0.0
+    legal, eff = probe_efficiency(L.step_done, L.reason, L.swing_done, L.swing_ok, L.cost,
+                                  L.progress, L.step_offset, L.swing_offset,
+                                  L.swing_strides, J, a, q)
+    return True, eff
+
+
+# The tables evaluated up front in one pass per agent (agents in parallel): the searches
+# that read most of the lattice (the DP of optimal and best_first_multistart's starts)
+# spend less on this loop than on evaluating entry by entry (planners.lattice.EAGER).
 
 
 @nb.njit(cache=True, nogil=True, parallel=True)
@@ -501,8 +897,10 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
         span = 2 * leg[2]
         r_start = np.floor((rest_lo - span) / cell) * cell
         count = max(1, int(np.ceil((rest_hi + span - r_start) / cell)))
-        table, vertex_cum = _raster(s, z, slope, r_start, cell, count,
-                                    min(levels, _bit_length(count)))
+        levels_a = min(levels, _bit_length(count))
+        table = np.empty((levels_a, count))
+        vertex_cum = np.empty(count + 1, dtype=np.int64)
+        _raster(s, z, slope, r_start, cell, count, levels_a, table, vertex_cum)
         scratch = np.empty((3, T))
         summit = np.empty(2)
         for q in range(Np):

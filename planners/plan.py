@@ -10,6 +10,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from planners import lattice
 from planners.best_first import best_first
 from planners.config import PlannerConfig
 from planners.errors import invalid
@@ -250,7 +251,8 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         sl = slice(start, start + BATCH_CHUNK)
         t0 = time.perf_counter()
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
-                              None if trailing is None else trailing[sl], origins[sl], config)
+                              None if trailing is None else trailing[sl], origins[sl], config,
+                              lazy=lattice.PRUNE and planner in lattice.LAZY)
         result = _SEARCHES[planner](tables)
         elapsed = (time.perf_counter() - t0) / len(profiles[sl])
         plans += _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],
@@ -298,6 +300,8 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     A = speeds.size
     rows = np.arange(A)[:, None]
     failed = np.flatnonzero(~result.found)
+    if tables.lazy:
+        tables.complete(failed)  # the diagnosis reads every legal prefix
     messages = {}
     for a, (message, prefix, depth) in zip(failed.tolist(),
                                            _diagnose(tables, failed, profiles, origins),
