@@ -37,9 +37,12 @@ class CrowdParams:
         ``"three_discs"``: broader than deep (:class:`~crowdwalk.crowd.shape.BodyShape`),
         turning its shoulders through gaps. Not the default, measured: in the 2 × 50
         counterflow (``crowdwalk verify --only counterflow --seeds 5``) three seeds of
-        five jam with it (19, 47, 32 of 100 arrive; stands of 44–54 s), none with the
-        disc; bottleneck flows fall from 1.33 / 1.67 / 2.18 to 1.08 / 1.52 / 1.88 /s
-        at 0.8 / 1.0 / 1.2 m (Seyfried 2009: 1.3–1.6 / 1.7–1.9 / 2.0–2.3).
+        five jammed with it (19, 47, 32 of 100 arrived; stands of 44–54 s), none with
+        the disc; since oncoming walkers are anticipated among all neighbours
+        (``SteeringParams.oncoming_neighbours``) all 100 arrive at every seed, but trips
+        take 2.64 / 1.60 / 1.31 / 1.33 / 1.78 × the free walk (disc: 1.90 / 1.33 / 1.38
+        / 1.40 / 1.34) and bottleneck flows are 0.89 / 1.49 / 1.95 /s at 0.8 / 1.0 /
+        1.2 m (disc 1.18 / 1.77 / 2.06; Seyfried 2009: 1.3–1.6 / 1.7–1.9 / 2.0–2.3).
     wait_time : float
         How long an agent stands before deciding again when it cannot step [s].
     target_distance : float
