@@ -468,7 +468,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         zeros(A, dtype=np.int64), empty((A, 7)), empty((A, Nn), dtype=np.int64), empty(A),
         zeros(A, dtype=np.int64), zeros(A, dtype=np.int64), empty((A, TABLE_LEVELS * cells)),
         empty((A, cells + 1), dtype=np.int64), zeros(A, dtype=np.bool_),
-        empty((A, Nn)), empty((A, Nn)), empty((A, Nn)), empty(A),
+        empty((A, Nn)), empty((A, Nn)), zeros((A, Nn)), empty(A),
         empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)),
         np.full((A, Ns), np.inf), np.full((A, Ns), int(Reason.UNREACHED), dtype=np.int64),
         np.full((A, Ns), np.inf), empty((A, Ns)), zeros((A, Ns), dtype=np.bool_),
