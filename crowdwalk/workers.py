@@ -10,6 +10,11 @@ A worker also holds objects with state of their own (the run's gait engine,
 :mod:`crowdwalk.gait.remote`), driven by messages in order.
 
 Workers are spawned (not forked), ignore Ctrl-C (the run stops them) and end with the run.
+
+Within this process, :class:`RowThreads` runs the parts of a row-independent call in
+threads at once (:meth:`RowThreads.map`): numpy's array operations, scipy's queries and
+the numba kernels (``nogil``) release the GIL, so the parts use the cores without copying
+anything. The crowd steers with these threads; worker processes pose.
 """
 
 from __future__ import annotations
@@ -20,29 +25,32 @@ import os
 import queue
 import signal
 import sys
+import threading
 import traceback
 import types
 from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from itertools import count as _count
 
 import numpy as np
 
-__all__ = ["Workers", "WorkerError", "available_cores", "split_rows", "worker_count",
-           "MIN_PARALLEL_AGENTS", "MIN_PARALLEL_AGENTS_NO_POSES", "MIN_SPLIT_ROWS"]
+__all__ = ["Workers", "WorkerError", "RowThreads", "available_cores", "row_threads",
+           "split_rows", "worker_count", "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS",
+           "MIN_THREAD_ROWS"]
 
 #: A run that writes poses and has fewer walkers stays in one process (workers cost ~2 s
-#: to start) [-]. Without poses the worker only steers, which pays from more walkers:
-#: ``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2 --seconds 6`` on the idle
-#: machine gave 2.86 vs 2.18 sim s per wall s (one process faster) without poses and 0.69
-#: vs 0.91 with poses; ``--agents 5000 --outputs traj+steps --seconds 3``, 0.60 vs 0.81.
+#: to start) [-]: ``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2 --seconds 6``
+#: on the idle machine gave 0.69 vs 0.91 sim s per wall s with poses. Without poses a run
+#: has no worker: its steering runs in this process's threads (:class:`RowThreads`).
 MIN_PARALLEL_AGENTS = 500
-#: The threshold without poses [-], between the measured loss at 1,000 and gain at 5,000.
-MIN_PARALLEL_AGENTS_NO_POSES = 2_500
-#: A call with fewer rows is not split [-]: the 1,000-walker stadium (~100 walkers deciding
-#: per tick) ran at 1.21 sim s per wall s with its steering split and 1.45 without
-#: (``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2``, load 1-4); the 10,000-
-#: walker one (~1,000 per tick) spends 63-82 % of its time steering.
+#: A call with fewer rows is not split among worker processes [-]: the 1,000-walker
+#: stadium (~100 walkers deciding per tick) ran at 1.21 sim s per wall s with its steering
+#: split and 1.45 without (``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2``,
+#: load 1-4).
 MIN_SPLIT_ROWS = 400
+#: A call with fewer rows per thread is not split among threads [-] (a part's fixed cost,
+#: ~0.3 ms of Python between numpy calls, against ~60 µs per walker steered).
+MIN_THREAD_ROWS = 32
 
 
 class WorkerError(RuntimeError):
@@ -58,15 +66,67 @@ def available_cores() -> int:
 
 def worker_count(agents: int, requested: int | None, *, poses: bool = True) -> int:
     """Worker processes for a run of ``agents`` walkers: ``requested`` if given, else one
-    per core beyond this one when the run has at least :data:`MIN_PARALLEL_AGENTS` walkers
-    (:data:`MIN_PARALLEL_AGENTS_NO_POSES` when it writes no ``poses``); none in a daemon
-    process, such as a Dask worker, which may not start processes."""
+    per core beyond this one when the run writes ``poses`` and has at least
+    :data:`MIN_PARALLEL_AGENTS` walkers (without poses, none: the steering runs in
+    threads, :class:`RowThreads`); none in a daemon process, such as a Dask worker, which
+    may not start processes."""
     if requested is not None:
         return int(requested)
     if mp.current_process().daemon:  # e.g. a Dask worker: a process per core already
         return 0
-    least = MIN_PARALLEL_AGENTS if poses else MIN_PARALLEL_AGENTS_NO_POSES
-    return available_cores() - 1 if agents >= least else 0
+    return available_cores() - 1 if poses and agents >= MIN_PARALLEL_AGENTS else 0
+
+
+class RowThreads:
+    """``count`` threads of this process, the caller's among them, for row-independent
+    calls (:meth:`map`)."""
+
+    def __init__(self, count: int) -> None:
+        self.count = max(1, int(count))
+        self._pool = (ThreadPoolExecutor(self.count - 1, thread_name_prefix="crowdwalk-rows")
+                      if self.count > 1 else None)
+
+    def map(self, fn: Callable, m: int, /, *args, min_rows: int | None = None, **kwargs):
+        """``fn(*args, **kwargs)`` computed on contiguous parts of its m rows at once, one
+        part per thread (the last in the calling thread), joined in order: the rules of
+        :func:`split_rows` (row-independent ``fn``; arguments with m rows are split).
+        Fewer than ``min_rows`` (default :data:`MIN_THREAD_ROWS`) rows per part: fewer
+        parts."""
+        least = MIN_THREAD_ROWS if min_rows is None else min_rows
+        parts = min(self.count, m // max(least, 1))
+        if parts <= 1 or self._pool is None:
+            return fn(*args, **kwargs)
+        bounds = np.linspace(0, m, parts + 1).round().astype(int)
+        cuts = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+        def part(rows):
+            return (tuple(_part(a, rows, m) for a in args),
+                    {k: _part(v, rows, m) for k, v in kwargs.items()})
+
+        futures = [self._pool.submit(fn, *a, **k) for a, k in map(part, cuts[:-1])]
+        a, k = part(cuts[-1])
+        here = fn(*a, **k)
+        return _join([f.result() for f in futures] + [here])
+
+    def close(self) -> None:
+        """End the threads."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+
+_ROW_THREADS: RowThreads | None = None
+_ROW_LOCK = threading.Lock()
+
+
+def row_threads() -> RowThreads:
+    """This process's :class:`RowThreads`: one per core (one in a daemon process, such as
+    a Dask worker, where every core has a process of its own), made on first use."""
+    global _ROW_THREADS
+    with _ROW_LOCK:
+        if _ROW_THREADS is None:
+            _ROW_THREADS = RowThreads(1 if mp.current_process().daemon else available_cores())
+        return _ROW_THREADS
 
 
 class _Handle:
@@ -240,10 +300,12 @@ def _part(value, rows: slice, m: int):
 
 def _join(parts: list):
     """The results of the parts joined as one call's: arrays and lists concatenated,
-    dataclasses field by field."""
+    tuples and dataclasses item by item."""
     first = parts[0]
     if isinstance(first, np.ndarray):
         return np.concatenate(parts)
+    if isinstance(first, tuple):
+        return tuple(_join(list(values)) for values in zip(*parts, strict=True))
     if isinstance(first, list):
         return [x for p in parts for x in p]
     if dataclasses.is_dataclass(first):
@@ -261,7 +323,8 @@ def split_rows(workers: Workers | None, fn: Callable, m: int, /, *args,
     split; everything else goes whole (shared objects by key, :meth:`Workers.share`).
     ``fn`` must be row-independent (row i of the result depends only on row i of the
     arguments) and importable by name; the result an array, a list or a dataclass of
-    them. Without workers, or with fewer than :data:`MIN_SPLIT_ROWS` rows, one call here.
+    them (or a tuple of those). Without workers, or with fewer than :data:`MIN_SPLIT_ROWS`
+    rows, one call here.
     """
     on = list(range(len(workers))) if workers is not None and on is None else on
     if workers is None or not on or m < MIN_SPLIT_ROWS:

@@ -1,9 +1,12 @@
-"""Worker processes: split calls give one call's result, failures surface, and a run with
-workers writes the same run folder as one in a single process."""
+"""Worker processes and row threads: split calls give one call's result, failures surface,
+and a run with workers (or with its steering split among threads) writes the same run
+folder as one in a single thread."""
 
 from __future__ import annotations
 
 import sqlite3
+import threading
+import time
 from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,7 +16,7 @@ import pytest
 
 import crowdwalk.workers as W
 from crowdwalk.crowd.run import RunOverrides, run_scenario
-from crowdwalk.workers import WorkerError, Workers, split_rows, worker_count
+from crowdwalk.workers import RowThreads, WorkerError, Workers, split_rows, worker_count
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -54,6 +57,31 @@ def test_split_rows_equals_one_call_and_sends_shared_objects_once(workers, monke
     assert split.rows == whole.rows
     only_one = split_rows(workers, weighted, 200, x, labels, table=table, scale=2.0, on=[1])
     assert np.array_equal(only_one.total, whole.total)
+
+
+def where(x: np.ndarray, labels: list) -> Pair:
+    """Row-independent, and says which thread computed each row (each part lasts long
+    enough for the others to be taken by other threads)."""
+    time.sleep(0.05)
+    return Pair(total=2.0 * x, rows=[threading.get_ident()] * len(labels))
+
+
+def test_row_threads_equal_one_call_and_use_every_thread():
+    x = np.random.default_rng(4).normal(size=(200, 3))
+    labels = [f"a{i}" for i in range(200)]
+    threads = RowThreads(3)
+    try:
+        whole = weighted(x, labels, table=np.eye(3), scale=2.0)
+        split = threads.map(weighted, 200, x, labels, table=np.eye(3), scale=2.0)
+        assert np.array_equal(split.total, whole.total) and split.rows == whole.rows
+        parts = threads.map(where, 200, x, labels, min_rows=10)
+        assert np.array_equal(parts.total, 2.0 * x)
+        assert len(set(parts.rows)) == 3  # three parts in three threads, this one last
+        assert parts.rows[-1] == threading.get_ident()
+        few = threads.map(where, 200, x, labels, min_rows=150)  # too few rows to split
+        assert set(few.rows) == {threading.get_ident()}
+    finally:
+        threads.close()
 
 
 def test_a_failure_in_a_worker_is_raised_here_with_its_traceback(workers, monkeypatch):
@@ -107,6 +135,30 @@ def test_a_run_with_workers_writes_the_same_run_folder(tmp_path, monkeypatch):
     assert _rows(a / "trajectories.sqlite", "trajectory_data") == \
         _rows(b / "trajectories.sqlite", "trajectory_data")
     assert _rows(a / "poses.sqlite", "pose_frame") == _rows(b / "poses.sqlite", "pose_frame")
+
+
+def test_a_run_steered_in_threads_writes_the_same_run_folder(tmp_path, monkeypatch):
+    """Neighbours and steering split among three threads (every tick, however few
+    decide) give the run folder of a run in one thread."""
+    import crowdwalk.crowd.simulation as S
+
+    monkeypatch.setattr(W, "MIN_THREAD_ROWS", 1)
+    scenario = ROOT / "scenarios" / "bottleneck.yaml"
+    runs = {}
+    for count in (1, 3):
+        threads = RowThreads(count)
+        monkeypatch.setattr(S, "row_threads", lambda threads=threads: threads)
+        try:
+            run_scenario(scenario, tmp_path / f"t{count}", overrides=RunOverrides(
+                duration=4.0, poses=False, fps=10.0, workers=0))
+        finally:
+            threads.close()
+        runs[count] = tmp_path / f"t{count}"
+    a, b = runs[1], runs[3]
+    assert len((a / "footsteps.csv").read_bytes().splitlines()) > 50
+    assert (a / "footsteps.csv").read_bytes() == (b / "footsteps.csv").read_bytes()
+    assert _rows(a / "trajectories.sqlite", "trajectory_data") == \
+        _rows(b / "trajectories.sqlite", "trajectory_data")
 
 
 def test_a_negative_worker_count_is_bad_input():

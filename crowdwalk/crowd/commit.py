@@ -39,13 +39,15 @@ def swing_bezier(swing: np.ndarray, *, stance: np.ndarray, stance_z: np.ndarray,
 
 def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
                direction: np.ndarray, yaw: np.ndarray, plan, duration: np.ndarray, terrain,
-               legs, population, foot_half_width, turn) -> StepBatch:
+               legs, population, foot_half_width, turn, threads=None) -> StepBatch:
     """Start the steps ``plan`` (a :class:`~crowdwalk.crowd.stepping.StepPlan` of k rows)
     of ``agents`` (k,) at ``start_time`` (k,) [s] along unit ``direction`` (k, 2), lasting
     ``duration`` (k,) [s], the torso turning to face ``yaw`` (k,) [rad] (unwrapped against
     its facing now), oriented by MetaGait's ``turn``
     (:class:`~crowdwalk.gait.metagait.StepTurn`): ``state`` moves on (in place; the plan
-    queue's anchor is the new stance) and the steps are returned."""
+    queue's anchor is the new stance) and the steps are returned. ``threads`` (a
+    :class:`crowdwalk.workers.RowThreads`, optional) finds the footings of parts of the
+    steps at once."""
     st, a, d = state, agents, direction
     L, H = plan.length, plan.rise
     new_c = st.stance[a] + L[:, None] * d
@@ -77,7 +79,9 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
     target = np.column_stack([foothold, new_z])
     st.stance_foot[a] = target
     # stepped over: at most one longest step (1.05 leg lengths) along the direction
-    kind, on_obstacle = terrain.footing(foothold, d, stride=1.05 * legs.of(a).length)
+    stride = 1.05 * legs.of(a).length
+    kind, on_obstacle = (terrain.footing(foothold, d, stride=stride) if threads is None else
+                         threads.map(terrain.footing, a.size, foothold, d, stride=stride))
     pop = population
     return StepBatch(
         agent=a, step=st.steps[a].copy(), start_time=t0, duration=duration, foot=foot,

@@ -4,7 +4,21 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["moving_distance", "point_segment_distance", "segment_distance", "step_distance"]
+__all__ = ["distance", "moving_distance", "point_segment_distance", "segment_distance",
+           "step_distance"]
+
+
+def distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """|a - b| [m] of points (..., 2), broadcast; result (...). The value of
+    ``np.linalg.norm(a - b, axis=-1)`` bit for bit (the same products, one sum, one square
+    root), computed per coordinate: without the reduction over a last axis of 2, which
+    numpy does slowly (a third of the steering's soft terms)."""
+    dx = a[..., 0] - b[..., 0]
+    dy = a[..., 1] - b[..., 1]
+    dx *= dx
+    dy *= dy
+    dx += dy
+    return np.sqrt(dx, out=dx)
 
 
 def _distance_to(apx, apy, abx, aby) -> np.ndarray:

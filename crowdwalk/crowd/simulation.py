@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
@@ -57,7 +58,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
-from crowdwalk.workers import split_rows
+from crowdwalk.workers import row_threads, split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -85,12 +86,18 @@ class CrowdSimulation:
         Receives every decided step and answers :meth:`poses` (None: no poses).
     workers : crowdwalk.workers.Workers or None
         Worker processes that steer parts of a tick's deciding walkers
-        (:func:`crowdwalk.workers.split_rows`; None: all here).
+        (:func:`crowdwalk.workers.split_rows`) when one of them does not pose (None: all
+        in this process).
+    threads : crowdwalk.workers.RowThreads, optional
+        Threads of this process that gather the neighbours of, and steer, parts of a
+        tick's deciding walkers at once (default :func:`crowdwalk.workers.row_threads`:
+        one per core).
     """
 
     def __init__(self, world, population: Population, *, parts: CrowdParts,
                  dt: float = 0.05, fps: float = 10.0, duration: float = 600.0,
-                 params: CrowdParams | None = None, gait=None, workers=None) -> None:
+                 params: CrowdParams | None = None, gait=None, workers=None,
+                 threads=None) -> None:
         for name, value in (("dt", dt), ("fps", fps), ("duration", duration)):
             if not (np.isfinite(value) and value > 0):
                 raise invalid("CrowdSimulation", name, "> 0", value)
@@ -143,6 +150,7 @@ class CrowdSimulation:
             if sc.waiting_areas else None
         self.gait = gait
         self.workers = workers
+        self.threads = row_threads() if threads is None else threads
         # the workers that steer parts of a tick (not the one holding a remote gait engine)
         self._steer_on = [] if workers is None else [
             w for w in range(len(workers)) if w != getattr(gait, "worker", None)]
@@ -317,10 +325,10 @@ class CrowdSimulation:
                 idx, te, pos = idx[~held], te[~held], pos[~held]
                 if idx.size == 0:
                     return
-        target, route_dir = steering_targets(
-            table, route=st.route[idx], progress=st.progress[idx], xy=pos,
-            heading=st.heading[idx], radius=self.radius[idx], clearance=self.clearance,
-            params=prm)
+        target, route_dir = self.threads.map(
+            partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
+            route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
+            radius=self.radius[idx])
         # a walker held up for long looks backwards on every other decision (the
         # candidate fan turned around), so that clogs can loosen
         clogged = st.stuck[idx] >= prm.steering.clog_after
@@ -328,18 +336,23 @@ class CrowdSimulation:
         route_dir = np.where(back[:, None], -route_dir, route_dir)
         w0 = _time.perf_counter()
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
-                                count=prm.neighbours, reach=prm.neighbour_range)
+                                count=prm.neighbours, reach=prm.neighbour_range,
+                                threads=self.threads)
         outline = self.shape.packed(idx)
         gap = self._gap_steps(idx, pos, nbs)
-        choice = split_rows(
-            self.workers, choose_steps, idx.size, pos, st.stance[idx],
+        rows = dict(
             heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
-            neighbours=nbs, clearance=self.clearance, params=prm.steering,
-            speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
+            neighbours=nbs, speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            on=self._steer_on,
             gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None)
+        if self._steer_on:  # worker processes (given, not posing); the field goes once
+            choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],
+                                clearance=self.clearance, params=prm.steering,
+                                on=self._steer_on, **rows)
+        else:  # the field and the parameters go whole, not cut by rows
+            steer = partial(choose_steps, clearance=self.clearance, params=prm.steering)
+            choice = self.threads.map(steer, idx.size, pos, st.stance[idx], **rows)
         self.wall_steering += _time.perf_counter() - w0
         if gap is not None:
             v, reach = gap.along(choice.direction)
@@ -359,8 +372,8 @@ class CrowdSimulation:
             go = np.flatnonzero(plan.move)
             if go.size and nbs.valid.shape[1]:
                 end = st.stance[idx[go]] + 0.5 * plan.length[go, None] * choice.direction[go]
-                clash = clashes_with_neighbours(
-                    nbs, go, start=pos[go], end=end,
+                clash = self.threads.map(
+                    partial(clashes_with_neighbours, nbs), go.size, go, start=pos[go], end=end,
                     duration=self._durations(idx[go], plan.take(go)), elapsed=t - te[go],
                     yaw=st.yaw1[idx[go]], yaw_end=choice.yaw[go], shape=outline[go])
                 move = plan.move.copy()
@@ -402,7 +415,7 @@ class CrowdSimulation:
         batch = take_steps(st, self.queue, agents=a, start_time=te[go], direction=direction[go],
                            yaw=yaw[go], plan=steps, duration=self._durations(a, steps),
                            terrain=self.terrain, legs=self.legs, population=self.pop,
-                           foot_half_width=self.half_width[a], turn=turn)
+                           foot_half_width=self.half_width[a], turn=turn, threads=self.threads)
         self._decided.append(batch)
         if self.gait is not None:
             if self._pending and np.isin(a, np.concatenate([b.agent for b in self._pending])).any():
@@ -418,10 +431,11 @@ class CrowdSimulation:
         st = self.state
         heading = np.arctan2(direction[:, 1], direction[:, 0])
         body = st.stance[a] + (0.5 * length)[:, None] * direction
-        _, ahead = steering_targets(
-            self.routes.table, route=st.route[a], progress=st.progress[a] + length, xy=body,
-            heading=heading, radius=self.radius[a], clearance=self.clearance,
-            params=self.params)
+        _, ahead = self.threads.map(
+            partial(steering_targets, self.routes.table, clearance=self.clearance,
+                    params=self.params), a.size,
+            route=st.route[a], progress=st.progress[a] + length, xy=body, heading=heading,
+            radius=self.radius[a])
         return self.metagait.orient(a, swing_foot=st.foot[a], heading=heading,
                                     heading_next=np.arctan2(ahead[:, 1], ahead[:, 0]),
                                     base_toe_out=self.pop.style.foot_angle[a])

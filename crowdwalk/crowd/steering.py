@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import point_segment_distance, segment_distance
+from crowdwalk.crowd.geometry import distance, point_segment_distance, segment_distance
 from crowdwalk.crowd.shape import body_gaps, disc_centres
 from crowdwalk.crowd.speed import GapSteps
 
@@ -314,7 +314,7 @@ def choose_steps(
             need = (np.maximum(shape[:, 0], shape[:, 1] + shape[:, 2])[:, None]
                     + np.maximum(nb_shape[..., 0], nb_shape[..., 1] + nb_shape[..., 2]))
         gap0 = point_segment_distance(position[:, None, :], neighbours.now, neighbours.end)
-        reach = np.linalg.norm(ends - position[:, None, None, :], axis=-1).max(axis=(1, 2))
+        reach = distance(ends, position[:, None, None, :]).max(axis=(1, 2))
         relevant = neighbours.valid & (gap0 - need < reach[:, None] + 1e-9)
         # the relevant (agent, neighbour) pairs only, not every agent padded to the most
         # crowded one's count
@@ -398,7 +398,7 @@ def choose_steps(
         use = np.minimum(use, gap.along(dirs, everyone=True)[1])
     end = stance[:, None, :] + 0.5 * use[..., None] * dirs  # (m, C, 2)
     cand = np.concatenate([end, position[:, None, :]], axis=1)  # (m, C+1, 2); last = wait
-    utility = np.linalg.norm(target[:, None, :] - cand, axis=-1)
+    utility = distance(target[:, None, :], cand)
     if neighbours.valid.shape[1]:
         # soft terms from the nearest ``soft_neighbours`` (sorted nearest first); the hard
         # limit above used every neighbour a step could reach
@@ -407,7 +407,7 @@ def choose_steps(
             neighbours.valid, neighbours.now, neighbours.end, neighbours.velocity,
             neighbours.radius, neighbours.heading)))
         rr = radius[:, None, None] + nb.radius[:, None, :]
-        gap_end = np.linalg.norm(cand[:, :, None, :] - nb.end[:, None, :, :], axis=-1)
+        gap_end = distance(cand[:, :, None, :], nb.end[:, None, :, :])
         rep = params.personal_weight * np.exp(-(gap_end - rr) / params.personal_range)
         # anticipation: the closest approach within ``anticipation`` seconds if this agent
         # walked the candidate direction at its speed and the oncoming neighbour kept its
@@ -431,7 +431,7 @@ def choose_steps(
         vv = np.einsum("mckj,mckj->mck", rel_v, rel_v)
         t_close = np.clip(-np.einsum("mckj,mckj->mck", np.broadcast_to(rel_p, rel_v.shape),
                                      rel_v) / np.maximum(vv, 1e-12), 0.0, params.anticipation)
-        closest = np.linalg.norm(rel_p + t_close[..., None] * rel_v, axis=-1)
+        closest = distance(rel_p, -t_close[..., None] * rel_v)  # |p + t v|
         ra = radius[:, None, None] + on_r[:, None, :]
         utility += np.where(oncoming[:, None, :], params.personal_weight
                             * np.exp(-(closest - ra) / params.personal_range), 0.0).sum(axis=-1)
