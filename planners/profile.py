@@ -184,11 +184,6 @@ class GroundProfile:
         inside = (f <= count) & (g >= 0)
         np.maximum.at(cells, np.maximum(f[inside] - 1, 0), self.z[inside])
         np.maximum.at(cells, np.minimum(g[inside], count - 1), self.z[inside])
-        # and in the cell that HeightRaster.max_height's own index rounding gives s_v,
-        # which may be one off where s_v lies within rounding of a cell edge
-        q = np.floor((self.s - start) * (1.0 / cell)).astype(np.intp)
-        seen = (q >= 0) & (q < count)
-        np.maximum.at(cells, q[seen], self.z[seen])
         return HeightRaster(start, cell, cells, self.s)
 
     def vertices_between(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
