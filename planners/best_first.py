@@ -31,6 +31,7 @@ def best_first(tables: StepTables) -> SearchResult:
     pass."""
     A = tables.neutral.size
     orders, which, configs = _orders(tables)
+    tables.prepare()
     found = np.zeros(A, dtype=np.bool_)
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
@@ -67,6 +68,7 @@ def find_init(tables: StepTables) -> SearchResult:
     """
     A = tables.neutral.size
     orders, which, configs = _orders(tables)
+    tables.prepare()
     found = np.zeros(A, dtype=np.bool_)
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
@@ -98,6 +100,7 @@ def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
     Counted: ``expanded`` -- configurations popped; ``checks`` -- in-grid neighbours
     looked up. Agents not ``init.found`` keep their configuration.
     """
+    tables.prepare()
     configs, found = init.configs.copy(), init.found.copy()
     A = found.size
     expanded = np.zeros(A, dtype=np.int64)

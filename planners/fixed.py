@@ -25,6 +25,7 @@ def fixed(tables: StepTables) -> SearchResult:
     """
     st = tables.struct
     A, n, J = tables.neutral.size, st.n, st.J
+    tables.prepare()
     j = np.arange(J)
     # Preference order per agent: distance to neutral, then shorter first.
     order = np.argsort(np.abs(j[None, :] - tables.neutral[:, None]) * 2 * J + j[None, :],

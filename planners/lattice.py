@@ -350,12 +350,20 @@ class StepTables:
             object.__setattr__(self, "_legal", self.step_reason == 0)
         return self.__dict__["_legal"]
 
+    def prepare(self) -> None:
+        """What the lazy kernels need of every agent before they evaluate an entry
+        (``lattice_kernel.prepare``; tables evaluated up front leave it to the first
+        search that reads them through those kernels)."""
+        if not self.lattice.ready.all():
+            run_parts(prepare_agents, self.neutral.size, self.lattice)
+
     def complete(self, agents: np.ndarray | None = None) -> None:
         """Evaluate every entry a search may read (:data:`PRUNE`) for ``agents``
         (default all); what a lazy search evaluated already is kept."""
         agents = (np.arange(self.neutral.size) if agents is None
                   else np.asarray(agents, dtype=np.int64))
         if agents.size:
+            self.prepare()
             run_parts(complete_agents, agents.size, self.lattice, agents)
 
     def evaluate(self, agents: np.ndarray, configs: np.ndarray):
@@ -460,7 +468,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         zeros(A, dtype=np.int64), empty((A, 7)), empty((A, Nn), dtype=np.int64), empty(A),
         zeros(A, dtype=np.int64), zeros(A, dtype=np.int64), empty((A, TABLE_LEVELS * cells)),
         empty((A, cells + 1), dtype=np.int64), zeros(A, dtype=np.bool_),
-        empty((A, Nn)), empty((A, Nn)), empty((A, Nn)), empty(A),
+        empty((A, Nn)), empty((A, Nn)), zeros((A, Nn)), empty(A),
         empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)),
         np.full((A, Ns), np.inf), np.full((A, Ns), int(Reason.UNREACHED), dtype=np.int64),
         np.full((A, Ns), np.inf), empty((A, Ns)), zeros((A, Ns), dtype=np.bool_),
@@ -471,8 +479,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                         L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,
                         L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
                         lattice, lazy)
-    run_parts(prepare_agents, A, lattice)
-    if not lazy:  # the one-pass kernel (faster than entry by entry where most are read)
+    if lazy:
+        tables.prepare()
+    else:  # the one-pass kernel (faster than entry by entry where most are read)
         L = lattice
         kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
         kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, trailing, L.speeds, g.normal,

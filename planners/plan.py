@@ -318,9 +318,12 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     controls = tables.controls[rows, swings].copy()
     controls[..., 0] += origins[:, None, None]
     leg_length = np.array([leg.length for leg in legs])[:, None]
-    durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
     terms = {name: getattr(tables, name)[rows, steps] for name in ("En", "Ev", "Ej", "E")}
-    efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
+    # a failed plan's steps beyond its legal prefix may be unevaluated (lazy tables):
+    # their values are garbage and dropped below
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
+        efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
     work = tables.work
     plans = []
     for a in range(A):
