@@ -64,7 +64,14 @@ from crowdwalk.gait.datasets import sample
 from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
 from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose, pelvis_shapes
 from crowdwalk.gait.engine import GroundHeight, PoseFrame
-from crowdwalk.gait.foot import StanceFoot, direction, foot_points, stance_foot_pose, wrap_angle
+from crowdwalk.gait.foot import (
+    SPIN_HEEL_LIFT,
+    StanceFoot,
+    direction,
+    foot_points,
+    stance_foot_pose,
+    wrap_angle,
+)
 from crowdwalk.steps import StepBatch
 
 __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
@@ -77,7 +84,6 @@ _BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these frac
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
 _C1_RISE = 0.05  # steps rising or falling this much [m] (stairs) join the root C¹ ...
 _VEL_PHASE = 0.02  # ... with velocities measured over this stance-phase interval [1]
-_SPIN_HEEL_LIFT = 0.008  # heel height above its ground at which a spin turn starts [m]
 _SPIN_GRID = np.linspace(0.0, 1.0, 41)  # step phases searched for the heel rise
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
@@ -111,7 +117,7 @@ def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 def _spin_start(body: Body, angles: np.ndarray, yaw_off: np.ndarray,
                 slope: np.ndarray) -> np.ndarray:
-    """Step phase τ (m,) [1] at which the stance foot's heel has risen ``_SPIN_HEEL_LIFT``
+    """Step phase τ (m,) [1] at which the stance foot's heel has risen ``SPIN_HEEL_LIFT``
     off the ground, rolling on its ball (§4.1: the foot pitch of the data ``angles``
     (m, S, 4) below the ground ``slope`` (m,) [rad], seen ``yaw_off`` (m,) [rad] from the
     sagittal plane); 1 where it never does (a spin then turns nothing)."""
@@ -121,7 +127,7 @@ def _spin_start(body: Body, angles: np.ndarray, yaw_off: np.ndarray,
     phi = sample(angles, phases, rows=rows)[:, 0].reshape(m, -1)
     pitch = np.arctan(np.tan(phi) * np.cos(yaw_off)[:, None])
     hb = (body.heel_offset + body.ball_offset)[:, None]
-    up = hb * np.sin(np.maximum(slope[:, None] - pitch, 0.0)) >= _SPIN_HEEL_LIFT
+    up = hb * np.sin(np.maximum(slope[:, None] - pitch, 0.0)) >= SPIN_HEEL_LIFT
     up &= _SPIN_GRID[None, :] > 0.3  # the rise of late stance, not the heel strike
     return np.where(up.any(axis=1), _SPIN_GRID[np.argmax(up, axis=1)], 1.0)
 

@@ -11,7 +11,19 @@ import numpy as np
 from crowdwalk.body import LEG_JOINTS, Body, rotation_y, rotation_z
 
 __all__ = ["direction", "wrap_angle", "mat_vec", "two_link_knee", "StanceFoot",
-           "stance_foot_pose", "foot_points"]
+           "stance_foot_pose", "foot_points", "column_or", "SPIN_HEEL_LIFT"]
+
+#: Heel height above its ground at which a spin turn (Sun & Metaxas §6.1) starts [m].
+SPIN_HEEL_LIFT = 0.008
+
+
+def column_or(steps, name: str, default: np.ndarray) -> np.ndarray:
+    """``steps.name`` (m,) where present and finite, else ``default`` (m,)."""
+    value = getattr(steps, name, None)
+    if value is None:
+        return np.asarray(default, float)
+    value = np.asarray(value, float)
+    return np.where(np.isfinite(value), value, default)
 
 
 def direction(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:

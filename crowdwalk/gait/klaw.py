@@ -64,7 +64,7 @@ from crowdwalk.body import (
     rotation_z,
 )
 from crowdwalk.errors import invalid
-from crowdwalk.gait.foot import two_link_knee
+from crowdwalk.gait.foot import SPIN_HEEL_LIFT, column_or, two_link_knee
 from crowdwalk.gait.foot import wrap_angle as _wrap
 
 __all__ = ["KlawEngine", "X_FACTOR", "double_support_fraction", "kochanek_bartels",
@@ -86,17 +86,8 @@ _DS_FREQ = np.array([1.439, 1.817, 1.822, 2.045, 2.340])
 _DS_FRAC = np.array([0.3089, 0.2526, 0.2558, 0.2385, 0.1882])
 
 
-SPIN_HEEL_LIFT = 0.008  # heel height off the ground at which a spin turn starts [m]
 _SPIN_GRID = np.linspace(0.0, 1.0, 26)  # step fractions searched for the heel rise
 
-
-def _column_or(cmd, name: str, default: np.ndarray) -> np.ndarray:
-    """``cmd.name`` (m,) where finite, else ``default`` (m,)."""
-    value = getattr(cmd, name, None)
-    if value is None:
-        return np.asarray(default, float)
-    value = np.asarray(value, float)
-    return np.where(np.isfinite(value), value, default)
 
 
 def double_support_fraction(step_frequency: np.ndarray) -> np.ndarray:
@@ -299,7 +290,7 @@ class KlawEngine:
 
         # landing: the heel-strike ankle, the landing leg's hip HIP_BEHIND steps behind it;
         # the landing foot points the step's toe-out from the heading (MetaGait §6.1)
-        toe_out = _column_or(cmd, "toe_out", st.foot_angle)
+        toe_out = column_or(cmd, "toe_out", st.foot_angle)
         yaw_land = psi1 - side * toe_out
         land_heel = target - b.heel_offset[:, None] * _fwd(yaw_land)
         ankle_hs = land_heel - _foot_offsets(b, np.full(m, HEEL_STRIKE_PITCH), yaw_land)[:, 0]
@@ -411,7 +402,7 @@ class KlawEngine:
         # heel is up SPIN_HEEL_LIFT to the step's end (none if it never stood flat and
         # rose: then the trailing foot keeps its yaw)
         s["spin_t0"][a] = self._heel_off(a, b, t_abs, T)
-        s["spin"][a] = np.where(s["spin_t0"][a] < T, _column_or(cmd, "spin", np.zeros(m)),
+        s["spin"][a] = np.where(s["spin_t0"][a] < T, column_or(cmd, "spin", np.zeros(m)),
                                 0.0)
         # the stance foot's state at t4 is the next step's trailing foot
         end = self._legs(a, t_abs + T)

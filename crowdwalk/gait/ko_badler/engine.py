@@ -44,7 +44,7 @@ from crowdwalk.body import (
 from crowdwalk.errors import invalid
 from crowdwalk.gait.elevwalker import GaitStyle
 from crowdwalk.gait.engine import PoseFrame
-from crowdwalk.gait.foot import two_link_knee
+from crowdwalk.gait.foot import SPIN_HEEL_LIFT, column_or, two_link_knee
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.ko_badler.generalize import (
     body_generalization,
@@ -72,17 +72,8 @@ _PATH = np.linspace(0.0, 1.0, 17)  # ground samples along the swing path
 _TOE_CLEARANCE = 0.0129
 _BEZIER_RAMP = 0.25  # fraction of the swing over which the Bezier lift is eased in
 _UNEVEN = 0.01  # ground this far above the foothold line: the step is over uneven ground [m]
-SPIN_HEEL_LIFT = 0.008  # heel height off the ground at which a spin turn starts [m]
 _SPIN_GRID = np.linspace(0.3, 1.0, 15)  # step phases searched for the heel rise
 
-
-def _column_or(steps, name: str, default: np.ndarray) -> np.ndarray:
-    """``steps.name`` (m,) where finite, else ``default`` (m,)."""
-    value = getattr(steps, name, None)
-    if value is None:
-        return np.asarray(default, float)
-    value = np.asarray(value, float)
-    return np.where(np.isfinite(value), value, default)
 
 
 def foot_configuration(body: BodyCondition, foot_angle, meta_angle):
@@ -212,7 +203,7 @@ class KoBadlerEngine:
         # MetaGait's orientation (§6.1): the landing foot points the step's toe-out from
         # the heading; the trailing foot is where the last stance foot's spin left it
         side_sw = np.where(np.asarray(steps.foot) == 0, 1.0, -1.0)
-        toe_out = _column_or(steps, "toe_out", np.full(a.size, self.style.toe_out))
+        toe_out = column_or(steps, "toe_out", np.full(a.size, self.style.toe_out))
         spun = self._spun_origin(a, self._start[a], self._yaw_stance[a], self._yaw_end[a])
         trail = np.where(first[:, None], guess, spun)
         before = np.where(first, length, self._length[a])
@@ -245,7 +236,7 @@ class KoBadlerEngine:
         self._commanded[a] = True
         # the stance foot's spin turn: about its ball once its heel is up (none if never)
         self._spin_start[a] = self._heel_off(a)
-        spin = _column_or(steps, "spin", np.zeros(a.size))
+        spin = column_or(steps, "spin", np.zeros(a.size))
         self._spin[a] = np.where(self._spin_start[a] < 1.0, spin, 0.0)
         self._yaw_end[a] = yaw_stance + self._spin[a]
         self.stats["commands"] += a.size
