@@ -1,8 +1,8 @@
 """Check that two versions of crowdwalk write identical run folders.
 
-Runs quickstart (with poses), bottleneck (with poses) and a 20 s cut of stadium_egress
-(1,000 agents, no poses) with the code of a repository checkout, then compares two such
-sets of run folders:
+Runs quickstart, bottleneck, stairs_up_down, uneven_park and corner (all with poses) and a
+20 s cut of stadium_egress (1,000 agents, no poses) with the code of a repository
+checkout, then compares two such sets of run folders:
 
 - ``footsteps.csv``: file bytes;
 - ``trajectories.sqlite`` and ``poses.sqlite``: table contents (every row of every table
@@ -37,6 +37,9 @@ RUNS = {
     "quickstart": ("scenarios/quickstart.yaml", {"poses": True}),
     "bottleneck": ("scenarios/bottleneck.yaml", {"poses": True}),
     "stadium_20s": ("scenarios/stadium_egress.yaml", {"duration": 20.0}),
+    "stairs_up_down": ("scenarios/stairs_up_down.yaml", {"poses": True}),
+    "uneven_park": ("scenarios/uneven_park.yaml", {"poses": True}),
+    "corner": ("scenarios/corner.yaml", {"poses": True}),
 }
 
 _CHILD = """
