@@ -298,8 +298,24 @@ def axis_angle_matrix(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return out
 
 
+@nb.njit(cache=True, nogil=True)
+def _elementary_kernel(angle, i, j, out):  # pragma: no cover - compiled
+    k = 3 - i - j
+    for a in range(angle.shape[0]):
+        c, s = np.cos(angle[a]), np.sin(angle[a])
+        out[a, k, k] = 1.0
+        out[a, i, i] = c
+        out[a, j, j] = c
+        out[a, i, j] = -s
+        out[a, j, i] = s
+
+
 def _elementary(angle: np.ndarray, i: int, j: int) -> np.ndarray:
     angle = np.asarray(angle, dtype=float)
+    if angle.ndim:  # the numpy code below, compiled (bitwise equal)
+        out = np.zeros((angle.size, 3, 3))
+        _elementary_kernel(np.ascontiguousarray(angle).reshape(-1), i, j, out)
+        return out.reshape(angle.shape + (3, 3))
     c, s = np.cos(angle), np.sin(angle)
     out = np.zeros(angle.shape + (3, 3))
     k = 3 - i - j

@@ -215,7 +215,14 @@ class Style:
 
     def take(self, index) -> Style:
         """The styles at ``index`` (integer or boolean array)."""
-        return Style(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+        index = np.asarray(index)
+        if index.ndim != 1:
+            return Style(**{f.name: getattr(self, f.name)[index] for f in fields(self)})
+        # rows of validated columns: the checks of __post_init__ hold, skip them
+        out = object.__new__(Style)
+        for name in _STYLE_FIELDS:
+            object.__setattr__(out, name, getattr(self, name)[index])
+        return out
 
     def with_values(self, **columns) -> Style:
         """A copy with the given (n,) columns replaced (SI units)."""
@@ -246,6 +253,8 @@ class Style:
         names = np.asarray(PRESET_NAMES + ("",), dtype=object)
         return names[self.preset]
 
+
+_STYLE_FIELDS = tuple(f.name for f in fields(Style))
 
 def normal_step_length(speed: np.ndarray, body_height: np.ndarray) -> np.ndarray:
     """Normal-mode step length [m] at ``speed`` (n,) [m/s] for bodies (n,) [m]: the

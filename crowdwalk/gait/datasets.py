@@ -32,6 +32,7 @@ from functools import cache
 from importlib import resources
 from typing import Literal, get_args
 
+import numba as nb
 import numpy as np
 
 from crowdwalk.errors import invalid
@@ -167,6 +168,9 @@ def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float,
         raise invalid("sample", "t", "finite [1]", t[~np.isfinite(t)].ravel()[:3])
     if curves.ndim not in (2, 3) or curves.shape[-1] != 4:
         raise invalid("sample", "angles", "an (N, 4) or (n, N, 4) array [rad]", curves.shape)
+    fast = _sample_fast(curves, t, rows)
+    if fast is not None:
+        return fast
     n_samples = curves.shape[-2]
     u = np.mod(t, 1.0) * n_samples
     i1 = np.floor(u).astype(np.intp)
@@ -187,6 +191,65 @@ def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float,
         + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s2
         + (3.0 * p1 - p0 - 3.0 * p2 + p3) * s3
     )
+
+
+@nb.njit(cache=True, nogil=True)
+def _sample_kernel(curves, t, rows, out):  # pragma: no cover - compiled
+    """Catmull-Rom samples out (m, 4) of curves (B, N, 4) at times t (m,) of rows (m,);
+    the arithmetic of :func:`sample`'s numpy code in the same order (bitwise equal)."""
+    n = curves.shape[1]
+    for a in range(t.shape[0]):
+        u = (t[a] % 1.0) * n
+        i1 = int(np.floor(u))
+        s = u - float(i1)
+        i0, i2, i3 = (i1 - 1) % n, (i1 + 1) % n, (i1 + 2) % n
+        i1 = i1 % n
+        r = rows[a]
+        s2 = s * s
+        s3 = s2 * s
+        for c in range(4):
+            p0, p1, p2, p3 = curves[r, i0, c], curves[r, i1, c], curves[r, i2, c], curves[r, i3, c]
+            out[a, c] = 0.5 * (
+                2.0 * p1
+                + (p2 - p0) * s
+                + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s2
+                + (3.0 * p1 - p0 - 3.0 * p2 + p3) * s3
+            )
+
+
+def _sample_fast(curves: np.ndarray, t: np.ndarray, rows) -> np.ndarray | None:
+    """:func:`sample` by :func:`_sample_kernel` (shape t.shape + (4,) or the broadcast of
+    t and rows + (4,)); None where the numpy code has to run (not float64, odd rows)."""
+    if curves.dtype != np.float64 or t.ndim == 0 and curves.ndim == 3:
+        return None
+    if curves.ndim == 2:
+        shape, rr = t.shape, np.zeros(t.size, np.intp)
+        curves = curves[None]
+        tt = t.reshape(-1)
+    else:
+        rows = np.arange(curves.shape[0]) if rows is None else np.asarray(rows)
+        if rows.dtype.kind not in "iu":
+            return None
+        tb, rb = np.broadcast_arrays(t, rows)
+        shape, tt, rr = tb.shape, tb.reshape(-1), rb.reshape(-1).astype(np.intp)
+        if rr.size and (rr.min() < -curves.shape[0] or rr.max() >= curves.shape[0]):
+            return None
+    out = np.empty((tt.size, 4))
+    _sample_kernel(np.ascontiguousarray(curves), np.ascontiguousarray(tt), rr, out)
+    return out.reshape(shape + (4,))
+
+
+@nb.njit(cache=True, nogil=True)
+def _series_kernel(coef, k, t, out):  # pragma: no cover - compiled
+    """out (m,) = sum over h of coef[2h] cos(2 pi k_h t) + coef[2h+1] sin(2 pi k_h t), summed
+    in harmonic order as :meth:`PelvisMotion._series`'s numpy code (bitwise equal)."""
+    for a in range(t.shape[0]):
+        acc = 0.0
+        for h in range(k.shape[0]):
+            x = 2 * np.pi * k[h] * t[a]
+            term = coef[2 * h] * np.cos(x) + coef[2 * h + 1] * np.sin(x)
+            acc = term if h == 0 else acc + term
+        out[a] = acc
 
 
 @cache
@@ -261,8 +324,15 @@ class PelvisMotion:
 
     @staticmethod
     def _series(coef: np.ndarray, harmonics, t) -> np.ndarray:
-        t = np.asarray(t, dtype=float)[..., None]
+        t = np.asarray(t, dtype=float)
         k = np.asarray(harmonics, dtype=float)
+        if (t.ndim and coef.dtype == np.float64 and coef.ndim == 1 and k.size
+                and coef.shape[0] == 2 * k.size):
+            out = np.empty(t.size)
+            _series_kernel(np.ascontiguousarray(coef), k, np.ascontiguousarray(t).reshape(-1),
+                           out)
+            return out.reshape(t.shape)
+        t = t[..., None]
         return np.sum(coef[0::2] * np.cos(2 * np.pi * k * t)
                       + coef[1::2] * np.sin(2 * np.pi * k * t), axis=-1)
 
