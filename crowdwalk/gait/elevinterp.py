@@ -143,6 +143,35 @@ def _segment(phi: np.ndarray) -> np.ndarray:
     return np.stack([np.sin(phi), -np.cos(phi)], axis=-1)
 
 
+@nb.njit(cache=True, nogil=True)
+def _step_of_kernel(stance, swing, thigh, shank, ankle_h, heel, toe, out):  # pragma: no cover
+    """:func:`step_of` of m leg pairs (stance, swing (m, 3); dimensions (m,)) into out
+    (m, 2): the numpy code's arithmetic in the same order (bitwise equal)."""
+    for a in range(stance.shape[0]):
+        f = stance[a, 0]
+        c, s = np.cos(f), np.sin(f)
+        if f <= 0.0:
+            px, w = toe[a], -toe[a]
+        else:
+            px, w = -heel[a], heel[a]
+        ax = px + w * c + ankle_h[a] * (-s)
+        ay = 0.0 + w * s + ankle_h[a] * c
+        p1, p2 = stance[a, 1], stance[a, 2]
+        hx = ax - shank[a] * np.sin(p1) - thigh[a] * np.sin(p2)
+        hy = ay - shank[a] * (-np.cos(p1)) - thigh[a] * (-np.cos(p2))
+        q1, q2 = swing[a, 1], swing[a, 2]
+        sx = hx + thigh[a] * np.sin(q2) + shank[a] * np.sin(q1)
+        sy = hy + thigh[a] * (-np.cos(q2)) + shank[a] * (-np.cos(q1))
+        g = swing[a, 0]
+        c, s = np.cos(g), np.sin(g)
+        if g >= 0.0:
+            out[a, 0] = sx - heel[a] * c - ankle_h[a] * (-s) + heel[a]
+            out[a, 1] = sy - heel[a] * s - ankle_h[a] * c
+        else:
+            out[a, 0] = sx + toe[a] * c - ankle_h[a] * (-s) - toe[a]
+            out[a, 1] = sy + toe[a] * s - ankle_h[a] * c
+
+
 def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     """Step length and height a pair of leg silhouettes produces (Eq. 10, extended).
 
@@ -172,9 +201,17 @@ def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     """
     stance = np.asarray(stance, dtype=float)
     swing = np.asarray(swing, dtype=float)
-    thigh, shank, ankle_h, heel, toe = (
-        np.asarray(_dimension(leg, k), dtype=float)[..., None] for k in LEG_FIELDS
-    )  # ``toe`` is the forefoot roll point (ball)
+    dims = [np.asarray(_dimension(leg, k), dtype=float) for k in LEG_FIELDS]
+    if stance.shape[-1] >= 3 and swing.shape[-1] >= 3:  # the code below, compiled
+        shape = np.broadcast_shapes(stance.shape[:-1], swing.shape[:-1], *(d.shape for d in dims))
+        flat = [np.ascontiguousarray(np.broadcast_to(a[..., :3], shape + (3,))).reshape(-1, 3)
+                for a in (stance, swing)]
+        flat += [np.ascontiguousarray(np.broadcast_to(d, shape)).reshape(-1) for d in dims]
+        out = np.empty((flat[0].shape[0], 2))
+        _step_of_kernel(*flat, out)
+        return out.reshape(shape + (2,))
+    thigh, shank, ankle_h, heel, toe = (d[..., None] for d in dims)
+    # ``toe`` is the forefoot roll point (ball)
     # Stance foot: pivot on the ball (foot pitched down) or on the heel, pivot fixed.
     f_st = stance[..., 0:1]
     u_st = np.concatenate([np.cos(f_st), np.sin(f_st)], axis=-1)  # heel→toe

@@ -98,3 +98,40 @@ def test_style_take_equals_building_the_rows():
     got = body.take(np.array([5, 1]))
     for k in body.__dataclass_fields__:
         assert _same(getattr(got, k), getattr(body, k)[np.array([5, 1])])
+
+
+def _step_of_numpy(stance, swing, leg):
+    from crowdwalk.gait.elevinterp import LEG_FIELDS, _dimension, _segment
+
+    thigh, shank, ankle_h, heel, toe = (
+        np.asarray(_dimension(leg, k), dtype=float)[..., None] for k in LEG_FIELDS)
+    f_st = stance[..., 0:1]
+    u_st = np.concatenate([np.cos(f_st), np.sin(f_st)], axis=-1)
+    n_st = np.concatenate([-np.sin(f_st), np.cos(f_st)], axis=-1)
+    on_toe = f_st <= 0.0
+    pivot_x = np.where(on_toe, toe, -heel)
+    pivot = np.concatenate([pivot_x, np.zeros_like(pivot_x)], axis=-1)
+    ankle = pivot + np.where(on_toe, -toe, heel) * u_st + ankle_h * n_st
+    hip = ankle - shank * _segment(stance[..., 1]) - thigh * _segment(stance[..., 2])
+    ankle_sw = hip + thigh * _segment(swing[..., 2]) + shank * _segment(swing[..., 1])
+    f_sw = swing[..., 0:1]
+    u_sw = np.concatenate([np.cos(f_sw), np.sin(f_sw)], axis=-1)
+    n_sw = np.concatenate([-np.sin(f_sw), np.cos(f_sw)], axis=-1)
+    heel_sw = ankle_sw - heel * u_sw - ankle_h * n_sw
+    toe_sw = ankle_sw + toe * u_sw - ankle_h * n_sw
+    on_heel = f_sw >= 0.0
+    length = np.where(on_heel, heel_sw[..., 0:1] + heel, toe_sw[..., 0:1] - toe)
+    height = np.where(on_heel, heel_sw[..., 1:2], toe_sw[..., 1:2])
+    return np.concatenate([length, height], axis=-1)
+
+
+def test_step_measure_kernel_equals_the_numpy_code():
+    from crowdwalk.gait.elevinterp import SagittalLeg, step_of
+
+    stance, swing = RNG.normal(0, 0.5, (500, 4)), RNG.normal(0, 0.5, (500, 4))
+    stance[:5, 0], swing[5:10, 0] = 0.0, -0.0
+    legs = SagittalLeg.from_body_height(RNG.uniform(1.4, 2.0, 500))
+    for st, sw, leg in ((stance, swing, legs), (stance, swing, SagittalLeg.from_body_height(1.7)),
+                        (stance[0], swing[0], SagittalLeg.from_body_height(1.7)),
+                        (stance[:, :3], swing[0], legs)):
+        assert _same(step_of(st, sw, leg), _step_of_numpy(st, sw, leg))
