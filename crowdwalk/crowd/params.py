@@ -59,6 +59,14 @@ class CrowdParams:
     reroute_after : float
         Time without ``progress_step`` of progress along the route after which an agent
         looks for another route [s].
+    sight_after, sight_reach : float
+        A walker without ``progress_step`` of progress for ``sight_after`` seconds whose
+        steering target is behind a wall (it does not see it: pushed through a side door
+        into a room, say) heads for the farthest point of its route within
+        ``sight_reach`` metres ahead that it sees (inf: never). Named deviation, measured
+        on RiMEA 10 full (``crowdwalk verify --full --only rimea10``): with re-routing
+        when the route line is not seen and this rule, 114 → 120 of 120 left by their
+        assigned exit (docs/architecture.md).
     progress_step : float
         Progress along the route that counts as getting on [m].
     stair_rise : float
@@ -120,6 +128,8 @@ class CrowdParams:
     neighbours: int = 32
     neighbour_range: float = 3.0
     reroute_after: float = 8.0
+    sight_after: float = 8.0
+    sight_reach: float = 10.0
     progress_step: float = 0.5
     stair_rise: float = 0.05
     planning_horizon: int = 3

@@ -309,6 +309,7 @@ class CrowdSimulation:
         st.segment[idx], st.progress[idx] = ahead.segment, ahead.progress
         st.best_progress[idx[ahead.gained]] = ahead.progress[ahead.gained]
         st.progress_time[idx[ahead.gained]] = te[ahead.gained]
+        st.gain_time[idx[ahead.gained]] = te[ahead.gained]
         if ahead.arrived.any():
             done = idx[ahead.arrived]
             st.status[done] = ARRIVED
@@ -329,6 +330,19 @@ class CrowdSimulation:
             partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
             route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
             radius=self.radius[idx])
+        if np.isfinite(prm.sight_after):
+            # stuck for ``sight_after`` with the target behind a wall (pushed into a side
+            # room, say): head for the farthest point of the route it sees
+            late = np.flatnonzero(t - st.gain_time[idx] >= prm.sight_after)
+            graph = self.routes.graph
+            hidden = [k for k in late if not graph.sees(pos[k], target[k])]
+            if hidden:
+                k = np.asarray(hidden)
+                seen = self.routes.farthest_visible(st, idx[k], prm.sight_reach)
+                ok = np.isfinite(seen[:, 0]) & (np.linalg.norm(seen - pos[k], axis=1) > 1e-6)
+                target[k[ok]] = seen[ok]
+                route_dir[k[ok]] = (seen[ok] - pos[k[ok]]) / np.linalg.norm(
+                    seen[ok] - pos[k[ok]], axis=1)[:, None]
         # a walker held up for long looks backwards on every other decision (the
         # candidate fan turned around), so that clogs can loosen
         clogged = st.stuck[idx] >= prm.steering.clog_after
