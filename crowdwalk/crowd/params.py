@@ -116,6 +116,18 @@ class CrowdParams:
         0.8 / 1.0 / 1.2 m (seed 4) 1.32 / 1.68 / 2.03 /s with it against 1.33 / 1.67 /
         2.18 without; it spreads walkers entering 0.8 m (|y| 0.08 against 0.05 m at
         mid-opening) but no zipper forms.
+    opening_ease : bool
+        Scale the soft wall term (``SteeringParams.wall_weight``) by
+        ``opening_wall_factor`` for walkers inside an opening zone
+        (:class:`~crowdwalk.crowd.openings.Openings`: corridors at most ``opening_width``
+        wide, minus the rooms at their ends, grown by ``opening_margin``), so that two
+        staggered lanes (a zipper) fit where the full term keeps everybody on the axis.
+        The hard wall limit is unchanged (no body closer to a wall than its radius).
+        Named deviation (docs/architecture.md).
+    opening_width, opening_margin : float
+        [m].
+    opening_wall_factor, opening_personal_factor : float
+        Factors on the soft wall and neighbour terms inside [-].
     steering : SteeringParams
     """
 
@@ -143,6 +155,11 @@ class CrowdParams:
     headway_lane: float = 2.0
     headway_steer: bool = False
     lane_keep: bool = False
+    opening_ease: bool = False
+    opening_width: float = 1.25
+    opening_margin: float = 0.5
+    opening_wall_factor: float = 0.2
+    opening_personal_factor: float = 1.0
     steering: SteeringParams = field(default_factory=SteeringParams)
 
     def body_axes(self, height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

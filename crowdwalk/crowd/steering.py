@@ -215,6 +215,8 @@ def choose_steps(
     shape: np.ndarray | None = None,
     yaw: np.ndarray | None = None,
     gap: GapSteps | None = None,
+    wall_scale: np.ndarray | None = None,
+    personal_scale: np.ndarray | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -262,6 +264,12 @@ def choose_steps(
         at the step the model allows along it (every neighbour counted), so that a
         walker falls in beside-behind the one ahead (the zipper) or steps round an
         oncoming one rather than close up behind.
+    wall_scale : (m,), optional
+        Factor on the soft wall term per agent (``CrowdParams.opening_ease``: eased
+        inside openings); None: 1.
+    personal_scale : (m,), optional
+        Factor on the neighbour repulsion (not the anticipation of oncoming walkers) per
+        agent, the same way; None: 1.
 
     Returns
     -------
@@ -409,6 +417,8 @@ def choose_steps(
         rr = radius[:, None, None] + nb.radius[:, None, :]
         gap_end = distance(cand[:, :, None, :], nb.end[:, None, :, :])
         rep = params.personal_weight * np.exp(-(gap_end - rr) / params.personal_range)
+        if personal_scale is not None:
+            rep = rep * np.asarray(personal_scale, float)[:, None, None]
         # anticipation: the closest approach within ``anticipation`` seconds if this agent
         # walked the candidate direction at its speed and the oncoming neighbour kept its
         # velocity (the time-to-collision idea of Karamouzas et al. 2014)
@@ -436,7 +446,9 @@ def choose_steps(
         utility += np.where(oncoming[:, None, :], params.personal_weight
                             * np.exp(-(closest - ra) / params.personal_range), 0.0).sum(axis=-1)
     wall_gap = clearance(cand) - radius[:, None]  # soft term uses the full radius
-    utility += params.wall_weight * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)
+    wall_w = params.wall_weight if wall_scale is None else params.wall_weight * np.asarray(
+        wall_scale, float)[:, None]
+    utility += wall_w * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)
     utility[:, :-1] += params.twist_weight * (1.0 - np.cos(turned))
     utility[:, :-1] += params.turn_weight * (1.0 - np.cos(cand_heading - heading[:, None]))
     utility[:, :-1] += params.right_bias * np.maximum(np.sin(offsets), 0.0)
