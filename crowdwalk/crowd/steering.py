@@ -293,17 +293,14 @@ def choose_steps(
 
     # hard limits: walls (sampled at each length's end point and the sweep's midpoint)
     # a step may not bring the body closer to a wall than its radius, unless it was
-    # already closer (then it may not get closer still: agents can leave a wall)
-    r = np.minimum(radius, clearance(position) - 1e-6)[:, None, None]
-    at_end, halfway = clearance(ends), clearance(0.5 * (ends + position[:, None, None, :]))
-    # and at the sweep's quarters where the body passes near a wall (a straight sweep
-    # past a convex corner dips closest between the samples: RiMEA 6 measured a body
-    # edge 1.6 cm into the inner corner with end and midpoint alone)
-    halfway = np.minimum(halfway, _quarters(clearance, position, ends, halfway, r))
-    wall_ok = (at_end >= r) & (halfway >= r)
-    # the new foothold itself must lie inside the walkable area
-    foot = stance[:, None, None, :] + lengths[None, None, :, None] * dirs[:, :, None, :]
-    wall_ok &= clearance(foot) >= params.foot_clearance
+    # already closer (then it may not get closer still: agents can leave a wall); and at
+    # the sweep's quarters where the body passes near a wall (a straight sweep past a
+    # convex corner dips closest between the samples: RiMEA 6 measured a body edge 1.6 cm
+    # into the inner corner with end and midpoint alone); the new foothold itself must
+    # lie inside the walkable area (one kernel: ClearanceField.step_walls)
+    wall_ok, near = clearance.step_walls(position, stance, ends, dirs, lengths, radius,
+                                         shape[:, 1] + 2 * shape[:, 2],
+                                         params.foot_clearance)
     # hard limits: swept bodies of neighbours (only those a step could reach)
     timed = neighbours.remaining is not None and step_time is not None
     pa = np.zeros(0, dtype=np.int64)
@@ -329,7 +326,7 @@ def choose_steps(
         ok = centre & _shoulders_clear(
             position[rows], ends[rows], yaw=yaw[rows], yaw_end=yaw_end[rows],
             shape=shape[rows], clearance=clearance,
-            near=np.minimum(at_end[rows], halfway[rows]))
+            near=near[rows])
         local = np.full(m, -1)
         local[rows] = np.arange(rows.size)
         sel = np.flatnonzero(local[pa] >= 0)
@@ -481,21 +478,6 @@ def choose_steps(
         yaw=np.where(move, yaw_end[rows, pick], yaw),
         utility=utility[rows, best],
     )
-
-
-def _quarters(clearance, position, ends, halfway, r) -> np.ndarray:
-    """(m, C, L) the least clearance [m] at a quarter and three quarters of the sweeps
-    from ``position`` (m, 2) to ``ends`` (m, C, L, 2), evaluated only where the midpoint's
-    ``halfway`` clearance is within a quarter sweep of the radius ``r`` (elsewhere the
-    clearance, which changes by at most the distance moved, cannot fall below it)."""
-    out = np.full(ends.shape[:-1], np.inf)
-    span = 0.25 * np.linalg.norm(ends - position[:, None, None, :], axis=-1)
-    i, c, l = np.nonzero(halfway < np.broadcast_to(r, halfway.shape) + span)
-    if i.size:
-        p0, p1 = position[i], ends[i, c, l]
-        out[i, c, l] = np.minimum(clearance(0.75 * p0 + 0.25 * p1),
-                                  clearance(0.25 * p0 + 0.75 * p1))
-    return out
 
 
 def _shoulders_clear(position, ends, *, yaw, yaw_end, shape, clearance,
