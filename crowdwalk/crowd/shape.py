@@ -110,6 +110,25 @@ def _approach(ax, ay, avx, avy, ta, bx, by, bvx, bvy, tb):
     return min(d, _closest(rx, ry, wx, wy, t2 - t1))
 
 
+@nb.njit(cache=True, nogil=True)
+def _segment_distance(ax, ay, bx, by, cx, cy, dx, dy):
+    """Least distance [m] between the segments ab and cd (0 where they cross or touch,
+    or are collinear)."""
+    o1 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    o2 = (bx - ax) * (dy - ay) - (by - ay) * (dx - ax)
+    o3 = (dx - cx) * (ay - cy) - (dy - cy) * (ax - cx)
+    o4 = (dx - cx) * (by - cy) - (dy - cy) * (bx - cx)
+    if o1 * o2 <= 0.0 and o3 * o4 <= 0.0:
+        return 0.0
+    return min(min(_closest(cx - ax, cy - ay, dx - cx, dy - cy, 1.0),
+                   _closest(cx - bx, cy - by, dx - cx, dy - cy, 1.0)),
+               min(_closest(ax - cx, ay - cy, bx - ax, by - ay, 1.0),
+                   _closest(ax - dx, ay - dy, bx - ax, by - ay, 1.0)))
+
+
+#: What a run's far test keeps below its bound [m] (covers the rounding, ~1e-13 m).
+FAR_MARGIN = 1e-9
+
 _SIDE = (0.0, 1.0, -1.0)
 
 
@@ -126,11 +145,23 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
     n_runs = nj // runs if runs > 0 else 0
     stop = np.empty(n_runs, np.int64)
     stop_c = np.empty(n_runs, np.int64)
+    # and per run the half width of a capsule about the segment from A's start to the
+    # run's last end that holds every sweep of the run (the greatest distance of an end
+    # from that segment: the distance is convex, the sweeps lie in the ends' hull)
+    width = np.empty(n_runs)
+    far = 0.0
     for p in range(npairs):
         i = pa[p]
         if runs > 0 and (p == 0 or i != pa[p - 1]):
             for c in range(n_runs):
                 stop[c] = stop_c[c] = runs
+                sx, sy = a_start[i, 0], a_start[i, 1]
+                lx, ly = a_end[i, c * runs + runs - 1, 0], a_end[i, c * runs + runs - 1, 1]
+                width[c] = 0.0
+                for l in range(runs):
+                    e = _closest(sx - a_end[i, c * runs + l, 0], sy - a_end[i, c * runs + l, 1],
+                                 lx - sx, ly - sy, 1.0)
+                    width[c] = max(width[c], e)
                 for l in range(runs):
                     if not a_ok[i, c * runs + l]:
                         stop[c] = l
@@ -165,6 +196,15 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
                 l = j - c * runs
                 if l >= stop_c[c]:  # a shorter step of the run is blocked: so is this one
                     out[p, j] = out_centre[p, j] = -np.inf
+                    continue
+                if l == 0:  # the run's capsule against B's whole remaining sweep
+                    far = _segment_distance(
+                        a_start[i, 0], a_start[i, 1], a_end[i, j + runs - 1, 0],
+                        a_end[i, j + runs - 1, 1], b_now[p, 0], b_now[p, 1], b_end[p, 0],
+                        b_end[p, 1]) - width[c]
+                if far - bound >= FAR_MARGIN:  # the holding discs stay clear: a bound
+                    out_centre[p, j] = far - ra - rb
+                    out[p, j] = far - bound if l < stop[c] else -np.inf
                     continue
             dur = a_dur[i, j]
             gone = min(a_elapsed[i], dur)
@@ -256,7 +296,9 @@ def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end:
         candidates are ``J / runs`` runs of ``runs`` increasing lengths, and ``pa`` lists
         each A's neighbours together, as ``np.nonzero`` gives them): after the first
         negative entry of a run for one A (over its neighbours so far, and ``a_ok`` /
-        ``a_centre_ok``) the run's longer entries are only set to -inf, not evaluated.
+        ``a_centre_ok``) the run's longer entries are only set to -inf, not evaluated;
+        and where B's remaining sweep keeps clear of a capsule holding all of a run's
+        sweeps, the run's clearances are that lower bound (both outputs), not evaluated.
         0 (default): every entry evaluated.
     a_ok, a_centre_ok : (m, J) bool, optional
         With ``runs``: A's candidates already blocked for the outline / the centre discs

@@ -131,7 +131,7 @@ def test_the_default_body_is_one_disc_as_broad_as_deep():
 
 
 
-def test_gaps_stopped_at_a_runs_first_blocked_length_give_the_same_free_lengths():
+def test_gaps_stopped_at_a_runs_first_blocked_length_or_bounded_give_the_same_free_lengths():
     rng = np.random.default_rng(7)
     m, k, n_c, n_l = 40, 6, 5, 6
     shape = BodyShape.from_axes(rng.uniform(0.15, 0.2, m), rng.uniform(0.2, 0.26, m)).packed()
@@ -166,4 +166,7 @@ def test_gaps_stopped_at_a_runs_first_blocked_length_give_the_same_free_lengths(
     np.testing.assert_array_equal(free(cut_centre, wall_ok), free(full_centre, wall_ok))
     kept = np.isfinite(cut)
     assert (~kept).any()  # some were skipped
-    np.testing.assert_array_equal(cut[kept], full[kept])  # the evaluated ones bit for bit
+    # the others: evaluated, or a lower bound where the run's capsule keeps clear
+    bounded = kept & (cut != full)
+    assert bounded.any() and (cut[bounded] >= 0.0).all() and (cut <= full).all()
+    assert (cut_centre <= full_centre).all() and (cut_centre[bounded] >= 0.0).all()
