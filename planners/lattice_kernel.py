@@ -24,7 +24,7 @@ import numpy as np
 
 from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, leg_constants
-from planners.swing import adjust_one
+from planners.swing import _cell, adjust_one
 
 __all__ = ["Lattice", "build_agents", "build_agents_serial", "complete", "complete_agents",
            "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
@@ -265,7 +265,7 @@ def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     vertex_cum[:] = 0
     for v in range(s.size):
         sv = s[v]
-        vertex_cum[min(max(int((sv - start) * scale), 0), count - 1) + 1] += 1
+        vertex_cum[_cell(sv, start, cell, scale, count) + 1] += 1
         if sv < edges[0] or sv > edges[count]:
             continue
         k = min(max(int(np.floor((sv - start) * scale)), 0), count)
