@@ -27,7 +27,6 @@ from planners.grids import leg_grids, swing_basis
 from planners.lattice_kernel import (
     Lattice,
     build_agents,
-    build_agents_serial,
     complete_agents,
     prepare_agents,
 )
@@ -488,15 +487,14 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         tables.prepare()
     else:  # the one-pass kernel (faster than entry by entry where most are read)
         L = lattice
-        kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
-        kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, trailing, L.speeds, g.normal,
-               g.per_metre, L.neutral_len, g.legs, g.flat_Ej, g.flat_reach, g.flat_ctrl,
-               g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
-               st.step_front, st.step_j, st.step_depth, L.step_offset, st.swing_back,
-               st.swing_front, st.swing_stride, first, second, valid, basis, influence,
-               fparams, iparams, weights, L.node_s, L.node_z, L.length, L.rise, L.En, L.Ev,
-               L.Ej, L.E, L.reason, L.cost, L.progress, L.terminal, L.far, L.swing_ok,
-               L.controls, L.rounds, L.work)
+        run_parts(build_agents, A, prof_s, prof_z, bounds, base, g.lo, g.delta, trailing,
+                  L.speeds, g.normal, g.per_metre, L.neutral_len, g.legs, g.flat_Ej,
+                  g.flat_reach, g.flat_ctrl, g.flat_ok, g.flat_slack, st.node_depth,
+                  st.node_m, st.step_stance, st.step_front, st.step_j, st.step_depth,
+                  L.step_offset, st.swing_back, st.swing_front, st.swing_stride, first,
+                  second, valid, basis, influence, fparams, iparams, weights, L.node_s,
+                  L.node_z, L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.cost,
+                  L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work)
         np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
         np.greater_equal(L.rounds, 0, out=L.swing_done)
     stages.add("kernel", t0)
