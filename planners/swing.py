@@ -176,11 +176,15 @@ def _round9(x):
 def _cell(x, start, cell, scale, c):
     """:func:`planners.profile.cell_index` of one arc length ``x`` [m] in a raster of
     ``c`` cells (``scale`` = 1 / ``cell``)."""
-    k = int(min(max((x - start) * scale, 0.0), c - 1.0))
-    if k > 0 and start + cell * k > x:
-        k -= 1
-    elif k < c - 1 and start + cell * (k + 1) <= x:
-        k += 1
+    f = min(max((x - start) * scale, 0.0), c - 1.0)
+    k = int(f)
+    r = f - k
+    # only within rounding of an edge (far less than 1e-6 cells) can k be one off
+    if r < 1e-6 or r > 1.0 - 1e-6:
+        if k > 0 and start + cell * k > x:
+            k -= 1
+        elif k < c - 1 and start + cell * (k + 1) <= x:
+            k += 1
     return k
 
 
