@@ -26,12 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from crowdwalk.body import JOINT, LEG_JOINTS, PROPORTIONS
+from crowdwalk.body import JOINT, LEG_JOINTS, PARENTS, PROPORTIONS, quaternion_to_matrix
 from crowdwalk.steps import FootstepTable
 
 __all__ = ["CycleKind", "GaitFigures", "WalkerTrack", "cycle_curves", "edge_clearance",
-           "foot_points", "gait_figures", "heel_slides", "load_tracks", "references",
-           "report_table",
+           "foot_points", "foot_yaw_from_rotations", "gait_figures", "heel_slides",
+           "load_tracks", "references", "report_table",
            "sagittal_angles", "second_differences", "stance_runs", "swing_clearance",
            "winter_at"]
 
@@ -49,7 +49,10 @@ _PELVIS, _LUMBAR = 0, 12  # HumanoidRoot, vl5
 @dataclass(frozen=True)
 class WalkerTrack:
     """One walker's stored poses: ``time`` (F,) [s], joint world ``positions`` (F, J, 3)
-    [m], ``contact`` (F, 2) bool (left, right), ``body_height`` [m], ``fps`` [1/s]."""
+    [m], ``contact`` (F, 2) bool (left, right), ``body_height`` [m], ``fps`` [1/s];
+    ``foot_yaw`` (F, 2) [rad] (left, right): the heading of each foot segment from the
+    written joint rotations (:func:`foot_yaw_from_rotations`), None for a track given by
+    positions only."""
 
     agent: int
     body_height: float
@@ -57,22 +60,58 @@ class WalkerTrack:
     positions: np.ndarray
     contact: np.ndarray
     fps: float
+    foot_yaw: np.ndarray | None = None
+
+
+#: The segment whose heading is a foot's yaw: the foot distal to the subtalar joint.
+_FOOT_SEGMENT = LEG_JOINTS[:, 3]
+
+
+def foot_yaw_from_rotations(root_quaternion: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """Heading [rad] (F, 2) of the left and right foot segments from the written rotations:
+    the root's world quaternion (F, 4) wxyz and the local joint quaternions (F, J, 4)
+    composed down the skeleton (``R_world[j] = R_world[parent] @ R_local[j]``, the BVH
+    semantics of :mod:`crowdwalk.body`).
+
+    The heading is that of the foot's lateral (y) axis turned by −90°: pitching the foot
+    (heel rise, push-off) turns about that axis and leaves it, so the yaw stays defined
+    when the foot is plantarflexed past vertical, where a heading read from the ankle and
+    ball positions flips by 180°. Unwrapped over time.
+    """
+    local = quaternion_to_matrix(np.asarray(joints, float))
+    world = {0: quaternion_to_matrix(np.asarray(root_quaternion, float))}
+    out = []
+    for foot in _FOOT_SEGMENT.tolist():
+        chain = []
+        j = foot
+        while j > 0:
+            chain.append(j)
+            j = int(PARENTS[j])
+        r = world[0]
+        for k in reversed(chain):
+            r = r @ local[:, k]
+        lateral = r[:, :, 1]
+        out.append(np.unwrap(np.arctan2(-lateral[:, 0], lateral[:, 1])))
+    return np.column_stack(out)
 
 
 def load_tracks(poses) -> dict[int, WalkerTrack]:
     """Every agent's :class:`WalkerTrack` from a :class:`~crowdwalk.record.Poses` reader,
-    in one pass over the stored frames."""
-    acc: dict[int, tuple[list, list, list]] = {}
+    in one pass over the stored frames (``foot_yaw`` from the written joint rotations)."""
+    acc: dict[int, tuple[list, list, list, list, list]] = {}
     for rec in poses:
         for i, agent in enumerate(rec.ids.tolist()):
-            t, p, c = acc.setdefault(agent, ([], [], []))
+            t, p, c, rq, jq = acc.setdefault(agent, ([], [], [], [], []))
             t.append(rec.time)
             p.append(rec.positions[i])
             c.append(rec.contact[i])
+            rq.append(rec.root_quaternion[i])
+            jq.append(rec.joints[i])
     return {a: WalkerTrack(agent=a, body_height=float(poses.body_heights[a]),
                            time=np.asarray(t), positions=np.asarray(p),
-                           contact=np.asarray(c, bool), fps=float(poses.fps))
-            for a, (t, p, c) in acc.items()}
+                           contact=np.asarray(c, bool), fps=float(poses.fps),
+                           foot_yaw=foot_yaw_from_rotations(np.asarray(rq), np.asarray(jq)))
+            for a, (t, p, c, rq, jq) in acc.items()}
 
 
 # --- geometry of the stored skeleton ---------------------------------------------------
@@ -185,8 +224,18 @@ def heel_slides(track: WalkerTrack, side: int, *, tolerance: float = 0.005
     """Per stance of one foot: horizontal slide [m] of the planted heel or ball (the larger)
     while it is within ``tolerance`` [m] of its lowest height in that stance, the foot's
     yaw change [deg] while the ball is planted, and while the heel is (a turn that is not
-    on the ball). Shapes (n_stances,)."""
+    on the ball). Shapes (n_stances,).
+
+    The yaw is ``track.foot_yaw`` (the written joint rotations) where the track has it;
+    a track of positions only falls back to the heel -> toe direction, which flips by 180°
+    once the foot is plantarflexed past vertical at push-off.
+    """
     pts = foot_points(track, side)
+    if track.foot_yaw is not None:
+        yaw_all = np.asarray(track.foot_yaw, float)[:, side]
+    else:
+        f_all = pts["toe"] - pts["heel"]
+        yaw_all = np.unwrap(np.arctan2(f_all[:, 1], f_all[:, 0]))
     slides, turns, heel_turns = [], [], []
     for a, b in stance_runs(track.contact[:, side]):
         worst = 0.0
@@ -195,9 +244,8 @@ def heel_slides(track: WalkerTrack, side: int, *, tolerance: float = 0.005
             down = p[:, 2] <= p[:, 2].min() + tolerance
             q = p[down, :2]
             worst = max(worst, float(np.linalg.norm(q - q[0], axis=1).max()))
-        f = (pts["toe"] - pts["heel"])[a:b]
         down = pts["ball"][a:b, 2] <= pts["ball"][a:b, 2].min() + tolerance
-        yaw = np.unwrap(np.arctan2(f[:, 1], f[:, 0]))
+        yaw = yaw_all[a:b]
         heel = pts["heel"][a:b, 2] <= pts["heel"][a:b, 2].min() + tolerance
         slides.append(worst)
         turns.append(float(np.rad2deg(np.ptp(yaw[down]))))

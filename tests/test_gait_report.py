@@ -5,11 +5,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from crowdwalk.body import (
+    JOINT,
+    JOINT_NAMES,
+    Body,
+    forward_kinematics,
+    matrix_to_quaternion,
+    rotation_y,
+    rotation_z,
+)
 from crowdwalk.crowd.run import RunOverrides, run_scenario
 from crowdwalk.gait_report import (
     WalkerTrack,
     edge_clearance,
     heel_slides,
+    load_tracks,
     report_table,
     run_figures,
     second_differences,
@@ -131,6 +141,54 @@ def test_a_foot_turning_on_its_heel_is_reported():
     slides, turns, heel_turns = heel_slides(track, 0)
     assert heel_turns[0] == pytest.approx(20.0, abs=0.5)
     assert slides[0] > 0.03  # the ball swings round the heel
+
+
+class _Poses(list):
+    """A :class:`crowdwalk.record.Poses` stand-in: the frames of one agent."""
+
+    body_heights = {0: 1.75}
+    fps = 25.0
+
+
+def _pushing_off(pitch: np.ndarray, yaw: np.ndarray) -> _Poses:
+    """One walker standing on its left ball: per frame the whole body turned by ``yaw``
+    [rad] and the left foot plantarflexed by ``pitch`` [rad] at the talocrural joint,
+    posed by forward kinematics and moved so that the left ball stays put; written as
+    :class:`crowdwalk.record.PoseRecord` rows (local quaternions and world positions)."""
+    from crowdwalk.record import PoseRecord
+
+    f, nj = pitch.size, len(JOINT_NAMES)
+    body = Body.from_heights(np.full(f, 1.75))
+    local = np.tile(np.eye(3), (f, nj, 1, 1))
+    local[:, JOINT["l_talocrural"]] = rotation_y(pitch)
+    local[:, JOINT["l_metatarsal"]] = rotation_y(-pitch)  # toes stay on the floor
+    root = rotation_z(yaw)
+    pos, _ = forward_kinematics(body, np.zeros((f, 3)), root, local)
+    pos -= pos[:, [JOINT["l_metatarsal"]]]  # the ball planted at the origin
+    quat = matrix_to_quaternion(local)
+    root_q = matrix_to_quaternion(root)
+    return _Poses(PoseRecord(frame=i, time=i / 25.0, ids=np.array([0]),
+                             root_position=pos[i:i + 1, 0], root_quaternion=root_q[i:i + 1],
+                             joints=quat[i:i + 1], positions=pos[i:i + 1],
+                             contact=np.ones((1, 2), bool), fallback=np.zeros(1, bool))
+                  for i in range(f))
+
+
+def test_a_foot_pushing_off_past_vertical_does_not_count_as_a_turn():
+    """The planted foot's yaw is read from the written joint rotations: a foot that rises
+    on its ball until the ankle -> ball line points past straight down (80 deg of
+    plantarflexion at push-off, as KLAW's does) has not turned; read from the ankle and
+    ball positions its heading flipped by 180 deg (a KLAW lone walker counted 18 of 29
+    straight-line stances as turns). A real turn on the ball still counts."""
+    f = 30
+    pitch = np.deg2rad(np.linspace(0.0, 80.0, f))
+    (track,) = load_tracks(_pushing_off(pitch, np.zeros(f))).values()
+    slides, turns, heel_turns = heel_slides(track, 0)
+    assert turns[0] == pytest.approx(0.0, abs=1e-3)
+    yaw = np.deg2rad(np.linspace(0.0, 20.0, f))
+    (track,) = load_tracks(_pushing_off(np.zeros(f), yaw)).values()
+    assert heel_slides(track, 0)[1][0] == pytest.approx(20.0, abs=1e-3)
+    assert heel_slides(track, 1)[1][0] == pytest.approx(20.0, abs=1e-3)
 
 
 def test_clearance_over_an_edge_and_a_foot_across_one():

@@ -40,6 +40,7 @@ from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.geometry import distance, point_segment_distance, segment_distance
 from crowdwalk.crowd.shape import body_gaps, disc_centres
 from crowdwalk.crowd.speed import GapSteps
+from crowdwalk.errors import invalid
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
 
@@ -95,6 +96,20 @@ class SteeringParams:
         (False, with no ``twists_deg``: the torso always faces the step direction).
     twist_weight : float
         Cost of walking with the shoulders twisted by φ, ``w (1 - cos φ)`` [m].
+    turn_limit_deg : float or None
+        Turn limit (gaitlevel; Chen & Li §5.4, ``planners.split_turn``): a step may turn
+        the walking direction by at most this much from the current heading [deg], so a
+        larger turn is split over consecutive steps (§5.4's threshold 45°); a walker
+        that was standing may turn as it likes. None (default): no limit. Opt-in,
+        measured (docs/architecture.md "Turn limit"): at 45° the corner's worst pelvis
+        second difference falls 14.7 -> 7.7 cm and the park's 14.0 -> 5.4 cm, but
+        bottleneck flows fall below Seyfried's band at every width.
+    turn_limit_spare : float
+        A walker whose step straight on (its current heading) is cut below this fraction
+        of its nominal step, by neighbours or walls, is spared the turn limit too [-]
+        (manoeuvring in a queue or in front of an opening). 0 (default): only standing
+        walkers are spared; 1.0 was measured to lose the corner's and park's gains and
+        not to keep the bottleneck flows either.
     """
 
     offsets_deg: tuple[float, ...] = (0.0, -12.0, 12.0, -25.0, 25.0, -40.0, 40.0, -60.0,
@@ -118,6 +133,16 @@ class SteeringParams:
     twists_deg: tuple[float, ...] = (60.0,)
     keep_facing: bool = True
     twist_weight: float = 0.05
+    turn_limit_deg: float | None = None
+    turn_limit_spare: float = 0.0
+
+    def __post_init__(self) -> None:
+        t = self.turn_limit_deg
+        if t is not None and not (np.isfinite(t) and 0.0 < t <= 180.0):
+            raise invalid("SteeringParams", "turn_limit_deg", "None or in (0, 180] [deg]", t)
+        if not (np.isfinite(self.turn_limit_spare) and self.turn_limit_spare >= 0.0):
+            raise invalid("SteeringParams", "turn_limit_spare", "finite and >= 0 [-]",
+                          self.turn_limit_spare)
 
 
 @dataclass(frozen=True)
@@ -301,17 +326,14 @@ def choose_steps(
 
     # hard limits: walls (sampled at each length's end point and the sweep's midpoint)
     # a step may not bring the body closer to a wall than its radius, unless it was
-    # already closer (then it may not get closer still: agents can leave a wall)
-    r = np.minimum(radius, clearance(position) - 1e-6)[:, None, None]
-    at_end, halfway = clearance(ends), clearance(0.5 * (ends + position[:, None, None, :]))
-    # and at the sweep's quarters where the body passes near a wall (a straight sweep
-    # past a convex corner dips closest between the samples: RiMEA 6 measured a body
-    # edge 1.6 cm into the inner corner with end and midpoint alone)
-    halfway = np.minimum(halfway, _quarters(clearance, position, ends, halfway, r))
-    wall_ok = (at_end >= r) & (halfway >= r)
-    # the new foothold itself must lie inside the walkable area
-    foot = stance[:, None, None, :] + lengths[None, None, :, None] * dirs[:, :, None, :]
-    wall_ok &= clearance(foot) >= params.foot_clearance
+    # already closer (then it may not get closer still: agents can leave a wall); and at
+    # the sweep's quarters where the body passes near a wall (a straight sweep past a
+    # convex corner dips closest between the samples: RiMEA 6 measured a body edge 1.6 cm
+    # into the inner corner with end and midpoint alone); the new foothold itself must
+    # lie inside the walkable area (one kernel: ClearanceField.step_walls)
+    wall_ok, near = clearance.step_walls(position, stance, ends, dirs, lengths, radius,
+                                         shape[:, 1] + 2 * shape[:, 2],
+                                         params.foot_clearance)
     # hard limits: swept bodies of neighbours (only those a step could reach)
     timed = neighbours.remaining is not None and step_time is not None
     pa = np.zeros(0, dtype=np.int64)
@@ -337,7 +359,7 @@ def choose_steps(
         ok = centre & _shoulders_clear(
             position[rows], ends[rows], yaw=yaw[rows], yaw_end=yaw_end[rows],
             shape=shape[rows], clearance=clearance,
-            near=np.minimum(at_end[rows], halfway[rows]))
+            near=near[rows])
         local = np.full(m, -1)
         local[rows] = np.arange(rows.size)
         sel = np.flatnonzero(local[pa] >= 0)
@@ -351,13 +373,21 @@ def choose_steps(
             # torso turning from ``yaw`` to ``yaw_end``)
             dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])
             nb_yaw, nb_yaw_end = neighbours.yaws()
+            # only a run's lengths up to its first blocked one count (free_lengths): the
+            # kernel stops there (the same result; 2.1 times faster on the 1,000-walker
+            # stadium's calls; scripts/check_identical_runs.py: identical runs)
+            a_ok = np.ones((m, n_c * n_l), bool)
+            a_centre_ok = a_ok.copy()
+            a_ok[rows] = ok.reshape(rows.size, -1)
+            a_centre_ok[rows] = centre.reshape(rows.size, -1)
             gaps, centre_gaps = body_gaps(
                 qa, a_start=position, a_yaw0=yaw, a_end=ends.reshape(m, n_c * n_l, 2),
                 a_yaw1=np.repeat(yaw_end, n_l, axis=1), a_duration=np.tile(dur, (1, n_c)),
                 a_elapsed=np.zeros(m) if lag is None else lag, a_shape=shape,
                 b_now=neighbours.now[qa, qk], b_yaw_now=nb_yaw[qa, qk],
                 b_end=neighbours.end[qa, qk], b_yaw_end=nb_yaw_end[qa, qk],
-                b_remaining=neighbours.remaining[qa, qk], b_shape=nb_shape[qa, qk])
+                b_remaining=neighbours.remaining[qa, qk], b_shape=nb_shape[qa, qk],
+                runs=n_l, a_ok=a_ok, a_centre_ok=a_centre_ok)
             blocked = gaps.reshape(-1, n_c, n_l) < 0.0
             centre_blocked = centre_gaps.reshape(-1, n_c, n_l) < 0.0
         else:
@@ -472,6 +502,11 @@ def choose_steps(
         late = np.maximum(np.asarray(stuck, dtype=float) - params.clog_after, 0.0)
         utility[:, -1] += params.give_way_weight * late
     utility[:, :-1] = np.where(free >= params.min_step, utility[:, :-1], np.inf)
+    if params.turn_limit_deg is not None:
+        # the last candidate keeps the current heading: how far the walker can go on
+        utility[:, :-1] = np.where(_within_turn_limit(
+            cand_heading, heading, free[:, -1], nominal_step, stuck, params),
+            utility[:, :-1], np.inf)
 
     n_dir = offsets.shape[1]
     best = np.argmin(utility, axis=1)
@@ -487,19 +522,18 @@ def choose_steps(
     )
 
 
-def _quarters(clearance, position, ends, halfway, r) -> np.ndarray:
-    """(m, C, L) the least clearance [m] at a quarter and three quarters of the sweeps
-    from ``position`` (m, 2) to ``ends`` (m, C, L, 2), evaluated only where the midpoint's
-    ``halfway`` clearance is within a quarter sweep of the radius ``r`` (elsewhere the
-    clearance, which changes by at most the distance moved, cannot fall below it)."""
-    out = np.full(ends.shape[:-1], np.inf)
-    span = 0.25 * np.linalg.norm(ends - position[:, None, None, :], axis=-1)
-    i, c, l = np.nonzero(halfway < np.broadcast_to(r, halfway.shape) + span)
-    if i.size:
-        p0, p1 = position[i], ends[i, c, l]
-        out[i, c, l] = np.minimum(clearance(0.75 * p0 + 0.25 * p1),
-                                  clearance(0.25 * p0 + 0.75 * p1))
-    return out
+def _within_turn_limit(cand_heading, heading, ahead, nominal_step, stuck,
+                       params: SteeringParams) -> np.ndarray:
+    """(m, C) bool: candidates (headings (m, C) [rad]) within ``params.turn_limit_deg``
+    of the current ``heading`` (m,) [rad], or spared: a walker whose step straight on,
+    ``ahead`` (m,) [m], is shorter than ``turn_limit_spare`` × ``nominal_step`` (m,)
+    [m], or that was standing (``stuck`` (m,) [s] > 0)."""
+    turn = np.abs((cand_heading - heading[:, None] + np.pi) % (2 * np.pi) - np.pi)
+    ok = turn <= np.deg2rad(params.turn_limit_deg) + 1e-9
+    spared = ahead < params.turn_limit_spare * nominal_step - 1e-9
+    if stuck is not None:
+        spared |= np.asarray(stuck, dtype=float) > 0.0
+    return ok | spared[:, None]
 
 
 def _shoulders_clear(position, ends, *, yaw, yaw_end, shape, clearance,

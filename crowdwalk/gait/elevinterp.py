@@ -39,7 +39,9 @@ Implementation notes (deviations and choices, each measured in the tests/benchma
   blends in a stair dataset. A level request is served by the level datasets alone
   (the "level line"), a low rise with its height measured from theirs; the blend is
   then closed by the trailing foot (a higher heel through push-off, closed form on the
-  ball's circle) and the length solved again, so the swing foot lands on the floor.
+  ball's circle) and the length solved again, so the swing foot lands on the floor. The
+  line extrapolates ``level_line_beyond`` (1.5) end intervals past the shortest and the
+  longest level dataset, and a closed line step is served at the requested height.
 - Speed blend (extension, switch ``ElevInterpConfig.speed_blend``; the paper blends by
   step length and height only). Given each step's walking speed, the level datasets
   (Bovi's xs … l) blended by *speed* replace, in mid-stance and mid-swing, the level
@@ -263,6 +265,13 @@ class ElevInterpConfig:
         blended dataset as it is.
     level_fade : float
         Datum and heel rise fade linearly to zero at this |step height| [leg lengths].
+    level_line_beyond : float
+        The level line (``level_datum``) is extrapolated linearly at most this many of
+        its end intervals beyond the shortest and the longest level dataset [1] (a
+        longer or shorter level request leaves the line for the triangulation, which
+        blends in the stair datasets). 1.5 (was 0.6): a 1.95 m body's level datasets
+        start at 0.67 m, its 0.8 m/s step is 0.54 m (docs/architecture.md "Level line
+        extrapolation").
     """
 
     tolerance: float = 0.002
@@ -277,6 +286,7 @@ class ElevInterpConfig:
     level_datum: bool = True
     heel_rise: bool = True
     level_fade: float = 0.04
+    level_line_beyond: float = 1.5
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
@@ -286,7 +296,7 @@ class ElevInterpConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise invalid(owner, name, f"finite and > 0 [{unit}]", value)
-        for name in ("extrapolation", "last_resort_extrapolation"):
+        for name in ("extrapolation", "last_resort_extrapolation", "level_line_beyond"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise invalid(owner, name, "finite and >= 0 [1]", value)
@@ -698,6 +708,12 @@ class ElevInterp:
                 ask[:, 0] += np.where(fade > 0.0, target[:, 0] - step[:, 0], 0.0)
                 out = serve(ask)
         served = served - (ask - target)
+        # On the level line the closure took the step to the requested height, which is
+        # what it serves: not the line's own Eq. 10 height less the datum interpolated
+        # between the level datasets' heights (those differ by 1-4 mm along the line and
+        # more beyond its ends, where the datum is clamped; a 3.8 mm difference at a
+        # 1.75 m body's 0.9 m step failed the tolerance and sent it to the triangulation).
+        served[on_line, 1] = target[on_line, 1]
         converged = np.linalg.norm(step - served, axis=1) <= cfg.tolerance / metres
         flags = np.stack([flags[:, 0] | ~converged, flags[:, 1], converged], axis=1)
         missed = flags[:, 0] & (fade > 0.0)
@@ -712,18 +728,18 @@ class ElevInterp:
         """The level datasets ``level`` (m,) (by increasing Eq. 10 length) blended
         piecewise linearly by their Eq. 10 step length to produce ``length`` (k,) [leg
         lengths]: the neighbouring two, extrapolated linearly beyond the shortest and the
-        longest by at most ``_LINE_BEYOND`` of the end interval; the weight refined by
-        secant steps on Eq. 10. Returns what :meth:`_solve` returns."""
+        longest by at most ``config.level_line_beyond`` of the end interval; the weight
+        refined by secant steps on Eq. 10. Returns what :meth:`_solve` returns."""
         xs = space.points[level, 0]
         j = np.clip(np.searchsorted(xs, length) - 1, 0, len(xs) - 2)
         lo, hi = xs[j], xs[j + 1]
-        f = np.clip((length - lo) / (hi - lo), -_LINE_BEYOND, 1.0 + _LINE_BEYOND)
+        beyond = self.config.level_line_beyond
+        f = np.clip((length - lo) / (hi - lo), -beyond, 1.0 + beyond)
         keys = space.keys[level]
         for _ in range(3):
             k = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
             step = step_of(k[:, 0], k[:, 1], _leg_of(props))
-            f = np.clip(f + (length - step[:, 0]) / (hi - lo), -_LINE_BEYOND,
-                        1.0 + _LINE_BEYOND)
+            f = np.clip(f + (length - step[:, 0]) / (hi - lo), -beyond, 1.0 + beyond)
         k = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
         step = step_of(k[:, 0], k[:, 1], _leg_of(props))
         curves = ((1.0 - f)[:, None, None] * space.angles[level][j]
@@ -780,7 +796,6 @@ class ElevInterp:
         return curves, phases, step, target, flags
 
 
-_LINE_BEYOND = 0.6  # level line: extrapolated at most this far beyond its end intervals
 _RISE_FROM, _RISE_OVER, _FALL_OVER = 0.3, 0.2, 0.2  # heel-rise window [stride fraction]
 _MAX_RISE = 0.2  # largest change of the trailing foot's elevation [rad]
 

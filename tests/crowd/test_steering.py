@@ -178,3 +178,50 @@ def test_an_oncoming_walker_behind_the_nearest_group_mates_is_avoided():
     assert choice.move[0]
     assert choice.direction[0][1] < -0.1  # evades, to its right
 
+
+
+def _turning(params, heading=0.0, stuck=0.0, nominal=0.7):
+    """A walker heading +x whose route turns to +y (target 3 m to its left), open room."""
+    none = Neighbours(*(np.zeros((1, 0) + s) for s in ((), (2,), (2,), (2,), ())))
+    return choose_steps(
+        position=np.zeros((1, 2)), stance=np.array([[0.1, 0.0]]), heading=np.array([heading]),
+        radius=np.array([R]), route_direction=np.array([[0.0, 1.0]]),
+        target=np.array([[0.0, 3.0]]), nominal_step=np.array([nominal]),
+        neighbours=none, clearance=ROOM, params=params, stuck=np.array([stuck]))
+
+
+def test_turn_limit_splits_a_sharp_turn_over_steps():
+    """Chen & Li §5.4 threshold as a steering limit (``turn_limit_deg``): a walking step
+    turns at most 45° from the heading; a walker that was standing, or whose step
+    straight on is cut below ``turn_limit_spare`` of its nominal step, is spared."""
+    from dataclasses import replace
+
+    from crowdwalk.crowd.steering import SteeringParams
+
+    def turn(choice):
+        return np.degrees(np.arctan2(choice.direction[0, 1], choice.direction[0, 0]))
+
+    free = _turning(SteeringParams())
+    assert free.move[0] and turn(free) > 50.0  # unlimited: straight for the target
+    limited = replace(SteeringParams(), turn_limit_deg=45.0)
+    step = _turning(limited)
+    assert step.move[0] and 0.0 < turn(step) <= 45.0 + 1e-6
+    assert turn(_turning(limited, stuck=0.5)) == turn(free)  # from standing
+    # with ``turn_limit_spare`` a walker whose way straight on is cut short (neighbours,
+    # walls) is spared; by default (0) it is not
+    from crowdwalk.crowd.steering import _within_turn_limit
+
+    cand = np.radians([[30.0, 60.0]])
+
+    def ok(params, ahead):
+        return _within_turn_limit(cand, np.zeros(1), np.array([ahead]), np.array([0.7]),
+                                  np.zeros(1), params).tolist()
+
+    spare = replace(limited, turn_limit_spare=1.0)
+    assert ok(spare, 0.75) == [[True, False]] and ok(spare, 0.6) == [[True, True]]
+    assert ok(limited, 0.6) == [[True, False]]
+    import pytest
+
+    from crowdwalk.errors import InputError
+    with pytest.raises(InputError, match="turn_limit_deg"):
+        SteeringParams(turn_limit_deg=0.0)

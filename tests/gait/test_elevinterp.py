@@ -333,3 +333,40 @@ def test_lift_swing_toe_flexes_only_the_swing_knee_to_the_clearance():
     none = lift_swing_toe(data.angles, body, data.stance_fraction, hip_drop=np.zeros(2),
                           clearance=-1.0)
     np.testing.assert_array_equal(none, data.angles)  # a swing that clears is untouched
+
+
+def test_level_line_reaches_a_tall_bodys_slow_step():
+    """A 1.95 m body's level datasets start at a 0.67 m step (end interval 0.09 m); its
+    0.8 m/s step is 0.54 m. The level line extrapolates 1.5 end intervals
+    (``level_line_beyond``), so that step is a blend of the two shortest level datasets,
+    not of the triangulation's stair datasets (with the former 0.6 it was)."""
+    body = leg(1.95)
+    interp = ElevInterp(config=ElevInterpConfig(heel_rise=False))
+    steps = interp.source_steps(body)
+    level = [i for i, d in enumerate(interp.datasets) if d.kind == "level"]
+    a, b = sorted(level, key=lambda i: steps[i, 0])[:2]
+    interval = steps[b, 0] - steps[a, 0]
+    length = steps[a, 0] - 1.4 * interval
+    out = interp.request(body, length, 0.0)
+    assert out.converged[0] and not out.clamped[0]
+    assert out.step_length[0] == pytest.approx(length, abs=1e-3)
+    lo, hi = interp.datasets[a].angles, interp.datasets[b].angles
+    f = np.sum((out.angles[0] - lo) * (hi - lo)) / np.sum((hi - lo) ** 2)
+    assert f < -1.0  # beyond the shortest, by more than the former limit
+    np.testing.assert_allclose(out.angles[0], lo + f * (hi - lo), atol=1e-9)
+    short = ElevInterp(config=ElevInterpConfig(heel_rise=False, level_line_beyond=0.6))
+    assert np.abs(short.request(body, length, 0.0).angles[0] - out.angles[0]).max() > 0.01
+
+
+def test_level_steps_on_the_line_serve_the_requested_height():
+    """On the level line the heel rise closes the step onto the floor, and that is what
+    the request is served: height 0, not the line's own Eq. 10 height less the datum
+    interpolated between the level datasets (1-3 mm apart along the line), which
+    flagged a 1.75 m body's 0.79-0.80 m steps as missed and sent them to the clamped
+    triangulation (landing 2-3 mm below the floor)."""
+    body = leg(np.full(9, 1.75))
+    length = np.linspace(0.62, 0.80, 9)
+    out = ElevInterp().request(body, length, 0.0)
+    assert out.converged.all() and not out.clamped.any()
+    np.testing.assert_array_equal(out.target[:, 1], 0.0)
+    np.testing.assert_allclose(out.step_height, 0.0, atol=0.2 * CM)
