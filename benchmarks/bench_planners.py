@@ -2,7 +2,7 @@
 the speed targets and the quality of each search against ``optimal``.
 
 Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N] [--agents N]
-[--targets-only ROUNDS]``. Prints:
+[--targets-only ROUNDS] [--stages]``. Prints:
 
 1. per terrain and grid resolution (13/11/7 intervals, n = 4), for each planner: median,
    p95 and min wall time per plan and the counted work (``Plan.stats``): nodes expanded,
@@ -13,6 +13,11 @@ Run ``python benchmarks/bench_planners.py [--repeat N] [--profiles N] [--agents 
 3. the speed targets of issue 15 against what was measured;
 4. on random terrain profiles, how often each search is within 1 % of ``optimal``
    (``best_first_multistart`` for several numbers of starts).
+
+``--stages`` prints instead where the time of a plan goes, per planner: the table build
+(per-leg grids, the lattice's arrays, the table kernel), the search and the plan
+assembly (:mod:`planners.stages`), for single plans on flat ground and stairs (median of
+``--repeat``) and for the batch of ``--agents`` walkers on random terrain (amortised).
 
 ``--targets-only ROUNDS`` measures the target cells alone (single plans on flat ground and
 stairs, the batch of ``--agents`` walkers, 1,000 by default, as issue 15 names it), ROUNDS
@@ -38,6 +43,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from planners import GroundProfile, Leg, PlannerConfig, plan, plan_batch  # noqa: E402
+from planners.stages import STAGES, recording  # noqa: E402
 
 
 def terrains() -> dict[str, GroundProfile]:
@@ -281,6 +287,56 @@ def targets_only(rounds: int, repeat: int, agents: int) -> None:
     print(f"(machine load average {os.getloadavg()[0]:.1f})")
 
 
+def _staged(run, *args) -> list[float]:
+    """Wall time of ``run(*args)`` and of each of its :data:`~planners.stages.STAGES`
+    [s]."""
+    with recording() as times:
+        t0 = time.perf_counter()
+        run(*args)
+        total = time.perf_counter() - t0
+    return [total] + [times[s] for s in STAGES]
+
+
+def stage_table(repeat: int, agents: int) -> None:
+    """Prints the time per plan of each stage, per planner: single plans (median of
+    ``repeat`` of each column) and the batch of ``agents`` walkers on random terrain
+    (amortised; first with every leg new to the per-leg caches, then again)."""
+    leg = Leg.from_body_height(1.75)
+    grounds = terrains()
+    rng = np.random.default_rng(7)
+    profiles = [random_terrain(rng) for _ in range(agents)]
+    legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
+    speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+    print("Stages of a plan [ms per plan, wall]: tables = grids (structure, per-leg grids "
+          "and flat caches) + arrays (shifted profiles, lattice arrays) + kernel (the "
+          "up-front table kernel; for the lazy planners the nodes only, their steps and "
+          "swings are evaluated in the search); other = input checks and the rest; single "
+          f"plans: median of {repeat} per column; batches: amortised over {agents}")
+    head = ("total", "tables", "grids", "arrays", "kernel", "search", "assemble", "other")
+    print(f"{'case':<32}{'planner':<23}" + "".join(f"{h:>9}" for h in head)
+          + f"{'tables %':>10}{'search %':>10}")
+    for planner in SEARCHES:
+        rows = []
+        for name in ("flat ground", "upstairs", "downstairs"):
+            single = (grounds[name], leg, 1.34, planner)
+            plan(*single)  # warm caches (flat swings, structures)
+            rows.append((f"single plan, {name}",
+                         np.median([_staged(plan, *single) for _ in range(repeat)], axis=0)))
+        warm = [Leg.from_body_height(1.6 + 0.01 * i) for i in range(16)]
+        plan_batch(profiles[:16], warm, speeds[:16], planner)
+        for label in ("new legs", "again"):
+            rows.append((f"batch of {agents}, {label}", np.array(_staged(
+                plan_batch, profiles, legs, speeds, planner)) / agents))
+        for label, v in rows:
+            total, grids, arrays, kernel, search, assemble = 1e3 * v
+            tables = grids + arrays + kernel
+            other = total - tables - search - assemble
+            cells = (total, tables, grids, arrays, kernel, search, assemble, other)
+            print(f"{label:<32}{planner:<23}" + "".join(f"{c:>9.3f}" for c in cells)
+                  + f"{100 * tables / total:>9.0f}%{100 * search / total:>9.0f}%")
+    print(f"(machine load average {os.getloadavg()[0]:.1f})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30, help="timed plans per cell")
@@ -288,7 +344,12 @@ def main() -> None:
     parser.add_argument("--agents", type=int, default=1000, help="walkers in the batch")
     parser.add_argument("--targets-only", type=int, default=0, metavar="ROUNDS",
                         help="only the target cells, ROUNDS times in turn")
+    parser.add_argument("--stages", action="store_true",
+                        help="only the time of each stage of a plan, per planner")
     args = parser.parse_args()
+    if args.stages:
+        stage_table(args.repeat, args.agents)
+        return
     if args.targets_only:
         targets_only(args.targets_only, args.repeat, args.agents)
         return

@@ -5,7 +5,8 @@ this once, so the first ``crowdwalk run`` loads them instead of compiling (about
 CPU otherwise), and every sweep worker runs it before it takes work. It walks two
 walkers (``best_first`` and ``fixed``) for two simulated seconds up a short stair flight,
 with poses: the planners, the crowd and the gait kernels all run once; then every planner
-plans a batch large enough for the parallel table kernel; then, at install
+plans a batch large enough for the kernels to run on every core, and plans that fail (a
+wall: the lazy tables are completed for the diagnosis); then, at install
 (``python -m crowdwalk.warm``, in a checkout), the README's quickstart runs for 15
 simulated seconds (its crowd calls three kernels with
 array layouts the two walkers do not: without it, the first quickstart compiled them,
@@ -60,8 +61,14 @@ def warm_kernels(quickstart: bool = False) -> float:
         run_scenario(scenario, tmp)
     # the batch kernels (every core) and every search, as crowds of walkers use them
     stairs = GroundProfile.stairs(0.17, 0.30, 3, first_edge=0.6)
+    # and a wall no plan passes: a failed plan completes its lazy tables
+    # (lattice_kernel.complete_agents) before the diagnosis; alone and in a batch
+    wall = GroundProfile([-2.0, 0.6, 0.6, 6.0], [0.0, 0.0, 0.6, 0.6])
+    leg = Leg.from_body_height(1.75)
     for planner in sorted(PLANNERS):
-        plan_batch([stairs] * PARALLEL_AGENTS, Leg.from_body_height(1.75), 1.34, planner)
+        plan_batch([stairs] * PARALLEL_AGENTS, leg, 1.34, planner)
+        plan_batch([wall], leg, 1.34, planner)
+        plan_batch([wall, stairs] * (PARALLEL_AGENTS // 2), leg, 1.34, planner)
     if quickstart and QUICKSTART.exists():
         with tempfile.TemporaryDirectory() as tmp:
             run_scenario(QUICKSTART, tmp, overrides=RunOverrides(duration=15.0))

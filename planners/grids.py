@@ -194,18 +194,19 @@ def _entries(keys: list, config: PlannerConfig) -> dict:
     rest = (E - config.weights.alpha * En)[rows, best] / L[rows, best]  # [J/(kg m)]
     S = 2 * J - 1
     strides = 2 * lo[:, None] + delta[:, None] * np.arange(S)
-    ctrl = np.empty((len(keys), 2, S, 4, 2))
-    ok = np.empty((len(keys), 2, S), dtype=np.bool_)
-    slack = np.empty((len(keys), 2, S))
+    # per clearance contiguous (one compiled signature, whatever the number of legs)
+    ctrl = np.empty((2, len(keys), S, 4, 2))
+    ok = np.empty((2, len(keys), S), dtype=np.bool_)
+    slack = np.empty((2, len(keys), S))
     basis, influence = swing_basis(config.bezier_samples)
     for extra_i, extra in enumerate((0.0, SLOPE_EXTRA)):
         _flat_curves(strides, leg.table(), RASTER_CELL, TABLE_LEVELS, basis, influence,
                      config.clearance + extra, config.clearance, config.swing_lift,
                      config.max_swing_lift, config.max_foot_slope, config.max_adjustments,
-                     ctrl[:, extra_i], ok[:, extra_i], slack[:, extra_i])
+                     ctrl[extra_i], ok[extra_i], slack[extra_i])
     return {"lo": lo, "delta": delta, "neutral": best.astype(np.int64), "rest": rest,
-            "flat_Ej": Ej, "flat_reach": reachable, "flat_ctrl": ctrl, "flat_ok": ok,
-            "flat_slack": slack}
+            "flat_Ej": Ej, "flat_reach": reachable, "flat_ctrl": ctrl.swapaxes(0, 1),
+            "flat_ok": ok.swapaxes(0, 1), "flat_slack": slack.swapaxes(0, 1)}
 
 
 _SWING_BASES: dict = {}

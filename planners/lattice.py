@@ -13,6 +13,7 @@ when it was evaluated).
 
 from __future__ import annotations
 
+import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -20,12 +21,12 @@ from functools import cached_property, lru_cache
 import numba as nb
 import numpy as np
 
+from planners import stages
 from planners.config import PlannerConfig
 from planners.grids import leg_grids, swing_basis
 from planners.lattice_kernel import (
     Lattice,
     build_agents,
-    build_agents_serial,
     complete_agents,
     prepare_agents,
 )
@@ -424,8 +425,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     curve), so stepping over a higher obstacle costs more joint rotation.
     """
     A = len(profiles)
+    t0 = time.perf_counter()
     st = structure(config.n_steps, config.intervals + 1)
     g = leg_grids(legs, speeds, config)
+    t0 = stages.add("grids", t0)
     if trailing is None:
         trailing = -(g.lo + g.delta * g.neutral)
     trailing = np.asarray(trailing, dtype=float)
@@ -479,19 +482,20 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                         L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,
                         L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
                         lattice, lazy)
+    t0 = stages.add("arrays", t0)
     if lazy:
         tables.prepare()
     else:  # the one-pass kernel (faster than entry by entry where most are read)
         L = lattice
-        kernel = build_agents if A >= PARALLEL_AGENTS else build_agents_serial
-        kernel(prof_s, prof_z, bounds, base, g.lo, g.delta, trailing, L.speeds, g.normal,
-               g.per_metre, L.neutral_len, g.legs, g.flat_Ej, g.flat_reach, g.flat_ctrl,
-               g.flat_ok, g.flat_slack, st.node_depth, st.node_m, st.step_stance,
-               st.step_front, st.step_j, st.step_depth, L.step_offset, st.swing_back,
-               st.swing_front, st.swing_stride, first, second, valid, basis, influence,
-               fparams, iparams, weights, L.node_s, L.node_z, L.length, L.rise, L.En, L.Ev,
-               L.Ej, L.E, L.reason, L.cost, L.progress, L.terminal, L.far, L.swing_ok,
-               L.controls, L.rounds, L.work)
+        run_parts(build_agents, A, prof_s, prof_z, bounds, base, g.lo, g.delta, trailing,
+                  L.speeds, g.normal, g.per_metre, L.neutral_len, g.legs, g.flat_Ej,
+                  g.flat_reach, g.flat_ctrl, g.flat_ok, g.flat_slack, st.node_depth,
+                  st.node_m, st.step_stance, st.step_front, st.step_j, st.step_depth,
+                  L.step_offset, st.swing_back, st.swing_front, st.swing_stride, first,
+                  second, valid, basis, influence, fparams, iparams, weights, L.node_s,
+                  L.node_z, L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.cost,
+                  L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work)
         np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
         np.greater_equal(L.rounds, 0, out=L.swing_done)
+    stages.add("kernel", t0)
     return tables

@@ -24,9 +24,9 @@ import numpy as np
 
 from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, leg_constants
-from planners.swing import adjust_one
+from planners.swing import _cell, adjust_one
 
-__all__ = ["Lattice", "build_agents", "build_agents_serial", "complete", "complete_agents",
+__all__ = ["Lattice", "build_agents", "complete", "complete_agents",
            "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
            "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_legal"]
 
@@ -265,7 +265,7 @@ def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     vertex_cum[:] = 0
     for v in range(s.size):
         sv = s[v]
-        vertex_cum[min(max(int((sv - start) * scale), 0), count - 1) + 1] += 1
+        vertex_cum[_cell(sv, start, cell, scale, count) + 1] += 1
         if sv < edges[0] or sv > edges[count]:
             continue
         k = min(max(int(np.floor((sv - start) * scale)), 0), count)
@@ -671,20 +671,22 @@ def config_efficiency(L, a, q):
     return True, eff
 
 
-# The tables evaluated up front in one pass per agent (agents in parallel): the searches
+# The tables evaluated up front in one pass per agent (agents on every core): the searches
 # that read most of the lattice (the DP of optimal and best_first_multistart's starts)
 # spend less on this loop than on evaluating entry by entry (planners.lattice.EAGER).
 
 
-@nb.njit(cache=True, nogil=True, parallel=True)
+@_jit
 def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
                  per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
                  flat_slack, node_depth, node_m, step_stance, step_front, step_j,
                  step_depth, step_offset, swing_back, swing_front, swing_stride,
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-                 progress, terminal, far, swing_ok, controls, rounds, work):
-    """Fill every table of every agent (see :func:`planners.lattice.build_tables`).
+                 progress, terminal, far, swing_ok, controls, rounds, work, part, parts):
+    """Fill every table of every ``parts``-th agent from ``part`` (see
+    :func:`planners.lattice.build_tables`, which runs it on every core through
+    :func:`planners.lattice.run_parts`).
 
     Per agent a: its profile ``prof_s/prof_z[bounds[a]:bounds[a+1]]`` [m] (shifted:
     the stance foot at ``base[a]``), grid ``lo, delta`` [m], ``trailing`` [m], speed
@@ -699,26 +701,7 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
     c_calf. ``work`` (A, 5): key-frame solves, curves built, reused, adjustment rounds,
     steps evaluated.
     """
-    for a in nb.prange(base.size):
-        _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
-               neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack, node_depth,
-               node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
-               swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
-               fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-               progress, terminal, far, swing_ok, controls, rounds, work)
-
-
-@_jit
-def build_agents_serial(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
-                 per_metre, neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok,
-                 flat_slack, node_depth, node_m, step_stance, step_front, step_j,
-                 step_depth, step_offset, swing_back, swing_front, swing_stride,
-                 pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
-                 weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-                 progress, terminal, far, swing_ok, controls, rounds, work):
-    """:func:`build_agents` one agent after the other (no thread start-up: for small
-    batches)."""
-    for a in range(base.size):
+    for a in range(part, base.size, parts):
         _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
                neutral_len, legs, flat_Ej, flat_reach, flat_ctrl, flat_ok, flat_slack, node_depth,
                node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,

@@ -10,7 +10,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from planners import lattice
+from planners import lattice, stages
 from planners.best_first import best_first
 from planners.config import PlannerConfig
 from planners.errors import invalid
@@ -253,10 +253,13 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
                               None if trailing is None else trailing[sl], origins[sl], config,
                               lazy=lattice.PRUNE and planner in lattice.LAZY)
+        t1 = time.perf_counter()
         result = _SEARCHES[planner](tables)
-        elapsed = (time.perf_counter() - t0) / len(profiles[sl])
+        t2 = stages.add("search", t1)
+        elapsed = (t2 - t0) / len(profiles[sl])
         plans += _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],
                            origins[sl], elapsed)
+        stages.add("assemble", t2)
     if turns is None and not any(first_foot):
         return plans
     return [_turned(p, None if turns is None else float(turns[a]), first_foot[a], config)

@@ -9,7 +9,7 @@ import numpy as np
 
 from planners.errors import invalid
 
-__all__ = ["GroundProfile", "HeightRaster", "RASTER_CELL"]
+__all__ = ["GroundProfile", "HeightRaster", "RASTER_CELL", "cell_index"]
 
 #: Cell of the conservative height raster used for swing collision checks [m].
 RASTER_CELL = 1.0 / 256.0  # dyadic, so cells align exactly with every agent's origin
@@ -227,6 +227,24 @@ def _as_vector(values, field: str) -> np.ndarray:
     return arr
 
 
+def cell_index(x: np.ndarray, start: float, cell: float, count: int) -> np.ndarray:
+    """Raster cell of each arc length ``x`` [m] (any shape): the last k in 0..count-1
+    whose left edge ``start + cell * k`` [m] (computed as :meth:`GroundProfile.raster`
+    computes its edges) is <= x, 0 before the raster.
+
+    Exact: ``floor((x - start) / cell)`` in floating point can be one cell off where
+    ``x`` lies within rounding of an edge (``x - start`` rounds), and a query would then
+    miss the cell holding a vertical change just before that edge; the index is
+    corrected against the edge itself. :func:`planners.swing._cell` is the compiled
+    twin (bitwise the same indices).
+    """
+    x = np.asarray(x, dtype=float)
+    k = np.clip((x - start) * (1.0 / cell), 0.0, count - 1.0).astype(np.intp)
+    k -= (k > 0) & (start + cell * k > x)
+    k += (k < count - 1) & (start + cell * (k + 1) <= x)
+    return k
+
+
 class HeightRaster:
     """Cell maxima of a ground profile with O(1) range-maximum queries.
 
@@ -246,7 +264,7 @@ class HeightRaster:
         self.start = float(start)
         self.cell = float(cell)
         c = heights.size
-        cells = np.clip(((vertex_s - self.start) / self.cell).astype(np.intp), 0, c - 1)
+        cells = cell_index(vertex_s, self.start, self.cell, c)
         self.vertex_cum = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=c))])
         self.heights = heights
         # the levels of the range-maximum table are built as queries need them (swing
@@ -259,9 +277,8 @@ class HeightRaster:
         """Number of profile vertices in the cells covering ``[a, b]`` [m] (>= the number
         in the interval itself: a conservative count)."""
         c = self.vertex_cum.size - 1
-        scale = 1.0 / self.cell
-        ia = np.clip(((np.asarray(a) - self.start) * scale).astype(np.intp), 0, c - 1)
-        ib = np.clip(((np.asarray(b) - self.start) * scale).astype(np.intp), ia, c - 1)
+        ia = cell_index(a, self.start, self.cell, c)
+        ib = np.maximum(cell_index(b, self.start, self.cell, c), ia)
         return self.vertex_cum[ib + 1] - self.vertex_cum[ia]
 
     def table(self, levels: int) -> np.ndarray:
@@ -279,11 +296,8 @@ class HeightRaster:
         """
         c = self._table.shape[1]
         flat = self._table.ravel()
-        scale = 1.0 / self.cell
-        ia = ((np.asarray(a) - self.start) * scale).astype(np.intp)
-        ib = ((np.asarray(b) - self.start) * scale).astype(np.intp)
-        np.clip(ia, 0, c - 1, out=ia)
-        np.clip(ib, ia, c - 1, out=ib)
+        ia = cell_index(a, self.start, self.cell, c)
+        ib = np.maximum(cell_index(b, self.start, self.cell, c), ia)
         k = self._log2[ib - ia + 1]
         if k.size and k.max() >= self._table.shape[0]:
             self._table = _range_max_table(self.heights, int(k.max()) + 1)

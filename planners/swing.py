@@ -173,12 +173,28 @@ def _round9(x):
 
 
 @_jit
-def _raster_max(a, b, start, scale, table):
+def _cell(x, start, cell, scale, c):
+    """:func:`planners.profile.cell_index` of one arc length ``x`` [m] in a raster of
+    ``c`` cells (``scale`` = 1 / ``cell``)."""
+    f = min(max((x - start) * scale, 0.0), c - 1.0)
+    k = int(f)
+    r = f - k
+    # only within rounding of an edge (far less than 1e-6 cells) can k be one off
+    if r < 1e-6 or r > 1.0 - 1e-6:
+        if k > 0 and start + cell * k > x:
+            k -= 1
+        elif k < c - 1 and start + cell * (k + 1) <= x:
+            k += 1
+    return k
+
+
+@_jit
+def _raster_max(a, b, start, cell, scale, table):
     """:meth:`HeightRaster.max_height` of one interval [m], from the raster's
     range-maximum table (L, c)."""
     levels, c = table.shape
-    ia = min(max(int((a - start) * scale), 0), c - 1)
-    ib = min(max(int((b - start) * scale), ia), c - 1)
+    ia = _cell(a, start, cell, scale, c)
+    ib = max(_cell(b, start, cell, scale, c), ia)
     span = ib - ia + 1
     k = 0
     while (2 << k) <= span and k + 1 < levels:
@@ -193,11 +209,11 @@ def _raster_max(a, b, start, scale, table):
 
 
 @_jit
-def _raster_vertices(a, b, start, scale, vertex_cum):
+def _raster_vertices(a, b, start, cell, scale, vertex_cum):
     """:meth:`HeightRaster.vertices_between` of one interval."""
     c = vertex_cum.size - 1
-    ia = min(max(int((a - start) * scale), 0), c - 1)
-    ib = min(max(int((b - start) * scale), ia), c - 1)
+    ia = _cell(a, start, cell, scale, c)
+    ib = max(_cell(b, start, cell, scale, c), ia)
     return vertex_cum[ib + 1] - vertex_cum[ia]
 
 
@@ -253,11 +269,12 @@ def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, 
             z_lo = min(pz[i], pz[i + 1])
             in_zone = (s_hi <= p0s + zone) or (s_lo >= p3s - zone)
             if in_zone:
-                ground = _raster_max(s_lo, s_hi, r_start, scale, table)
-                straight = _raster_vertices(s_lo, s_hi, r_start, scale, vertex_cum) == 0
+                ground = _raster_max(s_lo, s_hi, r_start, cell, scale, table)
+                straight = _raster_vertices(s_lo, s_hi, r_start, cell, scale,
+                                            vertex_cum) == 0
                 need = -(max_foot_slope * (s_hi - s_lo) if straight else 0.0)
             else:
-                ground = _raster_max(s_lo - heel, s_hi + toe, r_start, scale, table)
+                ground = _raster_max(s_lo - heel, s_hi + toe, r_start, cell, scale, table)
                 need = clearance
             deficit[i] = need - (z_lo - ankle - ground)
             if deficit[i] > 1e-9:

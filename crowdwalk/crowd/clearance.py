@@ -7,11 +7,18 @@ The sampling is a numba kernel (one thread: the crowd splits a tick's work acros
 by rows, :mod:`crowdwalk.workers`) that gives ``scipy.ndimage.map_coordinates(order=1,
 mode="constant")``'s values bit for bit (the same weights, taps and summation order;
 ``tests/crowd/test_clearance.py``), about 8 times faster.
+
+The steering's hard wall test of every candidate step (:meth:`ClearanceField.step_walls`)
+is one kernel too: it stops a run of step lengths at the first blocked one and skips the
+samples that a lower bound of the field (the least node of the grid block around a point,
+:attr:`ClearanceField.block_least`) shows to be far from the walls, with the same
+decisions as sampling everything.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numba as nb
 import numpy as np
@@ -22,6 +29,11 @@ __all__ = ["ClearanceField"]
 
 #: Outside the grid the clearance is this [m] (strongly negative: not walkable).
 OUTSIDE = -10.0
+#: Grid cells per side of a block of :attr:`ClearanceField.block_least` [-].
+BLOCK = 8
+#: What :attr:`ClearanceField.block_least` keeps below the least node [m] (covers the
+#: rounding of the bilinear sum, ~1e-14 m here).
+BLOCK_MARGIN = 1e-9
 
 
 @nb.njit(cache=True, nogil=True, inline="always")
@@ -59,6 +71,58 @@ def _bilinear(dist, ox, oy, cell, x, y):
 def _sample(dist, ox, oy, cell, xy, out):
     for p in range(out.shape[0]):
         out[p] = _bilinear(dist, ox, oy, cell, xy[p, 0], xy[p, 1])
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _at_least(dist, least, ox, oy, cell, x, y, floor):
+    """The clearance at (x, y) as :func:`_bilinear` gives it, or +inf where the point's
+    block shows it to be at least ``floor`` [m] (then it is not sampled)."""
+    ny, nx = dist.shape
+    r = (y - oy) / cell
+    c = (x - ox) / cell
+    if r >= 0.0 and r < ny - 1 and c >= 0.0 and c < nx - 1:  # both taps in the grid
+        if least[int(r) // BLOCK, int(c) // BLOCK] >= floor:
+            return np.inf
+    return _bilinear(dist, ox, oy, cell, x, y)
+
+
+@nb.njit(cache=True, nogil=True)
+def _step_walls(dist, least, ox, oy, cell, position, stance, ends, dirs, lengths, radius,
+                reach, foot_clearance, wall_ok, near):
+    m, n_c, n_l = wall_ok.shape
+    for a in range(m):
+        px, py = position[a, 0], position[a, 1]
+        r = min(radius[a], _bilinear(dist, ox, oy, cell, px, py) - 1e-6)
+        for c in range(n_c):
+            blocked = False
+            for l in range(n_l):
+                if blocked:  # a shorter step is blocked: so is this one (not tested)
+                    wall_ok[a, c, l] = False
+                    near[a, c, l] = np.inf
+                    continue
+                ex, ey = ends[a, c, l, 0], ends[a, c, l, 1]
+                at_end = _at_least(dist, least, ox, oy, cell, ex, ey, max(r, reach[a]))
+                dx, dy = ex - px, ey - py
+                span = 0.25 * np.sqrt(dx * dx + dy * dy)
+                half = _at_least(dist, least, ox, oy, cell, 0.5 * (ex + px), 0.5 * (ey + py),
+                                 max(r + span, reach[a]))
+                # and at the sweep's quarters where the body passes near a wall (the
+                # clearance changes by at most the distance moved)
+                if half < r + span:
+                    q1 = _bilinear(dist, ox, oy, cell, 0.75 * px + 0.25 * ex,
+                                   0.75 * py + 0.25 * ey)
+                    q3 = _bilinear(dist, ox, oy, cell, 0.25 * px + 0.75 * ex,
+                                   0.25 * py + 0.75 * ey)
+                    half = min(half, min(q1, q3))
+                ok = at_end >= r and half >= r
+                if ok:  # the new foothold itself must lie inside the walkable area
+                    fx = stance[a, 0] + lengths[l] * dirs[a, c, 0]
+                    fy = stance[a, 1] + lengths[l] * dirs[a, c, 1]
+                    ok = _at_least(dist, least, ox, oy, cell, fx, fy,
+                                   foot_clearance) >= foot_clearance
+                wall_ok[a, c, l] = ok
+                near[a, c, l] = min(at_end, half)
+                blocked = not ok
 
 
 @dataclass(frozen=True)
@@ -121,6 +185,51 @@ class ClearanceField:
         _sample(self.distance, float(self.origin[0]), float(self.origin[1]), float(self.cell),
                 flat, out)
         return out.reshape(xy.shape[:-1])
+
+    @cached_property
+    def block_least(self) -> np.ndarray:
+        """(by, bx) a lower bound of the clearance [m] at any point of each block of
+        :data:`BLOCK` × :data:`BLOCK` cells (the least node of the block and of the
+        blocks after it, which hold the far taps, less :data:`BLOCK_MARGIN`): bilinear
+        sampling gives a weighted mean of four nodes, never less than the least."""
+        d = self.distance
+        ny, nx = d.shape
+        by, bx = -(-ny // BLOCK), -(-nx // BLOCK)
+        pad = np.full((by * BLOCK, bx * BLOCK), np.inf)
+        pad[:ny, :nx] = d
+        least = pad.reshape(by, BLOCK, bx, BLOCK).min(axis=(1, 3))
+        grown = np.full((by + 1, bx + 1), np.inf)
+        grown[:by, :bx] = least
+        least = np.minimum(np.minimum(grown[:-1, :-1], grown[1:, :-1]),
+                           np.minimum(grown[:-1, 1:], grown[1:, 1:]))
+        return least - BLOCK_MARGIN * (1.0 + np.abs(least))
+
+    def step_walls(self, position: np.ndarray, stance: np.ndarray, ends: np.ndarray,
+                   dirs: np.ndarray, lengths: np.ndarray, radius: np.ndarray,
+                   reach: np.ndarray, foot_clearance: float) -> tuple[np.ndarray, np.ndarray]:
+        """The steering's hard wall test of m walkers' candidate steps.
+
+        A step of length ``lengths[l]`` (L,) [m] along ``dirs`` (m, C, 2) moves the body
+        from ``position`` (m, 2) to ``ends`` (m, C, L, 2) [m]; it is clear where the
+        clearance at its end, halfway and (where the midpoint is within a quarter sweep
+        of it) at its quarters is at least the body's ``radius`` (m,) [m] (or, nearer
+        the wall already, what is left of it), and the new foothold ``stance + length
+        dir`` at least ``foot_clearance`` [m] from the walls.
+
+        Returns ``wall_ok`` (m, C, L) bool — after the first blocked length of a run
+        every longer one is False (not tested: only the clear lengths from the short end
+        count) — and ``near`` (m, C, L) [m]: the least clearance at the end and halfway
+        where it is less than ``reach`` (m,) [m], else a value not less than ``reach``.
+        """
+        f = np.ascontiguousarray
+        m, n_c, n_l = ends.shape[:3]
+        wall_ok = np.empty((m, n_c, n_l), bool)
+        near = np.empty((m, n_c, n_l))
+        _step_walls(self.distance, self.block_least, float(self.origin[0]),
+                    float(self.origin[1]), float(self.cell), f(position, float),
+                    f(stance, float), f(ends, float), f(dirs, float), f(lengths, float),
+                    f(radius, float), f(reach, float), float(foot_clearance), wall_ok, near)
+        return wall_ok, near
 
     def gradient(self, xy: np.ndarray) -> np.ndarray:
         """Gradient of the clearance (..., 2) (points away from the nearest wall)."""

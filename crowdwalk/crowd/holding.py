@@ -160,6 +160,7 @@ class WaitingAreas:
                 held[j] = self._enter(sim, int(idx[j]), int(k), t)
         if held.any():
             st.progress_time[idx[held]] = t  # standing in line is no jam
+            st.gain_time[idx[held]] = t
             st.stuck[idx[held]] = 0.0
         return held
 
@@ -270,7 +271,7 @@ class WaitingAreas:
             a.queue.remove(i)
             self._free(i)
             self.done[i, k] = True
-            st.progress_time[i] = t
+            st.progress_time[i] = st.gain_time[i] = t
             st.stuck[i] = 0.0
             self._count_release(a, t)
 

@@ -59,6 +59,14 @@ class CrowdParams:
     reroute_after : float
         Time without ``progress_step`` of progress along the route after which an agent
         looks for another route [s].
+    sight_after, sight_reach : float
+        A walker without ``progress_step`` of progress for ``sight_after`` seconds whose
+        steering target is behind a wall (it does not see it: pushed through a side door
+        into a room, say) heads for the farthest point of its route within
+        ``sight_reach`` metres ahead that it sees (inf: never). Named deviation, measured
+        on RiMEA 10 full (``crowdwalk verify --full --only rimea10``): with re-routing
+        when the route line is not seen and this rule, 114 → 120 of 120 left by their
+        assigned exit (docs/architecture.md).
     progress_step : float
         Progress along the route that counts as getting on [m].
     stair_rise : float
@@ -108,6 +116,25 @@ class CrowdParams:
         0.8 / 1.0 / 1.2 m (seed 4) 1.32 / 1.68 / 2.03 /s with it against 1.33 / 1.67 /
         2.18 without; it spreads walkers entering 0.8 m (|y| 0.08 against 0.05 m at
         mid-opening) but no zipper forms.
+    opening_ease : bool
+        Scale the soft wall term (``SteeringParams.wall_weight``) by
+        ``opening_wall_factor`` for walkers inside an opening zone
+        (:class:`~crowdwalk.crowd.openings.Openings`: corridors at most ``opening_width``
+        wide, minus the rooms at their ends, grown by ``opening_margin``), so that two
+        staggered lanes (a zipper) fit where the full term keeps everybody on the axis.
+        The hard wall limit is unchanged (no body closer to a wall than its radius).
+        Named deviation, opt-in (docs/architecture.md): the zipper forms (lane
+        separation at 1.0 m 0.31 → 0.43 m), but the door flows do not rise (0.8 m:
+        1.11 → 1.09 /s over seeds 4–9).
+    opening_width, opening_margin : float
+        [m]. 1.25: the bottleneck series' widths; margin 0: a 0.5 m margin into the
+        rooms (the zone covering the mouth) jammed 0.9 m at seed 4 (0.82 /s).
+    opening_wall_factor, opening_personal_factor : float
+        Factors on the soft wall and neighbour terms inside [-]. The wall factor 0.0
+        **calibrated on Hoogendoorn & Daamen 2005** (Transp. Sci. 39:147: layers about
+        0.45 m apart in a 1 m bottleneck; 0.0 gives 0.43 m, 0.2 gives 0.39 m), validated
+        on Seyfried et al. 2009's flows (not met at 0.8 m). The neighbour factor 1.0
+        (0.4 measured: 0.8 / 0.9 / 1.0 m 1.17 / 1.58 / 1.79 /s with wall factor 0.2).
     steering : SteeringParams
     """
 
@@ -120,6 +147,8 @@ class CrowdParams:
     neighbours: int = 32
     neighbour_range: float = 3.0
     reroute_after: float = 8.0
+    sight_after: float = 8.0
+    sight_reach: float = 10.0
     progress_step: float = 0.5
     stair_rise: float = 0.05
     planning_horizon: int = 3
@@ -133,6 +162,11 @@ class CrowdParams:
     headway_lane: float = 2.0
     headway_steer: bool = False
     lane_keep: bool = False
+    opening_ease: bool = False
+    opening_width: float = 1.25
+    opening_margin: float = 0.0
+    opening_wall_factor: float = 0.0
+    opening_personal_factor: float = 1.0
     steering: SteeringParams = field(default_factory=SteeringParams)
 
     def body_axes(self, height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -163,6 +163,33 @@ class Routes:
                 out[v] = walk
         return out
 
+    def sees_route(self, state, i: int) -> bool:
+        """Whether walker ``i`` sees its route line: the straight way from where it stands
+        to its projection on the route or to the route's next vertex lies inside the
+        walkable area."""
+        st, tb = state, self.table
+        rid, here = int(st.route[i]), st.pos1[i]
+        on = tb.point_at(np.array([rid]), np.array([st.progress[i]]))[0]
+        nxt = tb.xy[min(int(st.segment[i]) + 1, int(tb.stop[rid]))]
+        return self.graph.sees(here, on) or self.graph.sees(here, nxt)
+
+    def farthest_visible(self, state, agents: np.ndarray, reach: float) -> np.ndarray:
+        """For walkers ``agents`` (k,): the farthest point (k, 2) [m] of their route
+        within ``reach`` [m] ahead of their progress (0.5 m apart) that they see from where
+        they stand (NaN where none is seen). A Python loop: only for the few walkers
+        stuck with their target behind a wall."""
+        st, tb = state, self.table
+        out = np.full((len(agents), 2), np.nan)
+        ahead = np.arange(reach, -1e-9, -0.5)
+        for k, i in enumerate(agents):
+            rid = int(st.route[i])
+            pts = tb.point_at(np.full(ahead.size, rid), st.progress[i] + ahead)
+            for q in pts:
+                if self.graph.sees(st.pos1[i], q):
+                    out[k] = q
+                    break
+        return out
+
     def reroute(self, state, blocked: np.ndarray, *, t: float, walkers: np.ndarray) -> None:
         """Agents ``blocked`` without progress for ``reroute_after`` seconds look for a
         cheaper way on **from where they stand**: to the next node of their route or one
@@ -177,8 +204,9 @@ class Routes:
         converted to metres at 1.34 m/s). The way from the next stop on is the same for
         every choice, so the choice is by the cost to the next stop. Back to the node
         passed last only when there is no other way. The agent switches (``state``'s route
-        fields) only when that differs from its way on (rare: a Python loop over the
-        blocked agents only)."""
+        fields) only when that differs from its way on, or when it no longer sees its
+        route line (:meth:`sees_route`; rare: a Python loop over the blocked agents
+        only)."""
         import networkx as nx
 
         st = state
@@ -237,7 +265,10 @@ class Routes:
                 at_stop.append(len(alt) - 1)
             # the same nodes on are the same way only while the corridor from the node
             # passed to the next is open (a door shut in it leaves the old line blocked)
-            if not ok or (alt == ahead and (passed < 0 or g.has_edge(base, ahead[0]))):
+            # and the walker sees its route line (pushed through a side door into a room,
+            # its line runs behind the room's wall: a new line from where it stands)
+            if not ok or (alt == ahead and (passed < 0 or g.has_edge(base, ahead[0]))
+                          and self.sees_route(st, i)):
                 continue
             self.assign(st, i, self.add(np.vstack([walks[best],
                                                    self.graph.raw_path(alt)[1:]]), alt,

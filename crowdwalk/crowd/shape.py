@@ -110,19 +110,66 @@ def _approach(ax, ay, avx, avy, ta, bx, by, bvx, bvy, tb):
     return min(d, _closest(rx, ry, wx, wy, t2 - t1))
 
 
+@nb.njit(cache=True, nogil=True)
+def _segment_distance(ax, ay, bx, by, cx, cy, dx, dy):
+    """Least distance [m] between the segments ab and cd (0 where they cross or touch,
+    or are collinear)."""
+    o1 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    o2 = (bx - ax) * (dy - ay) - (by - ay) * (dx - ax)
+    o3 = (dx - cx) * (ay - cy) - (dy - cy) * (ax - cx)
+    o4 = (dx - cx) * (by - cy) - (dy - cy) * (bx - cx)
+    if o1 * o2 <= 0.0 and o3 * o4 <= 0.0:
+        return 0.0
+    return min(min(_closest(cx - ax, cy - ay, dx - cx, dy - cy, 1.0),
+                   _closest(cx - bx, cy - by, dx - cx, dy - cy, 1.0)),
+               min(_closest(ax - cx, ay - cy, bx - ax, by - ay, 1.0),
+                   _closest(ax - dx, ay - dy, bx - ax, by - ay, 1.0)))
+
+
+#: What a run's far test keeps below its bound [m] (covers the rounding, ~1e-13 m).
+FAR_MARGIN = 1e-9
+
 _SIDE = (0.0, 1.0, -1.0)
 
 
 @nb.njit(cache=True, nogil=True)
 def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, b_yaw_now,
-          b_end, b_yaw_end, b_remaining, b_shape, out, out_centre):
+          b_end, b_yaw_end, b_remaining, b_shape, runs, a_ok, a_centre_ok, out, out_centre):
     npairs, nj = out.shape
     bx = np.empty(3)
     by = np.empty(3)
     bvx = np.empty(3)
     bvy = np.empty(3)
+    # with runs: per run of A's candidates, the first length blocked for the outline and
+    # for the centre discs (by A's own mask or an earlier neighbour of the same A)
+    n_runs = nj // runs if runs > 0 else 0
+    stop = np.empty(n_runs, np.int64)
+    stop_c = np.empty(n_runs, np.int64)
+    # and per run the half width of a capsule about the segment from A's start to the
+    # run's last end that holds every sweep of the run (the greatest distance of an end
+    # from that segment: the distance is convex, the sweeps lie in the ends' hull)
+    width = np.empty(n_runs)
+    far = 0.0
     for p in range(npairs):
         i = pa[p]
+        if runs > 0 and (p == 0 or i != pa[p - 1]):
+            for c in range(n_runs):
+                stop[c] = stop_c[c] = runs
+                sx, sy = a_start[i, 0], a_start[i, 1]
+                lx, ly = a_end[i, c * runs + runs - 1, 0], a_end[i, c * runs + runs - 1, 1]
+                width[c] = 0.0
+                for l in range(runs):
+                    e = _closest(sx - a_end[i, c * runs + l, 0], sy - a_end[i, c * runs + l, 1],
+                                 lx - sx, ly - sy, 1.0)
+                    width[c] = max(width[c], e)
+                for l in range(runs):
+                    if not a_ok[i, c * runs + l]:
+                        stop[c] = l
+                        break
+                for l in range(runs):
+                    if not a_centre_ok[i, c * runs + l]:
+                        stop_c[c] = l
+                        break
         ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
         rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
         bound = max(ra, sa + ras) + max(rb, sb + rbs)
@@ -143,6 +190,22 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
                 bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
         sx, sy = a_start[i, 0], a_start[i, 1]
         for j in range(nj):
+            c = l = 0
+            if runs > 0:
+                c = j // runs
+                l = j - c * runs
+                if l >= stop_c[c]:  # a shorter step of the run is blocked: so is this one
+                    out[p, j] = out_centre[p, j] = -np.inf
+                    continue
+                if l == 0:  # the run's capsule against B's whole remaining sweep
+                    far = _segment_distance(
+                        a_start[i, 0], a_start[i, 1], a_end[i, j + runs - 1, 0],
+                        a_end[i, j + runs - 1, 1], b_now[p, 0], b_now[p, 1], b_end[p, 0],
+                        b_end[p, 1]) - width[c]
+                if far - bound >= FAR_MARGIN:  # the holding discs stay clear: a bound
+                    out_centre[p, j] = far - ra - rb
+                    out[p, j] = far - bound if l < stop[c] else -np.inf
+                    continue
             dur = a_dur[i, j]
             gone = min(a_elapsed[i], dur)
             ta = dur - gone
@@ -158,12 +221,20 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
             # the centre discs' (overlapping: done)
             d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
             out_centre[p, j] = d - ra - rb
+            if runs > 0:
+                if d - ra - rb < 0.0:
+                    stop_c[c] = l
+                if l >= stop[c]:
+                    out[p, j] = -np.inf
+                    continue
             if d >= bound:
                 out[p, j] = d - bound
                 continue
             best = d - ra - rb
             if best < 0.0 or (sa == 0.0 and sb == 0.0):
                 out[p, j] = best
+                if runs > 0 and best < 0.0:
+                    stop[c] = l
                 continue
             ya0 = a_yaw0[i] + f * (a_yaw1[i, j] - a_yaw0[i])
             ya1 = a_yaw1[i, j]
@@ -188,13 +259,16 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
                 if best < 0.0:  # overlapping: how deep does not matter
                     break
             out[p, j] = best
+            if runs > 0 and best < 0.0:
+                stop[c] = l
 
 
 def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end: np.ndarray,
               a_yaw1: np.ndarray, a_duration: np.ndarray, a_elapsed: np.ndarray,
               a_shape: np.ndarray, b_now: np.ndarray, b_yaw_now: np.ndarray,
               b_end: np.ndarray, b_yaw_end: np.ndarray, b_remaining: np.ndarray,
-              b_shape: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+              b_shape: np.ndarray, runs: int = 0, a_ok: np.ndarray | None = None,
+              a_centre_ok: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Least clearance [m] from now on between the outlines of m stepping bodies A and
     P neighbours B, for J candidate steps of each A: (P, J); negative where they would
     overlap (then not necessarily the least). A lower bound (a shoulder disc turning is
@@ -217,14 +291,35 @@ def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end:
     b_now, b_yaw_now, b_end, b_yaw_end, b_remaining : (P, 2), (P,), (P, 2), (P,), (P,)
         The neighbour now, at the end of its committed step, and the time until then [s]
         (0: standing).
+    runs : int, optional
+        Only whether a step is clear up to its first blocked length matters (the caller's
+        candidates are ``J / runs`` runs of ``runs`` increasing lengths, and ``pa`` lists
+        each A's neighbours together, as ``np.nonzero`` gives them): after the first
+        negative entry of a run for one A (over its neighbours so far, and ``a_ok`` /
+        ``a_centre_ok``) the run's longer entries are only set to -inf, not evaluated;
+        and where B's remaining sweep keeps clear of a capsule holding all of a run's
+        sweeps, the run's clearances are that lower bound (both outputs), not evaluated.
+        0 (default): every entry evaluated.
+    a_ok, a_centre_ok : (m, J) bool, optional
+        With ``runs``: A's candidates already blocked for the outline / the centre discs
+        (e.g. by the walls) where False (default: none).
     """
     f = np.ascontiguousarray
     out = np.empty((pa.shape[0], a_end.shape[1]))
     centre = np.empty_like(out)
+    if runs and a_end.shape[1] % runs:
+        raise ValueError(f"body_gaps: runs {runs} does not divide {a_end.shape[1]} candidates")
+    no = np.ones((0, 0), bool)
+    a_ok = no if a_ok is None or not runs else f(a_ok, bool)
+    a_centre_ok = no if a_centre_ok is None or not runs else f(a_centre_ok, bool)
+    if runs:
+        full = np.ones((a_end.shape[0], a_end.shape[1]), bool)
+        a_centre_ok = full if a_centre_ok.size == 0 else a_centre_ok
+        a_ok = a_centre_ok if a_ok.size == 0 else a_ok & a_centre_ok
     _gaps(f(pa, dtype=np.int64), f(a_start, float), f(a_yaw0, float), f(a_end, float),
           f(a_yaw1, float), f(a_duration, float), f(a_elapsed, float), f(a_shape, float),
           f(b_now, float), f(b_yaw_now, float), f(b_end, float), f(b_yaw_end, float),
-          f(b_remaining, float), f(b_shape, float), out, centre)
+          f(b_remaining, float), f(b_shape, float), int(runs), a_ok, a_centre_ok, out, centre)
     return out, centre
 
 

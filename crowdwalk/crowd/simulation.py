@@ -148,6 +148,12 @@ class CrowdSimulation:
         self.events = EventTimeline(sc, world.routes, population) if sc.events else None
         self.holding = WaitingAreas(sc.waiting_areas, world.routes, n) \
             if sc.waiting_areas else None
+        self.openings = None
+        if params.opening_ease:
+            from crowdwalk.crowd.openings import Openings
+
+            self.openings = Openings(world.routes, params.opening_width,
+                                     params.opening_margin)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -300,6 +306,16 @@ class CrowdSimulation:
         return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                         free, leg, prm.contact_time_gap)
 
+    def _opening_scales(self, pos: np.ndarray) -> dict:
+        """``opening_ease``: the factors on the soft wall and neighbour terms (k,) for
+        deciders at ``pos`` (k, 2) [m] (empty without it)."""
+        if self.openings is None:
+            return {}
+        inside = self.openings.inside(pos)
+        prm = self.params
+        return {"wall_scale": np.where(inside, prm.opening_wall_factor, 1.0),
+                "personal_scale": np.where(inside, prm.opening_personal_factor, 1.0)}
+
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
         te = st.t1[idx].copy()  # heel-strike (or wait-end) times, within this tick
@@ -309,6 +325,7 @@ class CrowdSimulation:
         st.segment[idx], st.progress[idx] = ahead.segment, ahead.progress
         st.best_progress[idx[ahead.gained]] = ahead.progress[ahead.gained]
         st.progress_time[idx[ahead.gained]] = te[ahead.gained]
+        st.gain_time[idx[ahead.gained]] = te[ahead.gained]
         if ahead.arrived.any():
             done = idx[ahead.arrived]
             st.status[done] = ARRIVED
@@ -329,6 +346,19 @@ class CrowdSimulation:
             partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
             route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
             radius=self.radius[idx])
+        if np.isfinite(prm.sight_after):
+            # stuck for ``sight_after`` with the target behind a wall (pushed into a side
+            # room, say): head for the farthest point of the route it sees
+            late = np.flatnonzero(t - st.gain_time[idx] >= prm.sight_after)
+            graph = self.routes.graph
+            hidden = [k for k in late if not graph.sees(pos[k], target[k])]
+            if hidden:
+                k = np.asarray(hidden)
+                seen = self.routes.farthest_visible(st, idx[k], prm.sight_reach)
+                ok = np.isfinite(seen[:, 0]) & (np.linalg.norm(seen - pos[k], axis=1) > 1e-6)
+                target[k[ok]] = seen[ok]
+                route_dir[k[ok]] = (seen[ok] - pos[k[ok]]) / np.linalg.norm(
+                    seen[ok] - pos[k[ok]], axis=1)[:, None]
         # a walker held up for long looks backwards on every other decision (the
         # candidate fan turned around), so that clogs can loosen
         clogged = st.stuck[idx] >= prm.steering.clog_after
@@ -345,7 +375,8 @@ class CrowdSimulation:
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None)
+            gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None,
+            **self._opening_scales(pos))
         if self._steer_on:  # worker processes (given, not posing); the field goes once
             choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],
                                 clearance=self.clearance, params=prm.steering,

@@ -62,6 +62,7 @@ def place(state, agents: np.ndarray, *, t: float, xy: np.ndarray, z: np.ndarray,
     st.t0[idx] = st.t1[idx] = t
     st.start_time[idx] = t
     st.progress_time[idx] = t
+    st.gain_time[idx] = t
     seg, s, _ = table.project(st.route[idx], st.segment[idx], p)
     st.segment[idx], st.progress[idx] = seg, s
     ahead = table.point_at(st.route[idx], s + 1.0)

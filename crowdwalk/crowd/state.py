@@ -35,6 +35,7 @@ class AgentState:
         self.progress = np.zeros(n)  # global route arc length [m]
         self.best_progress = np.full(n, -np.inf)  # furthest route arc length reached [m]
         self.progress_time = np.zeros(n)  # when it last grew by ``progress_step`` [s]
+        self.gain_time = np.zeros(n)  # the same, not reset by a look for a new route [s]
         self.steps = np.zeros(n, dtype=np.int64)
         self.distance = np.zeros(n)  # walked by the body [m]
         self.energy = np.zeros(n)  # [J/kg]

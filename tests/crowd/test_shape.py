@@ -127,3 +127,46 @@ def test_the_default_body_is_one_disc_as_broad_as_deep():
     assert axes[0] == axes[1] == np.float64(0.105 * 1.71)
     half_depth, half_width = CrowdParams(body="three_discs").body_axes(np.array([1.71]))
     assert half_width[0] > half_depth[0]
+
+
+
+
+def test_gaps_stopped_at_a_runs_first_blocked_length_or_bounded_give_the_same_free_lengths():
+    rng = np.random.default_rng(7)
+    m, k, n_c, n_l = 40, 6, 5, 6
+    shape = BodyShape.from_axes(rng.uniform(0.15, 0.2, m), rng.uniform(0.2, 0.26, m)).packed()
+    start = rng.uniform(0, 3, (m, 2))
+    ends = start[:, None, None, :] + (np.linspace(0.15, 0.9, n_l)[None, None, :, None]
+                                      * rng.normal(size=(m, n_c, 1, 2)))
+    ends = ends.reshape(m, n_c * n_l, 2)
+    yaw0 = rng.uniform(-3, 3, m)
+    yaw1 = yaw0[:, None] + rng.uniform(-1, 1, (m, n_c * n_l))
+    dur = rng.uniform(0.3, 0.7, (m, n_c * n_l))
+    pa = np.repeat(np.arange(m), k)  # agent-major, as np.nonzero gives them
+    b_now = start[pa] + rng.uniform(-1, 1, (pa.size, 2))
+    b_end = b_now + rng.uniform(-0.4, 0.4, (pa.size, 2))
+    kw = dict(a_start=start, a_yaw0=yaw0, a_end=ends, a_yaw1=yaw1, a_duration=dur,
+              a_elapsed=rng.uniform(0, 0.2, m), a_shape=shape, b_now=b_now,
+              b_yaw_now=rng.uniform(-3, 3, pa.size), b_end=b_end,
+              b_yaw_end=rng.uniform(-3, 3, pa.size),
+              b_remaining=np.where(rng.random(pa.size) < 0.3, 0.0, rng.uniform(0, 0.5, pa.size)),
+              b_shape=shape[rng.integers(0, m, pa.size)])
+    wall_ok = rng.random((m, n_c * n_l)) > 0.1
+    ok = wall_ok & (rng.random((m, n_c * n_l)) > 0.1)
+    full, full_centre = body_gaps(pa, **kw)
+    cut, cut_centre = body_gaps(pa, **kw, runs=n_l, a_ok=ok, a_centre_ok=wall_ok)
+
+    def free(g, own):  # (m, C) clear lengths from the short end, all neighbours counted
+        blocked = np.zeros((m, n_c, n_l), bool)
+        np.logical_or.at(blocked, pa, g.reshape(-1, n_c, n_l) < 0.0)
+        return np.cumprod(~blocked & own.reshape(m, n_c, n_l), axis=2).sum(axis=2)
+
+    assert (free(full, ok) > 0).any() and (free(full, ok) < n_l).any()  # both kinds occur
+    np.testing.assert_array_equal(free(cut, ok), free(full, ok))
+    np.testing.assert_array_equal(free(cut_centre, wall_ok), free(full_centre, wall_ok))
+    kept = np.isfinite(cut)
+    assert (~kept).any()  # some were skipped
+    # the others: evaluated, or a lower bound where the run's capsule keeps clear
+    bounded = kept & (cut != full)
+    assert bounded.any() and (cut[bounded] >= 0.0).all() and (cut <= full).all()
+    assert (cut_centre <= full_centre).all() and (cut_centre[bounded] >= 0.0).all()

@@ -2,10 +2,12 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from planners import GroundProfile, ProfileError
+from planners.profile import RASTER_CELL, cell_index
+from planners.swing import TABLE_LEVELS, _cell, _raster_max, _raster_vertices
 
 
 @pytest.mark.parametrize(
@@ -39,6 +41,9 @@ def test_vertical_change_is_right_continuous_and_flat_beyond_the_ends():
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.tuples(st.floats(0, 5), st.floats(-1, 1)), min_size=2, max_size=12),
        st.lists(st.tuples(st.floats(-1, 6), st.floats(0, 2)), min_size=1, max_size=10))
+# a drop within rounding of a 0.01 m raster cell's edge (found by hypothesis): the
+# raster's query rounded onto the next cell and missed it
+@example(vertices=[(0.04, 0.0), (0.04, -1.0)], intervals=[(0.04, 0.0)])
 def test_max_height_is_exact_against_brute_force(vertices, intervals):
     vertices.sort(key=lambda v: v[0])
     p = GroundProfile([v[0] for v in vertices], [v[1] for v in vertices])
@@ -91,3 +96,61 @@ def test_span_heights_are_the_range_maximum_and_both_end_heights(vertices, inter
     highest, at_a, at_b = p.span_heights(a, b)
     assert np.array_equal(highest, p.max_height(a, b))
     assert np.array_equal(at_a, p.height(a)) and np.array_equal(at_b, p.height(b))
+
+
+def _drop_below_edge(edge=3.0, start=-1.5):
+    """A profile that drops 0.2 m one ulp before the raster edge ``edge`` [m], and its
+    raster from ``start`` (there ``x - start`` of the drop rounds up onto the edge)."""
+    x = np.nextafter(edge, -np.inf)
+    p = GroundProfile([0.0, x, x, 5.0], [0.2, 0.2, 0.0, 0.0])
+    return p, p.raster(start, 5.0, RASTER_CELL), x
+
+
+def test_raster_query_starting_just_before_a_cell_edge_keeps_the_cell_before_it():
+    # old: ((x - start) * 256) rounded onto the edge's cell, missing the drop's top
+    p, raster, x = _drop_below_edge()
+    a, b = np.array([x]), np.array([3.2])
+    assert p.max_height(a, b)[0] == 0.2
+    assert raster.max_height(a, b)[0] == 0.2
+    assert raster.vertices_between(a, b)[0] >= 2
+
+
+def test_compiled_raster_query_agrees_with_the_vectorised_one_at_cell_edges():
+    p, raster, x = _drop_below_edge()
+    table = np.ascontiguousarray(raster.table(TABLE_LEVELS))
+    scale = 1.0 / raster.cell
+    assert _raster_max(x, 3.2, raster.start, raster.cell, scale, table) == 0.2
+    # every query ending one ulp either side of an edge, or on it, gives the same cell
+    # maximum and vertex count in both
+    edges = raster.start + raster.cell * np.arange(raster.heights.size + 1)
+    ends = np.concatenate([np.nextafter(edges, -np.inf), edges, np.nextafter(edges, np.inf)])
+    lo = np.concatenate([ends[:-1], ends[1:]])
+    hi = np.concatenate([ends[1:], ends[1:] + 0.05])
+    lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)
+    want = raster.max_height(lo, hi)
+    got = [_raster_max(a, b, raster.start, raster.cell, scale, table)
+           for a, b in zip(lo, hi, strict=True)]
+    assert np.array_equal(got, want)
+    want_v = raster.vertices_between(lo, hi)
+    got_v = [_raster_vertices(a, b, raster.start, raster.cell, scale, raster.vertex_cum)
+             for a, b in zip(lo, hi, strict=True)]
+    assert np.array_equal(got_v, want_v)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-4, 1), st.sampled_from([0.01, 1 / 256, 0.1, 0.3]),
+       st.lists(st.tuples(st.integers(0, 400), st.integers(-2, 2)), min_size=1,
+                max_size=20))
+def test_cell_index_is_the_exact_cell_of_points_at_and_near_edges(start, cell, points):
+    count = 300
+    edges = start + cell * np.arange(count + 1)  # as GroundProfile.raster computes them
+    x = np.array([edges[min(k, count)] for k, _ in points])
+    for i, (_, ulps) in enumerate(points):
+        for _ in range(abs(ulps)):
+            x[i] = np.nextafter(x[i], np.sign(ulps) * np.inf)
+    got = cell_index(x, start, cell, count)
+    # exact: the last cell whose left edge (as computed) is <= x, 0 before the raster
+    want = np.clip(np.searchsorted(edges[:count], x, side="right") - 1, 0, count - 1)
+    assert np.array_equal(got, want)
+    compiled = [_cell(xi, start, cell, 1.0 / cell, count) for xi in x]
+    assert np.array_equal(compiled, want)
