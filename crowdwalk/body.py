@@ -316,6 +316,12 @@ def _elementary(angle: np.ndarray, i: int, j: int) -> np.ndarray:
         out = np.zeros((angle.size, 3, 3))
         _elementary_kernel(np.ascontiguousarray(angle).reshape(-1), i, j, out)
         return out.reshape(angle.shape + (3, 3))
+    return _elementary_numpy(angle, i, j)
+
+
+def _elementary_numpy(angle: np.ndarray, i: int, j: int) -> np.ndarray:
+    """Rotations (..., 3, 3) in the (i, j) plane by angles (...) [rad], in numpy: what
+    ``_elementary_kernel`` compiles."""
     c, s = np.cos(angle), np.sin(angle)
     out = np.zeros(angle.shape + (3, 3))
     k = 3 - i - j

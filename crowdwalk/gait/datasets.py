@@ -169,8 +169,11 @@ def sample(angles: ElevationDataset | np.ndarray, t: np.ndarray | float,
     if curves.ndim not in (2, 3) or curves.shape[-1] != 4:
         raise invalid("sample", "angles", "an (N, 4) or (n, N, 4) array [rad]", curves.shape)
     fast = _sample_fast(curves, t, rows)
-    if fast is not None:
-        return fast
+    return _sample_numpy(curves, t, rows) if fast is None else fast
+
+
+def _sample_numpy(curves: np.ndarray, t: np.ndarray, rows) -> np.ndarray:
+    """:func:`sample` in numpy (checked arguments): what ``_sample_kernel`` compiles."""
     n_samples = curves.shape[-2]
     u = np.mod(t, 1.0) * n_samples
     i1 = np.floor(u).astype(np.intp)

@@ -210,6 +210,12 @@ def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
         out = np.empty((flat[0].shape[0], 2))
         _step_of_kernel(*flat, out)
         return out.reshape(shape + (2,))
+    return _step_of_numpy(stance, swing, dims)
+
+
+def _step_of_numpy(stance: np.ndarray, swing: np.ndarray, dims: list) -> np.ndarray:
+    """:func:`step_of` in numpy, ``dims`` the leg's LEG_FIELDS arrays [m]: what
+    ``_step_of_kernel`` compiles (and the path for stance/swing with fewer than 3 columns)."""
     thigh, shank, ankle_h, heel, toe = (d[..., None] for d in dims)
     # ``toe`` is the forefoot roll point (ball)
     # Stance foot: pivot on the ball (foot pitched down) or on the heel, pivot fixed.
