@@ -179,10 +179,7 @@ def batch_runs(profiles, legs, speeds, planner: str, agents: int, counted: dict 
 
 def batch(agents: int) -> dict:
     """Prints the batch table; returns ms per plan (amortised) per planner and run."""
-    rng = np.random.default_rng(7)
-    profiles = [random_terrain(rng) for _ in range(agents)]
-    legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
-    speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+    profiles, legs, speeds = random_batch(agents)
     print(f"\nplan_batch: {agents} walkers on random terrain (per plan, amortised; first "
           "with every leg new to the per-leg caches, then the same walkers again)")
     print(f"{'planner':<22}{'new legs [ms]':>15}{'again [ms]':>12}")
@@ -239,15 +236,20 @@ def quality(count: int) -> None:
     print(f"optimal found a legal plan on {sum(o.ok for o in optimal)} of {count}")
 
 
-def targets_only(rounds: int, repeat: int, agents: int) -> None:
-    """The target cells, ``rounds`` times in turn; median and spread over the rounds, and
-    each cell's counted work per plan."""
-    leg = Leg.from_body_height(1.75)
-    grounds = terrains()
+def random_batch(agents: int) -> tuple[list, list, np.ndarray]:
+    """The random-terrain batch of the batch target: profiles, legs and speeds [m/s] of
+    ``agents`` walkers (seed 7, the same in every table)."""
     rng = np.random.default_rng(7)
     profiles = [random_terrain(rng) for _ in range(agents)]
     legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
-    speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+    return profiles, legs, rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+
+
+def targets_only(rounds: int, repeat: int, agents: int) -> None:
+    """The target cells, ``rounds`` times in turn; median and spread over the rounds, and
+    each cell's counted work per plan."""
+    leg, grounds = Leg.from_body_height(1.75), terrains()
+    profiles, legs, speeds = random_batch(agents)
     cells: dict = {}
     counted: dict = {}
     for _ in range(rounds):
@@ -301,12 +303,8 @@ def stage_table(repeat: int, agents: int) -> None:
     """Prints the time per plan of each stage, per planner: single plans (median of
     ``repeat`` of each column) and the batch of ``agents`` walkers on random terrain
     (amortised; first with every leg new to the per-leg caches, then again)."""
-    leg = Leg.from_body_height(1.75)
-    grounds = terrains()
-    rng = np.random.default_rng(7)
-    profiles = [random_terrain(rng) for _ in range(agents)]
-    legs = [Leg.from_body_height(h) for h in rng.normal(1.72, 0.08, agents).clip(1.5, 1.95)]
-    speeds = rng.normal(1.34, 0.2, agents).clip(0.6, 2.0)
+    leg, grounds = Leg.from_body_height(1.75), terrains()
+    profiles, legs, speeds = random_batch(agents)
     print("Stages of a plan [ms per plan, wall]: tables = grids (structure, per-leg grids "
           "and flat caches) + arrays (shifted profiles, lattice arrays) + kernel (the "
           "up-front table kernel; for the lazy planners the nodes only, their steps and "
