@@ -535,6 +535,14 @@ class RouteGraph:
         walkable area."""
         return bool(self._walkable_tolerant.covers(LineString([tuple(a), tuple(b)])))
 
+    def sees_all(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(n,) bool: :meth:`sees` for each segment from ``a`` (n, 2) to ``b`` (n, 2) [m],
+        in one vectorised shapely call."""
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        if not len(a):
+            return np.zeros(0, dtype=bool)
+        return shapely.covers(self._walkable_tolerant, shapely.linestrings(np.stack([a, b], 1)))
+
     @functools.cached_property
     def _inner(self):
         """The walkable area shrunk by 0.25 m (simplified to 2 cm, grown by 1 µm,

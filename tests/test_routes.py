@@ -235,3 +235,15 @@ def test_graphs_with_doors_shut_recheck_only_the_legs_near_the_doors(shut):
     assert set(reference) - set(shut_legs)  # the doors cut legs
     assert graph._corner_legs == reference  # open, derived from the closed graph
     assert graph.with_closed(walls)._corner_legs == shut_legs  # closed, from the open one
+
+
+def test_sees_all_answers_as_sees_one_segment_at_a_time():
+    g = stair_world()
+    x0, y0, x1, y1 = g.walkable_area.bounds
+    rng = np.random.default_rng(3)
+    a = rng.uniform((x0 - 1, y0 - 1), (x1 + 1, y1 + 1), (300, 2))
+    b = rng.uniform((x0 - 1, y0 - 1), (x1 + 1, y1 + 1), (300, 2))
+    want = np.array([g.sees(p, q) for p, q in zip(a, b, strict=True)])
+    assert 0 < want.sum() < want.size  # both answers occur
+    assert np.array_equal(g.sees_all(a, b), want)
+    assert g.sees_all(np.zeros((0, 2)), np.zeros((0, 2))).shape == (0,)

@@ -176,18 +176,17 @@ class Routes:
     def farthest_visible(self, state, agents: np.ndarray, reach: float) -> np.ndarray:
         """For walkers ``agents`` (k,): the farthest point (k, 2) [m] of their route
         within ``reach`` [m] ahead of their progress (0.5 m apart) that they see from where
-        they stand (NaN where none is seen). A Python loop: only for the few walkers
-        stuck with their target behind a wall."""
+        they stand (NaN where none is seen)."""
         st, tb = state, self.table
-        out = np.full((len(agents), 2), np.nan)
-        ahead = np.arange(reach, -1e-9, -0.5)
-        for k, i in enumerate(agents):
-            rid = int(st.route[i])
-            pts = tb.point_at(np.full(ahead.size, rid), st.progress[i] + ahead)
-            for q in pts:
-                if self.graph.sees(st.pos1[i], q):
-                    out[k] = q
-                    break
+        agents = np.asarray(agents, dtype=np.intp)
+        ahead = np.arange(reach, -1e-9, -0.5)  # farthest first
+        rid = np.repeat(st.route[agents].astype(np.intp), ahead.size)
+        pts = tb.point_at(rid, np.add.outer(st.progress[agents], ahead).ravel())
+        seen = self.graph.sees_all(np.repeat(st.pos1[agents], ahead.size, axis=0), pts)
+        seen = seen.reshape(agents.size, ahead.size)
+        first = np.argmax(seen, axis=1)
+        out = pts.reshape(agents.size, ahead.size, 2)[np.arange(agents.size), first]
+        out[~seen.any(axis=1)] = np.nan
         return out
 
     def reroute(self, state, blocked: np.ndarray, *, t: float, walkers: np.ndarray) -> None:

@@ -351,9 +351,8 @@ class CrowdSimulation:
             # room, say): head for the farthest point of the route it sees
             late = np.flatnonzero(t - st.gain_time[idx] >= prm.sight_after)
             graph = self.routes.graph
-            hidden = [k for k in late if not graph.sees(pos[k], target[k])]
-            if hidden:
-                k = np.asarray(hidden)
+            k = late[~graph.sees_all(pos[late], target[late])]
+            if k.size:
                 seen = self.routes.farthest_visible(st, idx[k], prm.sight_reach)
                 ok = np.isfinite(seen[:, 0]) & (np.linalg.norm(seen - pos[k], axis=1) > 1e-6)
                 target[k[ok]] = seen[ok]
