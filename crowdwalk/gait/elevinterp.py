@@ -315,6 +315,12 @@ class ElevInterpConfig:
         blends in the stair datasets). 1.5 (was 0.6): a 1.95 m body's level datasets
         start at 0.67 m, its 0.8 m/s step is 0.54 m (docs/architecture.md "Level line
         extrapolation").
+    knee_closure : bool
+        With ``heel_rise``, what the trailing foot cannot close the trailing knee does,
+        extending toward straight at the other heel strike (an extension of §5,
+        docs/architecture.md "Knee closure of long level steps"); False: such steps (a
+        1.75 m body's level steps beyond about 0.81 m) are served from the paper's
+        triangulation, clamped, the swing foot 0.5-2 cm below the floor.
     """
 
     tolerance: float = 0.002
@@ -330,6 +336,7 @@ class ElevInterpConfig:
     heel_rise: bool = True
     level_fade: float = 0.04
     level_line_beyond: float = 1.5
+    knee_closure: bool = True
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
@@ -746,7 +753,8 @@ class ElevInterp:
         for again in (True, True, False):
             curves, phases, step, served, flags = out
             curves, step = _heel_rise(curves, phases[:, 0], step,
-                                      np.where(fade > 0.0, target[:, 1], step[:, 1]), props)
+                                      np.where(fade > 0.0, target[:, 1], step[:, 1]), props,
+                                      knee=cfg.knee_closure)
             if again:
                 ask[:, 0] += np.where(fade > 0.0, target[:, 0] - step[:, 0], 0.0)
                 out = serve(ask)
@@ -844,7 +852,8 @@ _MAX_RISE = 0.2  # largest change of the trailing foot's elevation [rad]
 
 
 def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray,
-               height: np.ndarray, props: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+               height: np.ndarray, props: np.ndarray, knee: bool = False
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Datasets (k, N, 4) closed by the trailing foot, and the steps (k, 2) they produce.
 
     The stance foot at t = 0.5 rolls on its ball (§4.1); its ankle is ``R cos(f + β)``
@@ -854,6 +863,12 @@ def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray
     at t = 0.5 (the other heel strikes), kept through push-off to the dataset's foot-off
     ``stance_fraction`` (k,) and gone 0.2 later (early swing; the toe clearance of the
     middle third is :func:`lift_swing_toe`'s). Lengths in leg lengths; elevations [rad].
+
+    With ``knee`` (``ElevInterpConfig.knee_closure``), what the foot cannot close (the
+    rise is capped, and the ankle rises at most to straight above the ball) the trailing
+    knee closes: the stance shank's elevation at t = 0.5 is raised toward the thigh's
+    (the knee extends, never past straight) over the same window, closed form on
+    ``shank · cos``.
     """
     k, n = curves.shape[:2]
     ankle_h, ball = props[:, 2], props[:, 4]
@@ -870,6 +885,14 @@ def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray
                       1.0 - fall * fall * (3.0 - 2.0 * fall))
     closed = curves.copy()
     closed[:, :, 0] += delta[:, None] * window
+    if knee:
+        rest = height - step[:, 1] - (radius * np.cos(f + delta + beta) - z)
+        shank, thigh = sample(curves, np.full(k, 0.5))[:, 1:3].T
+        lifted = -np.arccos(np.clip(np.cos(shank) + np.maximum(rest, 0.0) / props[:, 1],
+                                    -1.0, 1.0))
+        extend = np.where((rest > 0.0) & (f <= 0.0) & (shank < 0.0),
+                          np.clip(np.minimum(lifted, thigh) - shank, 0.0, None), 0.0)
+        closed[:, :, 1] += extend[:, None] * window
     return closed, dataset_step(closed, _leg_of(props))
 
 

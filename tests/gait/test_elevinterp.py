@@ -226,7 +226,9 @@ def test_same_dataset_for_every_body_size_at_the_same_normalised_step():
 
 
 def test_solved_datasets_are_inserted_and_reused():
-    interp = ElevInterp()
+    # §5 step 6 as written (the level line's secant refinement is flagged ``refined`` on
+    # every call, and serves a 1.75 m body's long level steps since ``knee_closure``)
+    interp = ElevInterp(config=PAPER)
     body = leg(1.75)
     req = random_requests(interp, body, np.random.default_rng(3), 20)
     first = interp.request(body, req[:, 0], req[:, 1])
@@ -370,3 +372,27 @@ def test_level_steps_on_the_line_serve_the_requested_height():
     assert out.converged.all() and not out.clamped.any()
     np.testing.assert_array_equal(out.target[:, 1], 0.0)
     np.testing.assert_allclose(out.step_height, 0.0, atol=0.2 * CM)
+
+
+def test_long_level_steps_are_closed_by_the_trailing_knee():
+    """Past a level step of about 0.81 m (1.75 m body) the trailing foot's rise is spent
+    (capped, and the ankle near straight above the ball), so the step was served from the
+    clamped triangulation 1.5-2 cm below the floor. The trailing knee closes the rest
+    (``knee_closure``): the step lands on the floor, the knee at the other heel strike
+    extends but never past straight, and steps the foot closes are left unchanged."""
+    length = np.array([0.70, 0.85, 0.90, 0.93])
+    body = leg(np.full(length.size, 1.75))
+    foot_only = ElevInterp(config=ElevInterpConfig(knee_closure=False)).request(body, length,
+                                                                                0.0)
+    out = ElevInterp().request(body, length, 0.0)
+    assert np.all(foot_only.clamped[1:]) and np.all(foot_only.step_height[1:] < -CM)
+    assert out.converged.all() and not out.clamped.any()
+    np.testing.assert_allclose(dataset_step(out.angles, body), np.stack(
+        [length, np.zeros(length.size)], axis=1), atol=0.2 * CM)
+    np.testing.assert_array_equal(out.angles[0], foot_only.angles[0])
+    half = out.angles[:, 50]  # the stance leg at the other heel strike
+    knee = half[:, 2] - half[:, 1]
+    assert np.all(knee >= 0.0)
+    # the data bend it more at longer steps (level_l 17°, natural 15°); closed, the longest
+    # step has the straightest
+    assert knee[-1] < knee[:-1].min()
