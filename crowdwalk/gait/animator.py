@@ -84,6 +84,8 @@ _BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these frac
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
 _C1_RISE = 0.05  # steps rising or falling this much [m] (stairs) join the root C¹ ...
 _VEL_PHASE = 0.02  # ... with velocities measured over this stance-phase interval [1]
+_TRAIL_CONTINUES = np.deg2rad(3.0)  # new data continue the trailing leg within [rad]
+_TRAIL_TURN = np.deg2rad(45.0)  # ... on steps turning less (MetaGait's T, §6.1) [rad]
 _SPIN_GRID = np.linspace(0.0, 1.0, 41)  # step phases searched for the heel rise
 _MAX_TOE_START = np.radians(40.0)  # largest toe-out the swing leg starts from
 _MIN_STEP = 0.05  # shortest step requested of ElevInterp [m]
@@ -285,6 +287,7 @@ class _SwingState:
     trail_yaw: np.ndarray  # (n,) [rad]
     trail_slope: np.ndarray  # (n,) [rad]
     has_trail: np.ndarray  # (n,) bool, pinned in push-off
+    trail_root: np.ndarray  # (n,) bool, the root moves on with the trailing leg
     toe_off: np.ndarray  # (n,) toe-off, fraction of the step
     bezier: np.ndarray  # (n, 4, 3) planner's swing-ankle Bezier [m]
     use_bezier: np.ndarray  # (n,) bool
@@ -296,7 +299,8 @@ class _SwingState:
     @classmethod
     def zeros(cls, n: int) -> _SwingState:
         return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
-                   np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros((n, 4, 3)),
+                   np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n),
+                   np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
                    np.zeros((n, 3)), np.zeros((n, 3)))
 
@@ -426,9 +430,19 @@ class Animator:
         landed = self._landed(a, had, c1)
         st = self._stance
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
+        half = self._step.angles.shape[1] // 2
+        trailing_before = self._step.angles[a, half, :3].copy()  # the stance leg at t = 0.5
+        spun_before = self._stance.spin[a] != 0.0
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
         self._join_root(a, had, landed, c1)
+        # the root follows the trailing leg where the new data continue it (a short step
+        # after a long one, a stop, a start do not) on a straight or gently curved path
+        continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
+        turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
+        self._swing.trail_root[a] = (had & ~c1 & self.style.trailing_root
+                                     & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
+                                     & ~spun_before & (self._stance.spin[a] == 0.0))
         self._swing_ends(cmd, body, had, data, trail)
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
@@ -596,6 +610,12 @@ class Animator:
         on the target, and the pelvis drop where the landing is out of reach."""
         a = cmd.agent
         sw = self._swing
+        sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
+        sw.has_trail[a] = had
+        joins = np.flatnonzero(sw.trail_root[a])
+        if joins.size:  # the join starts from the trailing leg's root, not the stance leg's
+            aj = a[joins]
+            sw.hip_fix[aj] -= self._trailing_root(aj, np.zeros(aj.size))
         ends = np.concatenate([a, a])
         toe_off_phase = 0.5 * sw.toe_off[a]
         phases = np.concatenate([toe_off_phase, np.full(a.size, _PHASE_END)])
@@ -617,10 +637,8 @@ class Animator:
         ankle_land = stance_foot_pose(body, land, land_pitch)[1]
         # Push-off: until toe-off the trailing foot (the previous stance foot) stays on
         # its ball, pitched by the data; then the ankle joins the data smoothly.
-        sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
         pin = self._pinned_ankle(a, toe_off_phase, sample(data.angles, toe_off_phase + 0.5))[0]
         sw.d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
-        sw.has_trail[a] = had
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
@@ -988,6 +1006,9 @@ class Animator:
             hip_fix += self._swing.hip_vel[a] * (self._step.duration[a] * _HIP_BLEND
                                                   * x * (1.0 - x) ** 2)[:, None]
             hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
+            trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))
+            if trailing.size:
+                hip_fix[trailing] += self._trailing_root(a[trailing], phase[trailing])
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
         # a walk starts from standing: the pelvis is level and lists in over the first step
@@ -1003,6 +1024,42 @@ class Animator:
             attributes=None if self.attributes is None else self.attributes.take(a),
             list_scale=list_scale,
         )  # fmt: skip
+
+    def _trailing_root(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
+        """Root offset (k, 3) [m] along ψ of agents a at stance phases (k,) in the double
+        support that opens a step (``GaitStyle.trailing_root``): (1 − w) times how far
+        ahead of the new stance leg's root the trailing leg, pinned on its ball
+        (:meth:`_pinned_ankle`) and following its data (the swing leg at t + 0.5), puts
+        it; w a smoothstep from 0 at the heel strike to 1 at toe-off. At the heel strike
+        the root moves on as the previous step's stance leg moved it."""
+        body = self.body.take(a)
+        k = a.size
+        legs = sample(self._step.angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
+        st, sw = legs[:k], legs[k:]
+        psi = self._heading(a, phase)
+        tau = 2.0 * phase
+        foot = StanceFoot(self._stance.ball[a], self._stance.yaw[a], self._stance.slope[a])
+        warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
+                         self._warm.hip_jacobian[a])  # fmt: skip
+        free = elevwalker_pose(
+            body, self._step.stance_left[a], phase, st, sw, psi, foot, self._swing_toe(a, tau, psi),
+            warm, self.style, self._step.stance_fraction[a],
+            attributes=None if self.attributes is None else self.attributes.take(a),
+            list_scale=np.where(self._step.first[a], _smoothstep(tau), 1.0),
+        )  # fmt: skip
+        swing_ankle = free.positions[np.arange(k), LEG_JOINTS[np.where(
+            self._step.stance_left[a], 1, 0)][:, 2]]
+        gap = self._pinned_ankle(a, phase, sw)[0] - swing_ankle
+        fwd = np.stack([np.cos(psi), np.sin(psi), np.zeros(k)], axis=1)
+        w = _smoothstep(tau / np.maximum(self._swing.toe_off[a], 1e-9))
+        ahead = (1.0 - w) * np.sum(gap * fwd, axis=1)
+        # along the circle about the stance ankle: the stance leg pivots, its knee stays
+        st_leg = LEG_JOINTS[np.where(self._step.stance_left[a], 0, 1)]
+        rows = np.arange(k)
+        leg = free.positions[rows, st_leg[:, 0]] - free.positions[rows, st_leg[:, 2]]
+        rise = -np.sum(leg * fwd, axis=1) / np.maximum(leg[:, 2], 1e-3)
+        shift = ahead[:, None] * (fwd + rise[:, None] * np.array([0.0, 0.0, 1.0]))
+        return np.where(free.converged[:, None], shift, 0.0)
 
     def _lift_envelope(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray | None:
         """Anticipated swing-ankle lift (k,) [m] of agents a at step phases tau (k,): the

@@ -117,6 +117,12 @@ class GaitStyle:
         carries the measured wave about ``torso_tilt``
         (:func:`~crowdwalk.gait.datasets.trunk_motion`); False: ``shoulder_rotation`` ·
         cos 2πt and a constant tilt.
+    trailing_root : bool
+        In the double support that opens a level step the root's progress along ψ follows
+        the trailing leg (pinned on its ball) and hands over to the new stance leg by
+        toe-off, so the forward velocity is continuous at the heel strike (an extension of
+        §4.1, docs/architecture.md "Root velocity at the heel strike"); False: the root
+        follows the new stance foot from the heel strike on (§4.1), joined C⁰.
     """
 
     step_width: float = 0.05
@@ -131,6 +137,7 @@ class GaitStyle:
     level_clearance: bool = True
     pelvis_from_data: bool = True
     trunk_from_data: bool = True
+    trailing_root: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
