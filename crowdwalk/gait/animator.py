@@ -288,6 +288,7 @@ class _SwingState:
     trail_slope: np.ndarray  # (n,) [rad]
     has_trail: np.ndarray  # (n,) bool, pinned in push-off
     trail_root: np.ndarray  # (n,) bool, the root moves on with the trailing leg
+    served: np.ndarray  # (n,) bool, the step's dataset was served as asked (not clamped)
     toe_off: np.ndarray  # (n,) toe-off, fraction of the step
     bezier: np.ndarray  # (n, 4, 3) planner's swing-ankle Bezier [m]
     use_bezier: np.ndarray  # (n,) bool
@@ -299,8 +300,8 @@ class _SwingState:
     @classmethod
     def zeros(cls, n: int) -> _SwingState:
         return cls(np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n),
-                   np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n),
-                   np.zeros((n, 4, 3)),
+                   np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool),
+                   np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
                    np.zeros((n, 3)), np.zeros((n, 3)))
 
@@ -433,19 +434,25 @@ class Animator:
         half = self._step.angles.shape[1] // 2
         trailing_before = self._step.angles[a, half, :3].copy()  # the stance leg at t = 0.5
         spun_before = self._stance.spin[a] != 0.0
+        flat_before = np.abs(self._step.rise[a]) < _LEVEL_RISE
+        served_before = self._swing.served[a].copy()
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
         self._join_root(a, had, landed, c1)
+        swing_from = np.where(had[:, None], trail[0], cmd.start)
+        bumpy = self._uneven(cmd, body, swing_from)
         # the root follows the trailing leg where the new data continue it (a short step
         # after a long one, a stop, a start do not) on a straight or gently curved path
+        # over level ground
         continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
         turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
-        self._swing.trail_root[a] = (had & ~c1 & self.style.trailing_root
+        self._swing.served[a] = ~data.clamped
+        self._swing.trail_root[a] = (had & self.style.trailing_root & flat_before & ~bumpy
+                                     & served_before & ~data.clamped
+                                     & (np.abs(cmd.step_height) < _LEVEL_RISE)
                                      & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
                                      & ~spun_before & (self._stance.spin[a] == 0.0))
         self._swing_ends(cmd, body, had, data, trail)
-        swing_from = np.where(had[:, None], trail[0], cmd.start)
-        bumpy = self._uneven(cmd, body, swing_from)
         self._swing_curve(cmd, bumpy)
         if bumpy.any():
             self._anticipate_lift(a[bumpy])
