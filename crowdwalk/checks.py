@@ -71,12 +71,12 @@ def located(scenario, exc: InputError, default: tuple = ()) -> InputError:
 # --- memory ---------------------------------------------------------------------------
 
 # Bytes a run holds per agent, the run's worker process included (crowdwalk.workers):
-# `python benchmarks/bench_memory.py --agents 500 750 1000` measures ~39 kB of peak-RSS
-# growth per agent with poses (4 s; ~10 kB in the run's process, ~29 kB in the worker that
-# holds the gait engine) and `--agents 1000 5000 10000 --no-poses --seconds 2` ~19 kB
-# (~6 kB here, ~13 kB of steering work arrays in the worker). Per terrain grid node:
+# `python benchmarks/bench_memory.py --agents 500 1000 2000` measures 49-54 kB of peak-RSS
+# growth per agent with poses (4 s; about a third in the run's process, the rest in the
+# worker that holds the gait engine) and `--agents 1000 5000 10000 --no-poses --seconds 2`
+# ~5 kB (steering threads share the run's process; no worker). Per terrain grid node:
 # heights, the noise field and the filter's work arrays (8 float64 arrays).
-BYTES_PER_AGENT = 40_000
+BYTES_PER_AGENT = 60_000
 BYTES_PER_GRID_NODE = 64
 MAX_AGENTS = 20_000  # 4x the largest crowd benchmarked (bench_crowd.py); setup grows beyond
 MAX_ROUTE_NODES = 10_000  # route nodes (and edges) per scenario: validation within seconds
