@@ -23,7 +23,7 @@ import numba as nb
 import numpy as np
 
 from planners.energy import EV_PEAK_CM
-from planners.kinematics import key_frame, leg_constants
+from planners.kinematics import key_frame, key_frame_from, leg_constants, next_swing_leg, stance_leg
 from planners.swing import _cell, adjust_one
 
 __all__ = ["Lattice", "build_agents", "complete", "complete_agents",
@@ -787,6 +787,16 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     reach[1] = True
     key_frames = 0
     evaluated = 0
+    # the stance leg at K1 of each stance node (computed once, shared by its steps)
+    k1_thigh = np.empty(Nn)
+    k1_shank = np.empty(Nn)
+    k1_ok = np.zeros(Nn, dtype=np.bool_)
+    k1_done = np.zeros(Nn, dtype=np.bool_)
+    # and the former stance leg at K1' of each front node above its stance node
+    k4_thigh = np.empty(Nn)
+    k4_shank = np.empty(Nn)
+    k4_ok = np.zeros(Nn, dtype=np.bool_)
+    k4_done = np.zeros(Nn, dtype=np.bool_)
     for t in range(Ns):  # steps are ordered by depth
         st_v, fr_v = step_stance[t], step_front[t]
         ss, fs = node_s[a, st_v], node_s[a, fr_v]
@@ -810,8 +820,23 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
         reachable = flat_reach[a, step_j[t]]
         if not level and not hopeless:
             summit = highest + ankle + lift
-            th, ca, reachable = key_frame(ss, zs, fs, zf, ss, summit, leg[0], leg[1],
-                                          toe_off, ankle, ankle + lift, constants)
+            if not k1_done[st_v]:
+                k1_thigh[st_v], k1_shank[st_v], k1_ok[st_v] = stance_leg(
+                    ss, zs, leg[0], leg[1], ankle, constants)
+                k1_done[st_v] = True
+            zs_a, zf_a = zs + ankle, zf + ankle
+            if zs_a <= zf_a:
+                if not k4_done[fr_v]:
+                    k4_thigh[fr_v], k4_shank[fr_v], k4_ok[fr_v] = next_swing_leg(
+                        fs, zf_a, zf_a, leg[0], leg[1], ankle + lift, constants)
+                    k4_done[fr_v] = True
+                s4 = (k4_thigh[fr_v], k4_shank[fr_v], k4_ok[fr_v])
+            else:
+                s4 = next_swing_leg(fs, zf_a, zs_a, leg[0], leg[1], ankle + lift,
+                                    constants)
+            th, ca, reachable = key_frame_from(
+                ss, zs, fs, zf, ss, summit, leg[0], leg[1], toe_off, ankle, constants,
+                (k1_thigh[st_v], k1_shank[st_v], k1_ok[st_v]), s4)
             ej = c_thigh * th + c_calf * ca
             key_frames += 1
         en, ev, et = _energy(L, r, ej, speeds[a], normal[a], weights)
