@@ -94,6 +94,22 @@ def _span(s, z, slope, a, b):
 
 
 @_jit
+def _span_from(s, z, slope, a, ia, lo, b, ib):
+    """:func:`_span` given ``ia = _right(s, max(a, s[0])) - 1``, ``lo = _left(s, a)``
+    and ``ib = _right(s, max(b, s[0])) - 1`` (look-ups shared by the steps of a node)."""
+    qa = max(a, s[0])
+    ha = z[ia] + slope[ia] * (qa - s[ia])
+    qb = max(b, s[0])
+    hb = z[ib] + slope[ib] * (qb - s[ib])
+    empty = b < a
+    best = max(ha, ha if empty else hb)
+    hi = 0 if max(a, b) < s[0] else (ia if empty else ib) + 1
+    for i in range(lo, hi):
+        best = max(best, z[i])
+    return best, ha, hb
+
+
+@_jit
 def _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
     """foot_support of an ankle at ``x`` [m]: 0 or EDGE | SLOPE flags."""
     heel = x - heel_off
@@ -771,6 +787,13 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     for v in range(last0, Nn):
         far_a = max(far_a, node_s[a, v])
     far[a] = far_a
+    # each node's profile look-ups (:func:`_span_from`)
+    node_right = np.empty(Nn, dtype=np.int64)
+    node_left = np.empty(Nn, dtype=np.int64)
+    for v in range(Nn):
+        x = b0 + node_s[a, v]
+        node_right[v] = _right(s, max(x, s[0])) - 1
+        node_left[v] = _left(s, x)
     if terminal_cost:
         lo_i = max(_right(s, b0 + trailing[a] - 2.0) - 1, 0)
         hi_i = min(_left(s, b0 + far_a + 2.0), m_v - 1)
@@ -813,7 +836,8 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
             reason[a, t] = _UNREACHED
             continue
         evaluated += 1
-        highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
+        highest = _span_from(s, z, slope, b0 + ss, node_right[st_v], node_left[st_v],
+                             b0 + fs, node_right[fr_v])[0]
         nominal = lo[a] + delta[a] * step_j[t]
         level = r == 0 and highest == zs and abs(L - nominal) <= 1e-12
         hopeless = support[fr_v] != 0 or abs(r) > max_rise
