@@ -272,8 +272,13 @@ def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     ``vertex_cum`` (count + 1,)."""
     edges = start + cell * np.arange(count + 1)
     at = np.empty(count + 1)
+    # _height at each edge, its vertex found by one sweep (the edges increase)
+    i = _right(s, max(edges[0], s[0])) - 1
     for k in range(count + 1):
-        at[k] = _height(s, z, slope, edges[k])
+        q = max(edges[k], s[0])
+        while i + 1 < s.size and s[i + 1] <= q:
+            i += 1
+        at[k] = z[i] + slope[i] * (q - s[i])
     cells = table[0]
     for k in range(count):
         cells[k] = max(at[k], at[k + 1])
