@@ -162,13 +162,44 @@ def key_frame(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b
     """Joint rotations (thigh, calf) [rad] and reachability of one step (see
     :func:`key_frames`; ``constants`` from :func:`leg_constants`); compiled, for other
     kernels."""
+    s1 = stance_leg(stance_s, stance_z, a_len, b_len, ankle, constants)
+    s4 = next_swing_leg(front_s, front_z + ankle, max(front_z + ankle, stance_z + ankle),
+                        a_len, b_len, nominal_lift, constants)
+    return key_frame_from(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len,
+                          b_len, toe, ankle, constants, s1, s4)
+
+
+@_jit
+def stance_leg(stance_s, stance_z, a_len, b_len, ankle, constants):
+    """The stance leg at K1 (thigh, shank, reachable): a function of the stance foothold
+    alone, shared by every step from it (:func:`key_frame_from`)."""
+    L, H, min_reach = constants[0], constants[1], constants[2]
+    zs = stance_z + ankle
+    return _angles(stance_s, zs + H, stance_s, zs, a_len, b_len, L, min_reach)
+
+
+@_jit
+def next_swing_leg(front_s, front_ankle, high_ankle, a_len, b_len, nominal_lift, constants):
+    """The former stance leg at K1' (thigh, shank, reachable), its ankle ``nominal_lift``
+    above the higher foothold's ankle ``high_ankle`` [m]: a function of the front foothold
+    alone wherever that is the higher one (:func:`key_frame_from`)."""
+    L, H, min_reach = constants[0], constants[1], constants[2]
+    return _angles(front_s, front_ankle + H, front_s, high_ankle + nominal_lift, a_len, b_len,
+                   L, min_reach)
+
+
+@_jit
+def key_frame_from(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b_len,
+                   toe, ankle, constants, s1, s4):
+    """:func:`key_frame` given the stance leg at K1 ``s1`` (:func:`stance_leg` of the
+    same stance foothold) and the former stance leg at K1' ``s4``
+    (:func:`next_swing_leg`)."""
     L, H, min_reach, reach, r_toe, cos_pitch, sin_pitch = constants
     ss, fs = stance_s, front_s
     zs, zf = stance_z + ankle, front_z + ankle
     # K1: mid-swing of the front-going leg F, stance leg S
     p1z = zs + H
     f1 = _angles(ss, p1z, summit_s, summit_z, a_len, b_len, L, min_reach)
-    s1 = _angles(ss, p1z, ss, zs, a_len, b_len, L, min_reach)
     # K2: heel strike of F, pelvis midway
     p2s = 0.5 * (ss + fs)
     p2z = _pelvis_between(p2s, ss, zs, fs, zf, reach)
@@ -183,9 +214,7 @@ def key_frame(stance_s, stance_z, front_s, front_z, summit_s, summit_z, a_len, b
     f3 = _angles(p3s, p3z, fs, zf, a_len, b_len, L, min_reach)
     s3 = _angles(p3s, p3z, back_s, back_z, a_len, b_len, L, min_reach)
     # K1': legs swapped, S at a nominal mid-swing above F; F stands as S did at K1
-    p4z = zf + H
     f4 = s1
-    s4 = _angles(fs, p4z, fs, max(zf, zs) + nominal_lift, a_len, b_len, L, min_reach)
     # summed as the reference: each leg's three changes, then both legs
     thigh = ((abs(f2[0] - f1[0]) + abs(f3[0] - f2[0]) + abs(f4[0] - f3[0]))
              + (abs(s2[0] - s1[0]) + abs(s3[0] - s2[0]) + abs(s4[0] - s3[0])))

@@ -23,7 +23,7 @@ import numba as nb
 import numpy as np
 
 from planners.energy import EV_PEAK_CM
-from planners.kinematics import key_frame, leg_constants
+from planners.kinematics import key_frame, key_frame_from, leg_constants, next_swing_leg, stance_leg
 from planners.swing import _cell, adjust_one
 
 __all__ = ["Lattice", "build_agents", "complete", "complete_agents",
@@ -87,6 +87,22 @@ def _span(s, z, slope, a, b):
     empty = b < a
     best = max(ha, ha if empty else hb)
     lo = _left(s, a)
+    hi = 0 if max(a, b) < s[0] else (ia if empty else ib) + 1
+    for i in range(lo, hi):
+        best = max(best, z[i])
+    return best, ha, hb
+
+
+@_jit
+def _span_from(s, z, slope, a, ia, lo, b, ib):
+    """:func:`_span` given ``ia = _right(s, max(a, s[0])) - 1``, ``lo = _left(s, a)``
+    and ``ib = _right(s, max(b, s[0])) - 1`` (look-ups shared by the steps of a node)."""
+    qa = max(a, s[0])
+    ha = z[ia] + slope[ia] * (qa - s[ia])
+    qb = max(b, s[0])
+    hb = z[ib] + slope[ib] * (qb - s[ib])
+    empty = b < a
+    best = max(ha, ha if empty else hb)
     hi = 0 if max(a, b) < s[0] else (ia if empty else ib) + 1
     for i in range(lo, hi):
         best = max(best, z[i])
@@ -256,8 +272,13 @@ def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     ``vertex_cum`` (count + 1,)."""
     edges = start + cell * np.arange(count + 1)
     at = np.empty(count + 1)
+    # _height at each edge, its vertex found by one sweep (the edges increase)
+    i = _right(s, max(edges[0], s[0])) - 1
     for k in range(count + 1):
-        at[k] = _height(s, z, slope, edges[k])
+        q = max(edges[k], s[0])
+        while i + 1 < s.size and s[i + 1] <= q:
+            i += 1
+        at[k] = z[i] + slope[i] * (q - s[i])
     cells = table[0]
     for k in range(count):
         cells[k] = max(at[k], at[k + 1])
@@ -771,6 +792,13 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     for v in range(last0, Nn):
         far_a = max(far_a, node_s[a, v])
     far[a] = far_a
+    # each node's profile look-ups (:func:`_span_from`)
+    node_right = np.empty(Nn, dtype=np.int64)
+    node_left = np.empty(Nn, dtype=np.int64)
+    for v in range(Nn):
+        x = b0 + node_s[a, v]
+        node_right[v] = _right(s, max(x, s[0])) - 1
+        node_left[v] = _left(s, x)
     if terminal_cost:
         lo_i = max(_right(s, b0 + trailing[a] - 2.0) - 1, 0)
         hi_i = min(_left(s, b0 + far_a + 2.0), m_v - 1)
@@ -787,6 +815,16 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     reach[1] = True
     key_frames = 0
     evaluated = 0
+    # the stance leg at K1 of each stance node (computed once, shared by its steps)
+    k1_thigh = np.empty(Nn)
+    k1_shank = np.empty(Nn)
+    k1_ok = np.zeros(Nn, dtype=np.bool_)
+    k1_done = np.zeros(Nn, dtype=np.bool_)
+    # and the former stance leg at K1' of each front node above its stance node
+    k4_thigh = np.empty(Nn)
+    k4_shank = np.empty(Nn)
+    k4_ok = np.zeros(Nn, dtype=np.bool_)
+    k4_done = np.zeros(Nn, dtype=np.bool_)
     for t in range(Ns):  # steps are ordered by depth
         st_v, fr_v = step_stance[t], step_front[t]
         ss, fs = node_s[a, st_v], node_s[a, fr_v]
@@ -803,15 +841,31 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
             reason[a, t] = _UNREACHED
             continue
         evaluated += 1
-        highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
+        highest = _span_from(s, z, slope, b0 + ss, node_right[st_v], node_left[st_v],
+                             b0 + fs, node_right[fr_v])[0]
         nominal = lo[a] + delta[a] * step_j[t]
         level = r == 0 and highest == zs and abs(L - nominal) <= 1e-12
         hopeless = support[fr_v] != 0 or abs(r) > max_rise
         reachable = flat_reach[a, step_j[t]]
         if not level and not hopeless:
             summit = highest + ankle + lift
-            th, ca, reachable = key_frame(ss, zs, fs, zf, ss, summit, leg[0], leg[1],
-                                          toe_off, ankle, ankle + lift, constants)
+            if not k1_done[st_v]:
+                k1_thigh[st_v], k1_shank[st_v], k1_ok[st_v] = stance_leg(
+                    ss, zs, leg[0], leg[1], ankle, constants)
+                k1_done[st_v] = True
+            zs_a, zf_a = zs + ankle, zf + ankle
+            if zs_a <= zf_a:
+                if not k4_done[fr_v]:
+                    k4_thigh[fr_v], k4_shank[fr_v], k4_ok[fr_v] = next_swing_leg(
+                        fs, zf_a, zf_a, leg[0], leg[1], ankle + lift, constants)
+                    k4_done[fr_v] = True
+                s4 = (k4_thigh[fr_v], k4_shank[fr_v], k4_ok[fr_v])
+            else:
+                s4 = next_swing_leg(fs, zf_a, zs_a, leg[0], leg[1], ankle + lift,
+                                    constants)
+            th, ca, reachable = key_frame_from(
+                ss, zs, fs, zf, ss, summit, leg[0], leg[1], toe_off, ankle, constants,
+                (k1_thigh[st_v], k1_shank[st_v], k1_ok[st_v]), s4)
             ej = c_thigh * th + c_calf * ca
             key_frames += 1
         en, ev, et = _energy(L, r, ej, speeds[a], normal[a], weights)

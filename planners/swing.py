@@ -209,6 +209,23 @@ def _raster_max(a, b, start, cell, scale, table):
 
 
 @_jit
+def _cells_max(ia, ib, table):
+    """:func:`_raster_max` of the cells ``ia``..``ib`` (``ib`` >= ``ia``)."""
+    levels = table.shape[0]
+    span = ib - ia + 1
+    k = 0
+    while (2 << k) <= span and k + 1 < levels:
+        k += 1
+    width = 1 << k
+    best = table[k, ia]
+    i = ia + width
+    while i + width <= ib + 1:  # spans longer than the table's widest level
+        best = max(best, table[k, i])
+        i += width
+    return max(best, table[k, ib - width + 1])
+
+
+@_jit
 def _raster_vertices(a, b, start, cell, scale, vertex_cum):
     """:meth:`HeightRaster.vertices_between` of one interval."""
     c = vertex_cum.size - 1
@@ -245,8 +262,8 @@ def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, 
     ps = scratch[0]
     pz = scratch[1]
     deficit = scratch[2]
-    moves = np.zeros((2, 2))
     ok = False
+    c = table.shape[1]
     rounds = 0
     p0s, p0z = start_s, start_z + ankle
     p3s, p3z = end_s, end_z + ankle
@@ -268,13 +285,16 @@ def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, 
             s_lo, s_hi = min(ps[i], ps[i + 1]), max(ps[i], ps[i + 1])
             z_lo = min(pz[i], pz[i + 1])
             in_zone = (s_hi <= p0s + zone) or (s_lo >= p3s - zone)
-            if in_zone:
-                ground = _raster_max(s_lo, s_hi, r_start, cell, scale, table)
-                straight = _raster_vertices(s_lo, s_hi, r_start, cell, scale,
-                                            vertex_cum) == 0
+            if in_zone:  # _raster_max and _raster_vertices of [s_lo, s_hi]
+                ia = _cell(s_lo, r_start, cell, scale, c)
+                ib = max(_cell(s_hi, r_start, cell, scale, c), ia)
+                ground = _cells_max(ia, ib, table)
+                straight = vertex_cum[ib + 1] - vertex_cum[ia] == 0
                 need = -(max_foot_slope * (s_hi - s_lo) if straight else 0.0)
             else:
-                ground = _raster_max(s_lo - heel, s_hi + toe, r_start, cell, scale, table)
+                ia = _cell(s_lo - heel, r_start, cell, scale, c)
+                ib = max(_cell(s_hi + toe, r_start, cell, scale, c), ia)
+                ground = _cells_max(ia, ib, table)
                 need = clearance
             deficit[i] = need - (z_lo - ankle - ground)
             if deficit[i] > 1e-9:
@@ -290,6 +310,7 @@ def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, 
             v = _round9(pz[i] - pz[0])
             if v > high:
                 summit, high = i, v
+        move_s0 = move_z0 = move_s1 = move_z1 = 0.0
         for side in range(2):
             worst, worst_r = 0, -np.inf
             for i in range(T - 1):
@@ -299,8 +320,6 @@ def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, 
                         worst, worst_r = i, r
             need = deficit[worst] if worst_r > -np.inf else -np.inf
             if not need > 1e-9:
-                moves[side, 0] = 0.0
-                moves[side, 1] = 0.0
                 continue
             us = 0.5 * (ps[worst] + ps[worst + 1]) - ms
             uz = 0.5 * (pz[worst] + pz[worst + 1]) + need - mz
@@ -309,20 +328,20 @@ def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, 
             us, uz = us / norm, uz / norm
             weight = influence[side, worst]
             dist = min(max(2.0 * need / max(weight * uz, 1e-3) + 0.002, 0.005), 0.3)
-            moves[side, 0] = dist * us
-            moves[side, 1] = dist * uz
+            if side == 0:
+                move_s0, move_z0 = dist * us, dist * uz
+            else:
+                move_s1, move_z1 = dist * us, dist * uz
         # a half without collision follows the other one upward by the same amount
-        if not moves[0, 1] > 0:
-            moves[0, 1] = moves[1, 1]
-        if not moves[1, 1] > 0:
-            moves[1, 1] = moves[0, 1]
-        inside = True
-        for k in range(2):
-            ctrl[1 + k, 0] = min(max(ctrl[1 + k, 0] + moves[k, 0], p0s), p3s)
-            ctrl[1 + k, 1] += moves[k, 1]
-            if ctrl[1 + k, 1] > top:
-                inside = False
-        if not inside:
+        if not move_z0 > 0:
+            move_z0 = move_z1
+        if not move_z1 > 0:
+            move_z1 = move_z0
+        ctrl[1, 0] = min(max(ctrl[1, 0] + move_s0, p0s), p3s)
+        ctrl[1, 1] += move_z0
+        ctrl[2, 0] = min(max(ctrl[2, 0] + move_s1, p0s), p3s)
+        ctrl[2, 1] += move_z1
+        if ctrl[1, 1] > top or ctrl[2, 1] > top:
             break
     high = -np.inf  # the final curve's highest sample
     for i in range(T):
