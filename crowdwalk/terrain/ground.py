@@ -290,13 +290,29 @@ class Terrain:
         block = np.flatnonzero(kind == TerrainKind.BLOCK)
         if block.size:
             reach = 2.0  # [m] either side: longer than any chord that counts
-            d = np.asarray(direction, float)[block]
-            lines = shapely.linestrings(np.stack([xy[block] - reach * d,
-                                                  xy[block] + reach * d], axis=1))
-            polys = np.array([self.features[k].footprint for k in own[block]], dtype=object)
-            chord = shapely.length(shapely.intersection(lines, polys))
-            obstacle[block] = chord <= np.asarray(stride, float)[block]
+            stride = np.asarray(stride, float)
+            # a foothold farther than half the stride from its block's outline stands on
+            # a chord longer than the stride (the line through it holds the part within
+            # that distance either side): not an obstacle, no chord cut (the margin
+            # covers the rounding of both lengths, ~1e-12 m)
+            outline = self._outlines[own[block]]
+            inside = shapely.distance(shapely.points(xy[block]), outline)
+            cut = block[2.0 * np.minimum(inside, reach) <= stride[block] + 1e-6]
+            if cut.size:
+                d = np.asarray(direction, float)[cut]
+                lines = shapely.linestrings(np.stack([xy[cut] - reach * d,
+                                                      xy[cut] + reach * d], axis=1))
+                polys = np.array([self.features[k].footprint for k in own[cut]],
+                                 dtype=object)
+                chord = shapely.length(shapely.intersection(lines, polys))
+                obstacle[cut] = chord <= stride[cut]
         return kind, obstacle
+
+    @functools.cached_property
+    def _outlines(self) -> np.ndarray:
+        """(features,) object: each block's footprint outline (None for the others)."""
+        return np.array([f.footprint.boundary if f.kind == TerrainKind.BLOCK else None
+                         for f in self.features], dtype=object)
 
     # -- profile --
 
