@@ -361,3 +361,61 @@ def test_mesh_y_up_and_unreadable(tmp_path):
         MeshFeature.load(bad)
     with pytest.raises(InputError, match=r"MeshFeature\.up must be 'y' or 'z'"):
         MeshFeature.load(path, up="x")
+
+
+def test_the_crossings_kernel_finds_what_the_numpy_pairs_find_bit_for_bit():
+    from crowdwalk.terrain.ground import _crossings, _EdgeIndex
+
+    rng = np.random.default_rng(4)
+    edges = rng.uniform(0, 10, (120, 2, 2))
+    edges[:10, 1] = edges[:10, 0]  # degenerate edges
+    edges[10:20, :, 0] = 5.0  # vertical edges
+    index = _EdgeIndex(edges)
+    a = rng.uniform(0, 10, (3000, 2))
+    b = a + rng.uniform(-1, 1, (3000, 2))
+    b[:50] = a[:50]  # points
+    a[50:60] = edges[20:30, 0]  # starting on an edge's end
+    seg, t = _crossings(a, b, index)
+
+    # the numpy pairs of the bounding-box test and the crossing test, as before the kernel
+    e0, e = edges[:, 0], edges[:, 1] - edges[:, 0]
+    near = ((np.maximum(a, b)[:, None] >= index.lo - 1e-9).all(-1)
+            & (np.minimum(a, b)[:, None] <= index.hi + 1e-9).all(-1))
+    i, j = np.nonzero(near)
+    d, r, ej = b[i] - a[i], e0[j] - a[i], e[j]
+    den = d[:, 0] * ej[:, 1] - d[:, 1] * ej[:, 0]
+    ok = np.abs(den) > 1e-15
+    den = np.where(ok, den, 1.0)
+    tt = (r[:, 0] * ej[:, 1] - r[:, 1] * ej[:, 0]) / den
+    u = (r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]) / den
+    ok &= (tt >= -1e-12) & (tt <= 1 + 1e-12) & (u >= -1e-12) & (u <= 1 + 1e-12)
+    assert ok.sum() > 100
+    np.testing.assert_array_equal(seg, i[ok])
+    assert np.array_equal(t.view(np.int64), np.clip(tt[ok], 0.0, 1.0).view(np.int64))
+
+
+def test_footing_tells_obstacles_as_cutting_every_chord_does():
+    ter = Terrain(EXTENT, 0.0, (
+        Block.box((4.0, 3.0), (3, 2), 1.12, heading=0.4),  # wider than a stride
+        Block.box((-4.0, -3.0), (0.4, 6), 0.2, heading=-0.3),  # a curb: short chords across
+        Block(shapely.Polygon([(-15, 5), (-5, 5), (-5, 15), (-15, 15)],
+                              [[(-11, 9), (-9, 9), (-9, 11), (-11, 11)]]), 0.3),  # a hole
+        Slope.ramp((10, -10), 0.3, 8, 3, 0.0, 0.6),
+    ))
+    rng = np.random.default_rng(2)
+    xy = np.concatenate([rng.uniform(-16, 16, (20000, 2)),
+                         rng.uniform([-5.5, -6.5], [-2.5, 0.5], (5000, 2))])  # the curb
+    a = rng.uniform(-np.pi, np.pi, xy.shape[0])
+    direction = np.column_stack([np.cos(a), np.sin(a)])
+    stride = rng.uniform(0.3, 1.5, xy.shape[0])
+    kind, obstacle = ter.footing(xy, direction, stride=stride)
+    # every block foothold's chord cut, as before the outline bound
+    own = ter.owner(xy)
+    block = np.flatnonzero(kind == TerrainKind.BLOCK)
+    lines = shapely.linestrings(np.stack([xy[block] - 2.0 * direction[block],
+                                          xy[block] + 2.0 * direction[block]], axis=1))
+    polys = np.array([ter.features[k].footprint for k in own[block]], dtype=object)
+    want = np.zeros(xy.shape[0], bool)
+    want[block] = shapely.length(shapely.intersection(lines, polys)) <= stride[block]
+    assert want.any() and (~want[block]).any()
+    np.testing.assert_array_equal(obstacle, want)

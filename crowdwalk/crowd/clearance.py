@@ -90,9 +90,40 @@ def _at_least(dist, least, ox, oy, cell, x, y, floor):
 def _step_walls(dist, least, ox, oy, cell, position, stance, ends, dirs, lengths, radius,
                 reach, foot_clearance, wall_ok, near):
     m, n_c, n_l = wall_ok.shape
+    ny, nx = dist.shape
     for a in range(m):
         px, py = position[a, 0], position[a, 1]
         r = min(radius[a], _bilinear(dist, ox, oy, cell, px, py) - 1e-6)
+        # every point a candidate samples (ends, midpoints, quarters, footholds) lies in
+        # the box of the ends, the position and the footholds: where each block under
+        # that box is at least the largest floor, every sample is +inf (not sampled), so
+        # every candidate is clear, as the tests below would find it
+        x0 = x1 = px
+        y0 = y1 = py
+        top = max(max(r, reach[a]), foot_clearance)
+        for c in range(n_c):
+            for l in range(n_l):
+                ex, ey = ends[a, c, l, 0], ends[a, c, l, 1]
+                fx = stance[a, 0] + lengths[l] * dirs[a, c, 0]
+                fy = stance[a, 1] + lengths[l] * dirs[a, c, 1]
+                x0, x1 = min(x0, min(ex, fx)), max(x1, max(ex, fx))
+                y0, y1 = min(y0, min(ey, fy)), max(y1, max(ey, fy))
+                dx, dy = ex - px, ey - py
+                top = max(top, r + 0.25 * np.sqrt(dx * dx + dy * dy))
+        r0, r1, c0, c1 = (y0 - oy) / cell, (y1 - oy) / cell, (x0 - ox) / cell, (x1 - ox) / cell
+        clear = r0 >= 0.0 and r1 < ny - 1 and c0 >= 0.0 and c1 < nx - 1
+        if clear:
+            for bi in range(int(r0) // BLOCK, int(r1) // BLOCK + 1):
+                for bj in range(int(c0) // BLOCK, int(c1) // BLOCK + 1):
+                    if not least[bi, bj] >= top:
+                        clear = False
+                        break
+                if not clear:
+                    break
+        if clear:
+            wall_ok[a] = True
+            near[a] = np.inf
+            continue
         for c in range(n_c):
             blocked = False
             for l in range(n_l):

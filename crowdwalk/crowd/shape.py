@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-__all__ = ["BodyShape", "body_gaps", "disc_centres", "shape_overlap"]
+__all__ = ["BodyShape", "body_gaps", "clear_runs", "disc_centres", "shape_overlap"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -263,6 +263,135 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
                 stop[c] = l
 
 
+@nb.njit(cache=True, nogil=True)
+def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
+                b_yaw_now, b_end, b_yaw_end, b_remaining, b_shape, runs, ok, centre_ok):
+    """:func:`_gaps` with runs, keeping the signs only: each A's rows of ``ok`` and
+    ``centre_ok`` (m, J) become "shorter than the run's first blocked length" (the
+    reduction over A's neighbours of ``_gaps``' negative entries). A clear entry's
+    disc pairs are skipped where a disc of one body keeps clear of the other's holding
+    disc about its centre (every disc of a body, widened for its turn, lies within its
+    shoulder offset of the centre's track): the same signs, fewer disc pairs."""
+    npairs, nj = pa.shape[0], ok.shape[1]
+    bx = np.empty(3)
+    by = np.empty(3)
+    bvx = np.empty(3)
+    bvy = np.empty(3)
+    n_runs = nj // runs
+    stop = np.empty(n_runs, np.int64)
+    stop_c = np.empty(n_runs, np.int64)
+    width = np.empty(n_runs)
+    far = 0.0
+    for p in range(npairs):
+        i = pa[p]
+        if p == 0 or i != pa[p - 1]:
+            for c in range(n_runs):
+                stop[c] = stop_c[c] = runs
+                sx, sy = a_start[i, 0], a_start[i, 1]
+                lx, ly = a_end[i, c * runs + runs - 1, 0], a_end[i, c * runs + runs - 1, 1]
+                width[c] = 0.0
+                for l in range(runs):
+                    e = _closest(sx - a_end[i, c * runs + l, 0], sy - a_end[i, c * runs + l, 1],
+                                 lx - sx, ly - sy, 1.0)
+                    width[c] = max(width[c], e)
+                for l in range(runs):
+                    if not ok[i, c * runs + l]:
+                        stop[c] = l
+                        break
+                for l in range(runs):
+                    if not centre_ok[i, c * runs + l]:
+                        stop_c[c] = l
+                        break
+        ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
+        rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
+        bound = max(ra, sa + ras) + max(rb, sb + rbs)
+        tb = b_remaining[p]
+        if tb <= 1e-9:
+            tb = 0.0
+        yb0, yb1 = b_yaw_now[p], b_yaw_end[p]
+        c0, s0, c1, s1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
+        bend_b = sb * (1.0 - np.cos(0.5 * (yb1 - yb0))) + 1e-12
+        hold_b = max(rb, sb + rbs + bend_b)  # B's discs lie within this of its centre
+        for v in range(3):
+            k = _SIDE[v]
+            bx[v] = b_now[p, 0] - k * sb * s0
+            by[v] = b_now[p, 1] + k * sb * c0
+            bvx[v] = bvy[v] = 0.0
+            if tb > 0.0:
+                bvx[v] = (b_end[p, 0] - k * sb * s1 - bx[v]) / tb
+                bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
+        sx, sy = a_start[i, 0], a_start[i, 1]
+        for j in range(nj):
+            c = j // runs
+            l = j - c * runs
+            if l >= stop_c[c]:
+                continue
+            if l == 0:
+                far = _segment_distance(
+                    a_start[i, 0], a_start[i, 1], a_end[i, j + runs - 1, 0],
+                    a_end[i, j + runs - 1, 1], b_now[p, 0], b_now[p, 1], b_end[p, 0],
+                    b_end[p, 1]) - width[c]
+            if far - bound >= FAR_MARGIN:
+                continue
+            dur = a_dur[i, j]
+            gone = min(a_elapsed[i], dur)
+            ta = dur - gone
+            f = gone / dur if dur > 0.0 else 1.0
+            ex, ey = a_end[i, j, 0], a_end[i, j, 1]
+            ax0, ay0 = sx + f * (ex - sx), sy + f * (ey - sy)
+            avx = avy = 0.0
+            if ta > 1e-9:
+                avx, avy = (ex - ax0) / ta, (ey - ay0) / ta
+            else:
+                ta = 0.0
+            d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
+            if d - ra - rb < 0.0:
+                stop_c[c] = l
+            if l >= stop[c]:
+                continue
+            if d >= bound:
+                continue
+            best = d - ra - rb
+            if best < 0.0:
+                stop[c] = l
+                continue
+            if sa == 0.0 and sb == 0.0:
+                continue
+            ya0 = a_yaw0[i] + f * (a_yaw1[i, j] - a_yaw0[i])
+            ya1 = a_yaw1[i, j]
+            bend_a = sa * (1.0 - np.cos(0.5 * (ya1 - ya0))) + 1e-12
+            cs0, sn0, cs1, sn1 = np.cos(ya0), np.sin(ya0), np.cos(ya1), np.sin(ya1)
+            for u in range(3):
+                ku = _SIDE[u]
+                rad_a = ra if u == 0 else ras + bend_a
+                cx0, cy0 = ax0 - ku * sa * sn0, ay0 + ku * sa * cs0
+                cvx = cvy = 0.0
+                if ta > 0.0:
+                    cvx = (ex - ku * sa * sn1 - cx0) / ta
+                    cvy = (ey + ku * sa * cs1 - cy0) / ta
+                # disc u against B's holding disc: clear of all of B's discs
+                e = d if u == 0 else _approach(cx0, cy0, cvx, cvy, ta, bx[0], by[0],
+                                               bvx[0], bvy[0], tb)
+                if e - rad_a - hold_b >= FAR_MARGIN:
+                    continue
+                for v in range(3):
+                    if u == 0 and v == 0:
+                        continue
+                    rad_b = rb if v == 0 else rbs + bend_b
+                    g = _approach(cx0, cy0, cvx, cvy, ta, bx[v], by[v], bvx[v], bvy[v],
+                                  tb) - rad_a - rad_b
+                    best = min(best, g)
+                if best < 0.0:
+                    break
+            if best < 0.0:
+                stop[c] = l
+        if p == npairs - 1 or pa[p + 1] != i:  # A's last neighbour: its rows
+            for c in range(n_runs):
+                for l in range(runs):
+                    ok[i, c * runs + l] = l < stop[c]
+                    centre_ok[i, c * runs + l] = l < stop_c[c]
+
+
 def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end: np.ndarray,
               a_yaw1: np.ndarray, a_duration: np.ndarray, a_elapsed: np.ndarray,
               a_shape: np.ndarray, b_now: np.ndarray, b_yaw_now: np.ndarray,
@@ -321,6 +450,32 @@ def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end:
           f(b_now, float), f(b_yaw_now, float), f(b_end, float), f(b_yaw_end, float),
           f(b_remaining, float), f(b_shape, float), int(runs), a_ok, a_centre_ok, out, centre)
     return out, centre
+
+
+def clear_runs(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end: np.ndarray,
+               a_yaw1: np.ndarray, a_duration: np.ndarray, a_elapsed: np.ndarray,
+               a_shape: np.ndarray, b_now: np.ndarray, b_yaw_now: np.ndarray,
+               b_end: np.ndarray, b_yaw_end: np.ndarray, b_remaining: np.ndarray,
+               b_shape: np.ndarray, runs: int, ok: np.ndarray,
+               centre_ok: np.ndarray) -> None:
+    """:func:`body_gaps` with ``runs``, reduced over each A's neighbours to what its
+    caller keeps: in place, the rows of ``ok`` / ``centre_ok`` (m, J) bool (A's
+    candidates not blocked by the walls, for the outline / the centre discs) of every A
+    in ``pa`` become False from the first length of each run blocked by the walls or a
+    neighbour, as ``ok & ~(gaps < 0).any()`` over its neighbours would (same signs; the
+    clearances themselves are not computed). ``ok`` must imply ``centre_ok``."""
+    if a_end.shape[1] % runs:
+        raise ValueError(f"clear_runs: runs {runs} does not divide {a_end.shape[1]} candidates")
+    if not (ok.dtype == np.bool_ and centre_ok.dtype == np.bool_ and ok.flags.c_contiguous
+            and centre_ok.flags.c_contiguous):
+        raise ValueError("clear_runs: ok and centre_ok must be C-contiguous bool arrays")
+    ok &= centre_ok
+    f = np.ascontiguousarray
+    _clear_runs(f(pa, dtype=np.int64), f(a_start, float), f(a_yaw0, float), f(a_end, float),
+                f(a_yaw1, float), f(a_duration, float), f(a_elapsed, float),
+                f(a_shape, float), f(b_now, float), f(b_yaw_now, float), f(b_end, float),
+                f(b_yaw_end, float), f(b_remaining, float), f(b_shape, float), int(runs),
+                ok, centre_ok)
 
 
 def shape_overlap(xy_a: np.ndarray, yaw_a: np.ndarray, shape_a: np.ndarray,

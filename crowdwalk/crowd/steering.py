@@ -38,7 +38,7 @@ import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
 from crowdwalk.crowd.geometry import distance, point_segment_distance, segment_distance
-from crowdwalk.crowd.shape import body_gaps, disc_centres
+from crowdwalk.crowd.shape import clear_runs, disc_centres
 from crowdwalk.crowd.speed import GapSteps
 from crowdwalk.errors import invalid
 
@@ -380,16 +380,18 @@ def choose_steps(
             a_centre_ok = a_ok.copy()
             a_ok[rows] = ok.reshape(rows.size, -1)
             a_centre_ok[rows] = centre.reshape(rows.size, -1)
-            gaps, centre_gaps = body_gaps(
+            # only the signs are kept, reduced over each walker's neighbours in the
+            # kernel (clear_runs: the signs of body_gaps; identical runs)
+            clear_runs(
                 qa, a_start=position, a_yaw0=yaw, a_end=ends.reshape(m, n_c * n_l, 2),
                 a_yaw1=np.repeat(yaw_end, n_l, axis=1), a_duration=np.tile(dur, (1, n_c)),
                 a_elapsed=np.zeros(m) if lag is None else lag, a_shape=shape,
                 b_now=neighbours.now[qa, qk], b_yaw_now=nb_yaw[qa, qk],
                 b_end=neighbours.end[qa, qk], b_yaw_end=nb_yaw_end[qa, qk],
                 b_remaining=neighbours.remaining[qa, qk], b_shape=nb_shape[qa, qk],
-                runs=n_l, a_ok=a_ok, a_centre_ok=a_centre_ok)
-            blocked = gaps.reshape(-1, n_c, n_l) < 0.0
-            centre_blocked = centre_gaps.reshape(-1, n_c, n_l) < 0.0
+                runs=n_l, ok=a_ok, centre_ok=a_centre_ok)
+            return (a_ok[rows].reshape(rows.size, n_c, n_l),
+                    a_centre_ok[rows].reshape(rows.size, n_c, n_l))
         else:
             q0 = neighbours.now[qa, qk][:, None, None, :]  # (P, 1, 1, 2)
             q1 = neighbours.end[qa, qk][:, None, None, :]

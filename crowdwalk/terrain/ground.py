@@ -6,6 +6,7 @@ import functools
 import math
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 import shapely
 import trimesh
@@ -46,9 +47,54 @@ class _EdgeIndex:
             yield i + c0, j
 
 
+@nb.njit(cache=True, nogil=True)
+def _crossings_boxed(a, b, edges, lo, hi):
+    """:func:`_crossings` without an STRtree: every (segment, edge) pair in row-major
+    order whose bounding boxes overlap, tested as the numpy code does (element for
+    element the same operations)."""
+    m, ne = a.shape[0], edges.shape[0]
+    cap = max(16, 2 * m)
+    seg = np.empty(cap, np.int64)
+    ts = np.empty(cap)
+    h = 0
+    tol = 1e-12
+    for i in range(m):
+        ax, ay, bx, by = a[i, 0], a[i, 1], b[i, 0], b[i, 1]
+        x0, x1, y0, y1 = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
+        dx, dy = bx - ax, by - ay
+        for j in range(ne):
+            if not (x1 >= lo[j, 0] - 1e-9 and y1 >= lo[j, 1] - 1e-9
+                    and x0 <= hi[j, 0] + 1e-9 and y0 <= hi[j, 1] + 1e-9):
+                continue
+            rx, ry = edges[j, 0, 0] - ax, edges[j, 0, 1] - ay
+            ex, ey = edges[j, 1, 0] - edges[j, 0, 0], edges[j, 1, 1] - edges[j, 0, 1]
+            den = dx * ey - dy * ex
+            ok = np.abs(den) > 1e-15
+            if not ok:
+                den = 1.0
+            t = (rx * ey - ry * ex) / den
+            u = (rx * dy - ry * dx) / den
+            if ok and t >= -tol and t <= 1 + tol and u >= -tol and u <= 1 + tol:
+                if h == cap:
+                    cap *= 2
+                    seg2 = np.empty(cap, np.int64)
+                    ts2 = np.empty(cap)
+                    seg2[:h] = seg[:h]
+                    ts2[:h] = ts[:h]
+                    seg, ts = seg2, ts2
+                seg[h] = i
+                ts[h] = min(max(t, 0.0), 1.0)
+                h += 1
+    return seg[:h].copy(), ts[:h].copy()
+
+
 def _crossings(a: np.ndarray, b: np.ndarray, index: _EdgeIndex):
     """Where segments a→b (m, 2) [m] cross the indexed edges: (segment index (h,),
     parameter t ∈ [0, 1] along it (h,))."""
+    if index.tree is None:
+        f = np.ascontiguousarray
+        return _crossings_boxed(f(a, float), f(b, float), f(index.edges, float),
+                                f(index.lo, float), f(index.hi, float))
     seg_idx, ts = [], []
     edges = index.edges
     e0, e = edges[:, 0], edges[:, 1] - edges[:, 0]
@@ -244,13 +290,29 @@ class Terrain:
         block = np.flatnonzero(kind == TerrainKind.BLOCK)
         if block.size:
             reach = 2.0  # [m] either side: longer than any chord that counts
-            d = np.asarray(direction, float)[block]
-            lines = shapely.linestrings(np.stack([xy[block] - reach * d,
-                                                  xy[block] + reach * d], axis=1))
-            polys = np.array([self.features[k].footprint for k in own[block]], dtype=object)
-            chord = shapely.length(shapely.intersection(lines, polys))
-            obstacle[block] = chord <= np.asarray(stride, float)[block]
+            stride = np.asarray(stride, float)
+            # a foothold farther than half the stride from its block's outline stands on
+            # a chord longer than the stride (the line through it holds the part within
+            # that distance either side): not an obstacle, no chord cut (the margin
+            # covers the rounding of both lengths, ~1e-12 m)
+            outline = self._outlines[own[block]]
+            inside = shapely.distance(shapely.points(xy[block]), outline)
+            cut = block[2.0 * np.minimum(inside, reach) <= stride[block] + 1e-6]
+            if cut.size:
+                d = np.asarray(direction, float)[cut]
+                lines = shapely.linestrings(np.stack([xy[cut] - reach * d,
+                                                      xy[cut] + reach * d], axis=1))
+                polys = np.array([self.features[k].footprint for k in own[cut]],
+                                 dtype=object)
+                chord = shapely.length(shapely.intersection(lines, polys))
+                obstacle[cut] = chord <= stride[cut]
         return kind, obstacle
+
+    @functools.cached_property
+    def _outlines(self) -> np.ndarray:
+        """(features,) object: each block's footprint outline (None for the others)."""
+        return np.array([f.footprint.boundary if f.kind == TerrainKind.BLOCK else None
+                         for f in self.features], dtype=object)
 
     # -- profile --
 

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from crowdwalk.crowd.params import CrowdParams
-from crowdwalk.crowd.shape import BodyShape, body_gaps, disc_centres, shape_overlap
+from crowdwalk.crowd.shape import BodyShape, body_gaps, clear_runs, disc_centres, shape_overlap
 from crowdwalk.crowd.steering import SteeringParams
 from crowdwalk.sinks import OverlapMonitor, RunInfo, Snapshot
 from crowdwalk.verify import _run
@@ -170,3 +170,42 @@ def test_gaps_stopped_at_a_runs_first_blocked_length_or_bounded_give_the_same_fr
     bounded = kept & (cut != full)
     assert bounded.any() and (cut[bounded] >= 0.0).all() and (cut <= full).all()
     assert (cut_centre <= full_centre).all() and (cut_centre[bounded] >= 0.0).all()
+
+
+def test_clear_runs_keeps_exactly_the_signs_of_the_gaps_reduced_over_the_neighbours():
+    rng = np.random.default_rng(11)
+    m, k, n_c, n_l = 60, 5, 5, 6
+    shape = BodyShape.from_axes(rng.uniform(0.15, 0.2, m), rng.uniform(0.2, 0.26, m)).packed()
+    start = rng.uniform(0, 3, (m, 2))
+    ends = start[:, None, None, :] + (np.linspace(0.15, 0.9, n_l)[None, None, :, None]
+                                      * rng.normal(size=(m, n_c, 1, 2)))
+    ends = ends.reshape(m, n_c * n_l, 2)
+    yaw0 = rng.uniform(-3, 3, m)
+    pa = np.repeat(np.arange(0, m, 2), k)  # every other agent has neighbours
+    b_now = start[pa] + rng.uniform(-0.9, 0.9, (pa.size, 2))
+    kw = dict(a_start=start, a_yaw0=yaw0, a_end=ends,
+              a_yaw1=yaw0[:, None] + rng.uniform(-1, 1, (m, n_c * n_l)),
+              a_duration=rng.uniform(0.3, 0.7, (m, n_c * n_l)),
+              a_elapsed=rng.uniform(0, 0.2, m), a_shape=shape, b_now=b_now,
+              b_yaw_now=rng.uniform(-3, 3, pa.size),
+              b_end=b_now + rng.uniform(-0.4, 0.4, (pa.size, 2)),
+              b_yaw_end=rng.uniform(-3, 3, pa.size),
+              b_remaining=np.where(rng.random(pa.size) < 0.3, 0.0, rng.uniform(0, 0.5, pa.size)),
+              b_shape=shape[rng.integers(0, m, pa.size)])
+    wall_ok = rng.random((m, n_c * n_l)) > 0.1
+    ok = wall_ok & (rng.random((m, n_c * n_l)) > 0.1)
+    gaps, centre_gaps = body_gaps(pa, **kw, runs=n_l, a_ok=ok, a_centre_ok=wall_ok)
+
+    def reduced(g, own):
+        blocked = np.zeros((m, n_c * n_l), bool)
+        np.logical_or.at(blocked, pa, g < 0.0)
+        return own & ~blocked
+
+    got_ok, got_centre = ok.copy(), wall_ok.copy()
+    clear_runs(pa, **kw, runs=n_l, ok=got_ok, centre_ok=got_centre)
+    want_ok, want_centre = reduced(gaps, ok), reduced(centre_gaps, wall_ok)
+    np.testing.assert_array_equal(got_ok[pa], want_ok[pa])
+    np.testing.assert_array_equal(got_centre[pa], want_centre[pa])
+    alone = np.setdiff1d(np.arange(m), pa)
+    np.testing.assert_array_equal(got_ok[alone], ok[alone])  # no neighbours: untouched
+    assert want_ok[pa].any() and (~want_ok[pa] & wall_ok[pa]).any()  # both kinds occur
