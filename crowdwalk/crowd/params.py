@@ -106,6 +106,10 @@ class CrowdParams:
         bodies' reach, Tordeux et al.'s criterion). Validated on Weidmann (1993) and
         SFPE; 1.0 (the own lateral extent only, so that zipper lanes close up) ran
         0.77 m/s at 2 /m² against Weidmann's 0.62.
+    headway_free_margin : float, optional
+        With ``"headway"``: walkers inside an opening zone (corridors at most
+        ``opening_width`` wide, minus the rooms, grown by this margin [m]) follow
+        nobody (free speed; the hard swept-body test keeps them apart). None: off.
     headway_steer : bool
         With ``"headway"``: steering scores each candidate direction at the step the
         model allows along it, as ``"contact_gap"`` does.
@@ -161,6 +165,7 @@ class CrowdParams:
     headway_time: float = 1.06
     headway_lane: float = 2.0
     headway_steer: bool = False
+    headway_free_margin: float | None = None
     lane_keep: bool = False
     opening_ease: bool = False
     opening_width: float = 1.25
