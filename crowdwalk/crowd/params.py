@@ -110,6 +110,10 @@ class CrowdParams:
         With ``"headway"``: walkers inside an opening zone (corridors at most
         ``opening_width`` wide, minus the rooms, grown by this margin [m]) follow
         nobody (free speed; the hard swept-body test keeps them apart). None: off.
+        Opt-in, measured (docs/architecture.md, "Headway free zone at openings"): 1.0
+        (not calibrated: chosen among 0–2 m on seed 4) raises the headway model's door
+        flows to 1.22 / 1.49 / 1.66 / 1.94 / 1.95 /s at 0.8–1.2 m (full, seeds 4–6;
+        alone 0.76 / 0.93 / 1.34 at 0.8 / 1.0 / 1.2, fast); counterflow still fails.
     headway_steer : bool
         With ``"headway"``: steering scores each candidate direction at the step the
         model allows along it, as ``"contact_gap"`` does.
