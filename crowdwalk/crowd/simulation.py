@@ -154,6 +154,12 @@ class CrowdSimulation:
 
             self.openings = Openings(world.routes, params.opening_width,
                                      params.opening_margin)
+        self.free_zone = None  # headway_free_margin: where the headway model is off
+        if params.speed_model == "headway" and params.headway_free_margin is not None:
+            from crowdwalk.crowd.openings import Openings
+
+            self.free_zone = Openings(world.routes, params.opening_width,
+                                      params.headway_free_margin)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -300,6 +306,8 @@ class CrowdSimulation:
             # the others are avoided by steering, not followed
             if nbs.heading is not None:
                 followed = nbs.valid & (np.cos(nbs.heading - h[:, None]) > 0.0)
+            if self.free_zone is not None:  # in and near openings: walk into free space
+                followed &= ~self.free_zone.inside(pos)[:, None]
             lane = prm.headway_lane * self.shape.bound[idx]
             return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                             free, leg, prm.headway_time, lane=lane)
