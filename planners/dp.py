@@ -81,10 +81,8 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     states = np.zeros(B, dtype=np.int64)
     transitions = np.zeros(B, dtype=np.int64)
     _cheapest(tables.step_legal, tables.swing_ok, step_cost, agents.astype(np.int64), J,
-              np.asarray(st.step_offset, dtype=np.int64),
-              np.asarray(st.swing_offset, dtype=np.int64),
-              np.asarray(st.swing_strides, dtype=np.int64), configs, found, states,
-              transitions)
+              st._step_offsets, st._swing_offsets, st._swing_strides, configs, found,
+              states, transitions)
     return configs, found, DPWork(states, transitions)
 
 

@@ -8,6 +8,8 @@ search as written; this is the improvement, measured in ``benchmarks/bench_plann
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numba as nb
 import numpy as np
 
@@ -51,7 +53,10 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
     centres = tables.neutral[agents] if centres is None else centres
     A = agents.size
     configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
-    legal, _ = tables.evaluate(agents, configs)
+    legal = np.empty(A, dtype=np.bool_)
+    _legal_each(tables.step_legal, tables.swing_ok, st.J, st._step_offsets,
+                st._swing_offsets, st._swing_strides, np.asarray(agents, dtype=np.int64),
+                configs, legal)
     found = legal.copy()
     checks = np.ones(A, dtype=np.int64)
     blocked = np.flatnonzero(~legal)
@@ -67,6 +72,29 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
     else:
         expanded = np.zeros(A, dtype=np.int64)
     return SearchResult(configs, found, expanded, checks)
+
+
+@nb.njit(cache=True, nogil=True)
+def _legal_each(step_legal, swing_ok, J, step_off, swing_off, strides, agents, configs,
+                legal):
+    """Whether each configuration ``configs[b]`` (B, n) is legal for table row
+    ``agents[b]`` (compiled, as :meth:`~planners.lattice.StepTables.evaluate`)."""
+    B, n = configs.shape
+    for b in range(B):
+        a = agents[b]
+        m_prev, m_prev2, j_prev = 0, 0, 0
+        ok = True
+        for k in range(n):
+            j = configs[b, k]
+            step = step_off[k] + m_prev * J + j
+            swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
+            if not (step_legal[a, step] and swing_ok[a, swing]):
+                ok = False
+            if k > 0:
+                m_prev2 += j_prev
+            m_prev += j
+            j_prev = j
+        legal[b] = ok
 
 
 def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
@@ -85,11 +113,18 @@ def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
     _climb(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
-           np.ascontiguousarray(tables.progress), st.J,
-           np.asarray(st.step_offset, dtype=np.int64), np.asarray(st.swing_offset, dtype=np.int64),
-           np.asarray(st.swing_strides, dtype=np.int64), neighbour_deltas(st.n),
+           np.ascontiguousarray(tables.progress), st.J, st._step_offsets,
+           st._swing_offsets, st._swing_strides, _deltas(st.n),
            np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
     return configs, current, expanded, checks
+
+
+@lru_cache(maxsize=8)
+def _deltas(n: int) -> np.ndarray:
+    """:func:`~planners.search.neighbour_deltas` ``(n)``, built once (read-only)."""
+    deltas = neighbour_deltas(n)
+    deltas.flags.writeable = False
+    return deltas
 
 
 @nb.njit(cache=True, nogil=True)
@@ -134,19 +169,40 @@ def greedy(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, st.n, st.J
     configs = np.zeros((A, n), dtype=np.int64)
     found = np.ones(A, dtype=bool)
-    rows = np.arange(A)[:, None]
-    for k in range(n):
-        trial = np.repeat(configs[:, None, :], J, axis=1)
-        trial[:, :, k] = np.arange(J)
-        steps, swings = st.indices(trial)
-        s, w = steps[:, :, k], swings[:, :, k]
-        score = np.where(tables.step_legal[rows, s] & tables.swing_ok[rows, w],
-                         tables.length[rows, s] / tables.E[rows, s], -np.inf)
-        best = np.argmax(score, axis=1)
-        found &= np.isfinite(score[rows[:, 0], best])
-        configs[:, k] = best
+    _greedy(tables.step_legal, tables.swing_ok, tables.length, tables.E, J,
+            st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
     checks = np.full(A, n * J, dtype=np.int64)
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
+
+
+@nb.njit(cache=True, nogil=True)
+def _greedy(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, configs,
+            found):
+    """The steps of :func:`greedy` (A agents), compiled: at step k the first j of highest
+    ``length / E`` among the legal steps (of the swing from f_{k-2}), as ``np.argmax``
+    (a NaN score wins; where none is legal, j = 0 and not found)."""
+    A, n = configs.shape
+    for a in range(A):
+        m_prev, m_prev2, j_prev = 0, 0, 0
+        for k in range(n):
+            best, best_j, nan = -np.inf, 0, False
+            for j in range(J):
+                step = step_off[k] + m_prev * J + j
+                swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
+                score = (length[a, step] / E[a, step]
+                         if step_legal[a, step] and swing_ok[a, swing] else -np.inf)
+                if np.isnan(score):
+                    best_j, nan = j, True
+                    break
+                if score > best:
+                    best, best_j = score, j
+            if nan or not np.isfinite(best):
+                found[a] = False
+            configs[a, k] = best_j
+            if k > 0:
+                m_prev2 += j_prev
+            m_prev += best_j
+            j_prev = best_j
 
 
 def budget(tables: StepTables) -> SearchResult:
@@ -190,7 +246,7 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     if starts >= 3:
         seeds.append(greedy(tables))
     configs, eff, found, expanded, checks, spread_out = _climb_all(tables, seeds)
-    extra = np.linspace(0, J - 1, max(starts - 3, 0) + 2)[1:-1].round().astype(np.int64)
+    extra = _extra_starts(starts, J)
     # Where the first starts disagree the terrain is hard: climb from the extra starts too.
     hard = np.flatnonzero(spread_out & found) if extra.size else np.zeros(0, dtype=int)
     if hard.size:
@@ -212,6 +268,15 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     return SearchResult(configs, found, expanded, checks)
 
 
+@lru_cache(maxsize=64)
+def _extra_starts(starts: int, J: int) -> np.ndarray:
+    """The constant-step starts beyond the first three: ``starts - 3`` step-length indices
+    spread over the grid (read-only)."""
+    extra = np.linspace(0, J - 1, max(starts - 3, 0) + 2)[1:-1].round().astype(np.int64)
+    extra.flags.writeable = False
+    return extra
+
+
 def _climb_all(tables: StepTables, seeds: list[SearchResult]):
     """Hill-climb every found seed; keep each agent's best.
 
@@ -231,15 +296,27 @@ def _climb_all(tables: StepTables, seeds: list[SearchResult]):
     differ = np.zeros(A, dtype=bool)
     if rows.size:
         local, eff, exp, chk = hill_climb(tables, rows, start_configs)
-        np.add.at(expanded, rows, exp)
-        np.add.at(checks, rows, chk)
-        order = np.lexsort((-eff, rows))  # per agent, best first
-        first = np.ones(order.size, dtype=bool)
-        first[1:] = rows[order][1:] != rows[order][:-1]
-        winners = rows[order][first]
-        configs[winners] = local[order][first]
-        best_eff[winners] = eff[order][first]
         worst = np.full(A, np.inf)
-        np.minimum.at(worst, rows, eff)
+        _keep_best(rows, local, eff, exp, chk, configs, best_eff, worst, expanded, checks)
         differ = worst < best_eff * (1 - AGREE)
     return configs, best_eff, found, expanded, checks, differ
+
+
+@nb.njit(cache=True, nogil=True)
+def _keep_best(rows, local, eff, exp, chk, configs, best_eff, worst, expanded, checks):
+    """Per agent ``rows[i]``: the local optimum ``local[i]`` of highest ``eff[i]`` (the
+    first among equals; a NaN only where all are NaN) into ``configs`` and ``best_eff``
+    (-inf where none), the least ``eff`` (NaN if any) into ``worst``; ``exp`` and ``chk``
+    added to ``expanded`` and ``checks``."""
+    seen = np.zeros(best_eff.size, dtype=np.bool_)
+    for i in range(rows.size):
+        a, e = rows[i], eff[i]
+        expanded[a] += exp[i]
+        checks[a] += chk[i]
+        if not np.isnan(worst[a]) and (np.isnan(e) or e < worst[a]):
+            worst[a] = e
+        b = best_eff[a]
+        if not seen[a] or (np.isnan(b) and not np.isnan(e)) or e > b:
+            seen[a] = True
+            best_eff[a] = e
+            configs[a] = local[i]
