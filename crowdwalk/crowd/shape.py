@@ -133,6 +133,72 @@ _SIDE = (0.0, 1.0, -1.0)
 
 
 @nb.njit(cache=True, nogil=True)
+def _run_limits(i, a_start, a_end, ok, centre_ok, runs, stop, stop_c, width):
+    """Per run of A's (row ``i``) candidates: the first length blocked for the outline
+    (``stop``) and for the centre discs (``stop_c``) by A's own masks, and the half width
+    of a capsule about the segment from A's start to the run's last end that holds every
+    sweep of the run (``width`` [m]: the greatest distance of an end from that segment;
+    the distance is convex, the sweeps lie in the ends' hull)."""
+    for c in range(stop.shape[0]):
+        stop[c] = stop_c[c] = runs
+        sx, sy = a_start[i, 0], a_start[i, 1]
+        lx, ly = a_end[i, c * runs + runs - 1, 0], a_end[i, c * runs + runs - 1, 1]
+        width[c] = 0.0
+        for l in range(runs):
+            e = _closest(sx - a_end[i, c * runs + l, 0], sy - a_end[i, c * runs + l, 1],
+                         lx - sx, ly - sy, 1.0)
+            width[c] = max(width[c], e)
+        for l in range(runs):
+            if not ok[i, c * runs + l]:
+                stop[c] = l
+                break
+        for l in range(runs):
+            if not centre_ok[i, c * runs + l]:
+                stop_c[c] = l
+                break
+
+
+@nb.njit(cache=True, nogil=True)
+def _discs_of_b(p, b_now, b_yaw_now, b_end, b_yaw_end, b_remaining, sb, bx, by, bvx, bvy):
+    """Fill B's (row ``p``) three disc centres now and their velocities (3,) [m, m/s];
+    return its remaining step time [s] (0 when done) and its turn's sagitta widening [m]."""
+    tb = b_remaining[p]
+    if tb <= 1e-9:
+        tb = 0.0
+    yb0, yb1 = b_yaw_now[p], b_yaw_end[p]
+    c0, s0, c1, s1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
+    bend_b = sb * (1.0 - np.cos(0.5 * (yb1 - yb0))) + 1e-12
+    for v in range(3):
+        k = _SIDE[v]
+        bx[v] = b_now[p, 0] - k * sb * s0
+        by[v] = b_now[p, 1] + k * sb * c0
+        bvx[v] = bvy[v] = 0.0
+        if tb > 0.0:
+            bvx[v] = (b_end[p, 0] - k * sb * s1 - bx[v]) / tb
+            bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
+    return tb, bend_b
+
+
+@nb.njit(cache=True, nogil=True)
+def _centre_motion(i, j, a_start, a_end, a_dur, a_elapsed):
+    """A's (row ``i``) centre on candidate ``j``: remaining time ``ta`` [s], the share
+    ``f`` of the step gone, the end, the position now and the velocity [m, m/s]."""
+    sx, sy = a_start[i, 0], a_start[i, 1]
+    dur = a_dur[i, j]
+    gone = min(a_elapsed[i], dur)
+    ta = dur - gone
+    f = gone / dur if dur > 0.0 else 1.0
+    ex, ey = a_end[i, j, 0], a_end[i, j, 1]
+    ax0, ay0 = sx + f * (ex - sx), sy + f * (ey - sy)
+    avx = avy = 0.0
+    if ta > 1e-9:
+        avx, avy = (ex - ax0) / ta, (ey - ay0) / ta
+    else:
+        ta = 0.0
+    return ta, f, ex, ey, ax0, ay0, avx, avy
+
+
+@nb.njit(cache=True, nogil=True)
 def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, b_yaw_now,
           b_end, b_yaw_end, b_remaining, b_shape, runs, a_ok, a_centre_ok, out, out_centre):
     npairs, nj = out.shape
@@ -145,50 +211,19 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
     n_runs = nj // runs if runs > 0 else 0
     stop = np.empty(n_runs, np.int64)
     stop_c = np.empty(n_runs, np.int64)
-    # and per run the half width of a capsule about the segment from A's start to the
-    # run's last end that holds every sweep of the run (the greatest distance of an end
-    # from that segment: the distance is convex, the sweeps lie in the ends' hull)
+    # and per run the half width of a capsule holding the run's sweeps (_run_limits)
     width = np.empty(n_runs)
     far = 0.0
     for p in range(npairs):
         i = pa[p]
         if runs > 0 and (p == 0 or i != pa[p - 1]):
-            for c in range(n_runs):
-                stop[c] = stop_c[c] = runs
-                sx, sy = a_start[i, 0], a_start[i, 1]
-                lx, ly = a_end[i, c * runs + runs - 1, 0], a_end[i, c * runs + runs - 1, 1]
-                width[c] = 0.0
-                for l in range(runs):
-                    e = _closest(sx - a_end[i, c * runs + l, 0], sy - a_end[i, c * runs + l, 1],
-                                 lx - sx, ly - sy, 1.0)
-                    width[c] = max(width[c], e)
-                for l in range(runs):
-                    if not a_ok[i, c * runs + l]:
-                        stop[c] = l
-                        break
-                for l in range(runs):
-                    if not a_centre_ok[i, c * runs + l]:
-                        stop_c[c] = l
-                        break
+            _run_limits(i, a_start, a_end, a_ok, a_centre_ok, runs, stop, stop_c, width)
         ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
         rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
         bound = max(ra, sa + ras) + max(rb, sb + rbs)
         # B's three discs now and their velocities (the same for every candidate of A)
-        tb = b_remaining[p]
-        if tb <= 1e-9:
-            tb = 0.0
-        yb0, yb1 = b_yaw_now[p], b_yaw_end[p]
-        c0, s0, c1, s1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
-        bend_b = sb * (1.0 - np.cos(0.5 * (yb1 - yb0))) + 1e-12
-        for v in range(3):
-            k = _SIDE[v]
-            bx[v] = b_now[p, 0] - k * sb * s0
-            by[v] = b_now[p, 1] + k * sb * c0
-            bvx[v] = bvy[v] = 0.0
-            if tb > 0.0:
-                bvx[v] = (b_end[p, 0] - k * sb * s1 - bx[v]) / tb
-                bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
-        sx, sy = a_start[i, 0], a_start[i, 1]
+        tb, bend_b = _discs_of_b(p, b_now, b_yaw_now, b_end, b_yaw_end, b_remaining, sb, bx, by,
+                                 bvx, bvy)
         for j in range(nj):
             c = l = 0
             if runs > 0:
@@ -206,17 +241,8 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
                     out_centre[p, j] = far - ra - rb
                     out[p, j] = far - bound if l < stop[c] else -np.inf
                     continue
-            dur = a_dur[i, j]
-            gone = min(a_elapsed[i], dur)
-            ta = dur - gone
-            f = gone / dur if dur > 0.0 else 1.0
-            ex, ey = a_end[i, j, 0], a_end[i, j, 1]
-            ax0, ay0 = sx + f * (ex - sx), sy + f * (ey - sy)
-            avx = avy = 0.0
-            if ta > 1e-9:
-                avx, avy = (ex - ax0) / ta, (ey - ay0) / ta
-            else:
-                ta = 0.0
+            ta, f, ex, ey, ax0, ay0, avx, avy = _centre_motion(i, j, a_start, a_end, a_dur,
+                                                               a_elapsed)
             # the centres: their approach bounds the holding discs' (clear: done) and is
             # the centre discs' (overlapping: done)
             d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
@@ -285,42 +311,13 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
     for p in range(npairs):
         i = pa[p]
         if p == 0 or i != pa[p - 1]:
-            for c in range(n_runs):
-                stop[c] = stop_c[c] = runs
-                sx, sy = a_start[i, 0], a_start[i, 1]
-                lx, ly = a_end[i, c * runs + runs - 1, 0], a_end[i, c * runs + runs - 1, 1]
-                width[c] = 0.0
-                for l in range(runs):
-                    e = _closest(sx - a_end[i, c * runs + l, 0], sy - a_end[i, c * runs + l, 1],
-                                 lx - sx, ly - sy, 1.0)
-                    width[c] = max(width[c], e)
-                for l in range(runs):
-                    if not ok[i, c * runs + l]:
-                        stop[c] = l
-                        break
-                for l in range(runs):
-                    if not centre_ok[i, c * runs + l]:
-                        stop_c[c] = l
-                        break
+            _run_limits(i, a_start, a_end, ok, centre_ok, runs, stop, stop_c, width)
         ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
         rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
         bound = max(ra, sa + ras) + max(rb, sb + rbs)
-        tb = b_remaining[p]
-        if tb <= 1e-9:
-            tb = 0.0
-        yb0, yb1 = b_yaw_now[p], b_yaw_end[p]
-        c0, s0, c1, s1 = np.cos(yb0), np.sin(yb0), np.cos(yb1), np.sin(yb1)
-        bend_b = sb * (1.0 - np.cos(0.5 * (yb1 - yb0))) + 1e-12
+        tb, bend_b = _discs_of_b(p, b_now, b_yaw_now, b_end, b_yaw_end, b_remaining, sb, bx, by,
+                                 bvx, bvy)
         hold_b = max(rb, sb + rbs + bend_b)  # B's discs lie within this of its centre
-        for v in range(3):
-            k = _SIDE[v]
-            bx[v] = b_now[p, 0] - k * sb * s0
-            by[v] = b_now[p, 1] + k * sb * c0
-            bvx[v] = bvy[v] = 0.0
-            if tb > 0.0:
-                bvx[v] = (b_end[p, 0] - k * sb * s1 - bx[v]) / tb
-                bvy[v] = (b_end[p, 1] + k * sb * c1 - by[v]) / tb
-        sx, sy = a_start[i, 0], a_start[i, 1]
         for j in range(nj):
             c = j // runs
             l = j - c * runs
@@ -333,17 +330,8 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
                     b_end[p, 1]) - width[c]
             if far - bound >= FAR_MARGIN:
                 continue
-            dur = a_dur[i, j]
-            gone = min(a_elapsed[i], dur)
-            ta = dur - gone
-            f = gone / dur if dur > 0.0 else 1.0
-            ex, ey = a_end[i, j, 0], a_end[i, j, 1]
-            ax0, ay0 = sx + f * (ex - sx), sy + f * (ey - sy)
-            avx = avy = 0.0
-            if ta > 1e-9:
-                avx, avy = (ex - ax0) / ta, (ey - ay0) / ta
-            else:
-                ta = 0.0
+            ta, f, ex, ey, ax0, ay0, avx, avy = _centre_motion(i, j, a_start, a_end, a_dur,
+                                                               a_elapsed)
             d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
             if d - ra - rb < 0.0:
                 stop_c[c] = l
