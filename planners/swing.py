@@ -192,20 +192,9 @@ def _cell(x, start, cell, scale, c):
 def _raster_max(a, b, start, cell, scale, table):
     """:meth:`HeightRaster.max_height` of one interval [m], from the raster's
     range-maximum table (L, c)."""
-    levels, c = table.shape
+    c = table.shape[1]
     ia = _cell(a, start, cell, scale, c)
-    ib = max(_cell(b, start, cell, scale, c), ia)
-    span = ib - ia + 1
-    k = 0
-    while (2 << k) <= span and k + 1 < levels:
-        k += 1
-    width = 1 << k
-    best = table[k, ia]
-    i = ia + width
-    while i + width <= ib + 1:  # spans longer than the table's widest level
-        best = max(best, table[k, i])
-        i += width
-    return max(best, table[k, ib - width + 1])
+    return _cells_max(ia, max(_cell(b, start, cell, scale, c), ia), table)
 
 
 @_jit
