@@ -133,6 +133,24 @@ def make_periodic(curve: np.ndarray) -> np.ndarray:
     return closed[:N_SAMPLES]
 
 
+def close_in_swing(curve: np.ndarray, foot_off: float) -> np.ndarray:
+    """Periodic closure of a cycle whose measured end is not the next step of the same
+    task (Bovi's stair cycles: the second heel strike is off the flight): the drift
+    c(1) − c(0) is removed over the swing alone, from ``foot_off`` to t = 1 with the
+    smoothstep w(u) = 3u² − 2u³ (w = 0 and w' = 0 at foot-off), so the stance phase is the
+    measured curve exactly. Drops the 101st sample, as :func:`make_periodic`.
+
+    Bovi's adult ascent thigh ends 48° below where it starts (54.8° → 6.8°; knee 65.7° →
+    18.6°) and the descent shank 16° (1.2° → −15.2°); the linear closure spread that over
+    the whole cycle and bent the ascending knee 24° more than Bovi's at mid-stance.
+    """
+    t = np.linspace(0.0, 1.0, 101)
+    u = np.clip((t - foot_off) / (1.0 - foot_off), 0.0, 1.0)
+    w = u * u * (3.0 - 2.0 * u)
+    closed = curve - (curve[-1] - curve[0]) * w
+    return closed[:N_SAMPLES]
+
+
 def warp_to_half(curve: np.ndarray, cfs: float) -> tuple[np.ndarray, callable]:
     """Resample a periodic (N, 4) curve so contralateral foot strike falls at t = 0.5.
 
@@ -157,8 +175,18 @@ def warp_to_half(curve: np.ndarray, cfs: float) -> tuple[np.ndarray, callable]:
     return warped, inverse
 
 
-def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
-    """Elevation-angle datasets: angles (7, 100, 4) [rad] and per-dataset metadata."""
+STAIR_CLOSURES = ("swing", "linear")
+
+
+def derive_datasets(gait_dir: Path, stair_closure: str = "swing"
+                    ) -> tuple[np.ndarray, list[dict]]:
+    """Elevation-angle datasets: angles (7, 100, 4) [rad] and per-dataset metadata.
+
+    ``stair_closure``: how the stair cycles, which do not close, are made periodic —
+    ``"swing"`` (:func:`close_in_swing`, the shipped data) or ``"linear"``
+    (:func:`make_periodic`, as the level cycles; the data shipped before gait11)."""
+    if stair_closure not in STAIR_CLOSURES:
+        raise ValueError(f"stair_closure: one of {STAIR_CLOSURES}, got {stair_closure!r}")
     sys.path.insert(0, str(REPO))
     from crowdwalk.gait.elevinterp import SagittalLeg, step_of
 
@@ -182,7 +210,12 @@ def derive_datasets(gait_dir: Path) -> tuple[np.ndarray, list[dict]]:
         shank = c["Shank Flex/Extension"]
         thigh = c["Thigh Flex/Extension"]
         pelvis = -c[PELVIS] - pelvis_neutral
-        deg = np.stack([make_periodic(x) for x in (foot, shank, thigh, pelvis)], axis=-1)
+        if kind == "level" or stair_closure == "linear":
+            deg = np.stack([make_periodic(x) for x in (foot, shank, thigh, pelvis)], axis=-1)
+        else:  # "swing"
+            fo_measured = p["Ipsilateral Foot Off [% cycle]"] / 100
+            deg = np.stack([close_in_swing(x, fo_measured) for x in (foot, shank, thigh, pelvis)],
+                           axis=-1)
         deg, to_t = warp_to_half(deg, cfs)
         angles.append(np.deg2rad(deg))
         # Phase events in dataset time t: foot-off of this leg; double support is the two
@@ -391,9 +424,9 @@ def derive_normative(gait_dir: Path) -> dict:
     }
 
 
-def derive_all(gait_dir: Path) -> tuple[np.ndarray, dict, dict]:
+def derive_all(gait_dir: Path, stair_closure: str = "swing") -> tuple[np.ndarray, dict, dict]:
     """Everything the package ships: angles, dataset metadata, normative references."""
-    angles, meta = derive_datasets(gait_dir)
+    angles, meta = derive_datasets(gait_dir, stair_closure)
     norm = derive_normative(gait_dir)
     bovi = read_bovi_parameters(gait_dir / BOVI_FILE)["Natural"]
     norm["phases"]["stance_fraction_natural"] = round(
@@ -492,8 +525,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out-dir", type=Path, default=OUT_DIR)
     parser.add_argument("--check", action="store_true", help="compare with the shipped files")
     parser.add_argument("--plots", type=Path, help="also draw the shipped datasets into DIR")
+    parser.add_argument("--stair-closure", choices=STAIR_CLOSURES, default="swing",
+                        help="periodic closure of the stair cycles (default swing; linear: "
+                             "the data shipped before gait11)")
     args = parser.parse_args(argv)
-    angles, meta, norm = derive_all(args.gait_dir)
+    angles, meta, norm = derive_all(args.gait_dir, args.stair_closure)
     print_table(angles, meta)
     check = cross_check(args.gait_dir, angles, meta, norm)
     for joint in ("knee", "ankle"):
