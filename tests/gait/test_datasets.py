@@ -74,10 +74,11 @@ def test_stair_datasets_rise_and_fall():
 def test_stair_stance_is_the_measured_stance():
     """Bovi 2011's stair cycles do not close (ascent thigh 54.8° at heel strike, 6.8° at the
     next one: the cycle ends off the flight). The stance phase is the measured one: from
-    35 % to the contralateral strike the ascending knee (thigh − shank) is under 22° (Bovi:
-    16–21°), and the descent's stance knee stays in Bovi's stance range. With the drift removed linearly over the whole cycle (the
-    data before gait11) the thigh carried +48°·t: the ascent knee was 37–41° from 35 to
-    50 % and its swing peak 100° (Bovi's mean 61°, the swing-peak parameter 65°)."""
+    35 % to the contralateral strike the ascending knee (thigh − shank) is under 22°
+    (Bovi: 16–21°), and the descent's stance knee stays in Bovi's stance range. With the
+    drift removed linearly over the whole cycle (the data before gait11) the thigh
+    carried +48°·t: the ascent knee was 37–41° from 35 to 50 % and its swing peak 100°
+    (Bovi's mean 61°, the swing-peak parameter 65°)."""
     up, down = dataset_by_name("stairs_up"), dataset_by_name("stairs_down")
     knee_up = deg(up.angles[:, THIGH] - up.angles[:, SHANK])
     assert knee_up[35:50].max() < 22

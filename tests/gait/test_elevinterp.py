@@ -153,14 +153,15 @@ def random_requests(interp, body, rng, n):
 @given(st.floats(1.50, 1.95), st.integers(0, 2**31 - 1))
 def test_refined_step_matches_request_within_1cm(height, seed):
     # Walking requests: level steps at 0.8-1.6 m/s (WBDS step length, scaled with body
-    # height) and up/down steps of up to 6 cm at shorter lengths.
+    # height) and up/down steps of up to 6 cm at shorter lengths (0.50-0.60 m: the stair
+    # datasets' Eq. 10 steps are 0.45 / 0.42 m for 1.75 m, the region's left corners).
     rng = np.random.default_rng(seed)
     interp = ElevInterp(config=ElevInterpConfig(max_inserted=0))  # every request searched
     body = leg(height)
     scale = height / 1.75
     speed = rng.uniform(0.8, 1.6, 6)
     level = np.stack([0.2555 + 0.312 * speed, np.zeros(6)], axis=1) * scale
-    sloped = np.stack([rng.uniform(0.35, 0.55, 6), rng.uniform(-0.03, 0.06, 6)], axis=1) * scale
+    sloped = np.stack([rng.uniform(0.50, 0.60, 6), rng.uniform(-0.03, 0.06, 6)], axis=1) * scale
     req = np.vstack([level, sloped])
     out = interp.request(body, req[:, 0], req[:, 1])
     assert out.converged.all() and not out.clamped.any()
@@ -196,9 +197,14 @@ def test_mixed_bodies_in_one_batch():
     heights = rng.uniform(1.5, 1.95, 40)
     body = leg(heights)
     interp = ElevInterp()
-    region = interp.legal_region(leg(1.5))  # smallest body: inside for every body
-    centre = region.mean(axis=0)
-    req = centre + 0.5 * (region[rng.integers(0, len(region), 40)] - centre)
+    # each body's own region (the stair corners scale with the body: a small body's
+    # region is not inside a tall one's since the stair datasets' Eq. 10 steps are long)
+    corner = rng.integers(0, 3, 40)
+    req = np.empty((40, 2))
+    for i, h in enumerate(heights):
+        region = interp.legal_region(leg(h))
+        centre = region.mean(axis=0)
+        req[i] = centre + 0.5 * (region[corner[i] % len(region)] - centre)
     out = interp.request(body, req[:, 0], req[:, 1])
     achieved = np.stack([out.step_length, out.step_height], axis=1)
     assert np.abs(achieved - req).max() < 1 * CM
@@ -210,11 +216,14 @@ def test_same_dataset_for_every_body_size_at_the_same_normalised_step():
     # Size invariance: a step scaled with leg length gets the same angle curves.
     sizes = np.array([1.5, 1.7, 1.95])
     body = leg(sizes)
-    interp = ElevInterp(config=ElevInterpConfig(max_inserted=0))
+    # the paper's triangulation (no level datum: with it the midpoint's height is moved
+    # onto the level line and, with the stair corners at 0.45-0.49 leg lengths since the
+    # stair cycles close in the swing, lands in a triangle that needs the search)
+    interp = ElevInterp(config=ElevInterpConfig(max_inserted=0, level_datum=False))
     unit = interp.source_steps(leg(1.0)) / leg(1.0).length  # per leg length
     for normalised, exact in [
         (0.5 * (unit[2] + unit[3]), True),  # between natural and M: no search needed
-        (np.array([0.42, 0.02]), False),  # searched: equal up to the solver tolerance
+        (np.array([0.55, 0.02]), False),  # searched: equal up to the solver tolerance
     ]:
         req = normalised * body.length[:, None]
         out = interp.request(body, req[:, 0], req[:, 1])
