@@ -682,8 +682,8 @@ class Animator:
         has = np.all(np.isfinite(cmd.swing_bezier), axis=(1, 2))
         sw.bezier[a[has]] = cmd.swing_bezier[has]
         has &= bumpy
-        if not has.any():
-            return
+        if not has.any() or self.style.lift_swing:
+            return  # lift_swing: the data's swing, raised by _anticipate_lift
         ab = a[has]
         k = ab.size
         idx = np.tile(ab, _CHECK_SPAN.size)
@@ -724,7 +724,9 @@ class Animator:
         # a sample lifts for itself and for the intervals on either side of it
         at[:-1] = np.maximum(at[:-1], mid)
         at[1:] = np.maximum(at[1:], mid)
-        need = np.where(at > 0.0, at + _LIFT_MARGIN, 0.0).T
+        # lift_swing: the sole clears the ground by toe_clearance where it would touch
+        margin = self.style.toe_clearance if self.style.lift_swing else _LIFT_MARGIN
+        need = np.where(at > -margin + _LIFT_MARGIN, at + margin, 0.0).T
         self._swing.lift_need[ab] = need
         self.stats["lift_steps"] += int((need > 0).any(axis=1).sum())
 

@@ -123,6 +123,13 @@ class GaitStyle:
         toe-off, so the forward velocity is continuous at the heel strike (an extension of
         §4.1, docs/architecture.md "Root velocity at the heel strike"); False: the root
         follows the new stance foot from the heel strike on (§4.1), joined C⁰.
+    lift_swing : bool
+        Over uneven ground (stairs, curbs) the Animator's swing follows the data, raised
+        where the sole would come below ``toe_clearance`` over the ground by the
+        anticipated lift (an extension: docs/architecture.md "Stair swing from the
+        data"); False: where the data's sole comes within 2 mm of the ground the ankle
+        follows the planner's swing Bezier (Chen & Li §5.2: its control points 15 cm
+        above the chord), which flexed the ascending swing knee to 110–115°.
     """
 
     step_width: float = 0.05
@@ -138,6 +145,7 @@ class GaitStyle:
     pelvis_from_data: bool = True
     trunk_from_data: bool = True
     trailing_root: bool = True
+    lift_swing: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):

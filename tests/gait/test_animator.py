@@ -100,9 +100,10 @@ def test_feet_land_on_the_commanded_footholds_and_the_root_moves_smoothly():
 
 
 def test_swing_follows_the_planner_bezier_over_a_block():
-    """Item 6: a block between the footholds that the data-driven foot would hit."""
+    """Item 6: a block between the footholds that the data-driven foot would hit
+    (``lift_swing`` off: the planner's Bezier)."""
     body = Body.from_heights([1.75])
-    animator = Animator(body, ground=_block)
+    animator = Animator(body, ground=_block, style=GaitStyle(lift_swing=False))
     a = float(body.ankle_height[0])
     start, target = np.array([[0.0, 0.045, 0.0]]), np.array([[0.75, -0.045, 0.0]])
     # the trailing (right) foot starts behind the stance foot
@@ -125,12 +126,39 @@ def test_swing_follows_the_planner_bezier_over_a_block():
 
 
 
+def test_lift_swing_clears_a_block_from_the_data():
+    """``GaitStyle.lift_swing`` (default): over the block the swing follows the data,
+    raised by the anticipated lift, not the planner's Bezier; the sole stays above the
+    block and the ankle peaks far below the Bezier's (30 cm control points)."""
+    body = Body.from_heights([1.75])
+    animator = Animator(body, ground=_block)
+    a = float(body.ankle_height[0])
+    animator.command(_command([0], -0.6, 1, [[-0.75, 0.045, 0.0]], [[0.0, -0.045, 0.0]]))
+    bezier = np.array([[[0.0, -0.045, a], [0.15, -0.045, a + 0.3], [0.6, -0.045, a + 0.3],
+                        [0.75, -0.045, a]]])  # fmt: skip
+    animator.command(_command([0], 0.0, 1, [[0.0, 0.045, 0.0]], [[0.75, -0.045, 0.0]],
+                              bezier=bezier))  # fmt: skip
+    assert animator.stats["bezier_steps"] == 0 and animator.stats["lift_steps"] == 1
+    lowest, top = np.inf, -np.inf
+    for f in range(30):
+        frame = animator.pose(f / 50.0)
+        rot = forward_kinematics(body, frame.root_position,
+                                 quaternion_to_matrix(frame.root_quaternion),
+                                 quaternion_to_matrix(frame.joints))[1]  # fmt: skip
+        swing = foot_points(body, frame.positions, rot)[0, 1]
+        lowest = min(lowest, (swing[:, 2] - _block(swing[:, :2])).min())
+        top = max(top, frame.positions[0, LEG_JOINTS[1, 2], 2])
+    assert lowest > -1e-3
+    assert top < a + 0.75 * 0.3  # the Bezier's summit
+
+
 def test_the_swing_joins_the_planner_bezier_without_a_jump():
     """The swing ankle blends onto the Bezier (30 cm over a block) over half the swing and
     off it over the last 0.3 (issue 11 item 5): at 25 fps its second difference stays
-    under 15 cm (a blend over 0.15 of the step, two frames, made 36 cm)."""
+    under 15 cm (a blend over 0.15 of the step, two frames, made 36 cm); ``lift_swing``
+    off (the default follows the data, lifted)."""
     body = Body.from_heights([1.75])
-    animator = Animator(body, ground=_block)
+    animator = Animator(body, ground=_block, style=GaitStyle(lift_swing=False))
     a = float(body.ankle_height[0])
     animator.command(_command([0], -0.6, 1, [[-0.75, 0.045, 0.0]], [[0.0, -0.045, 0.0]]))
     bezier = np.array([[[0.0, -0.045, a], [0.15, -0.045, a + 0.3], [0.6, -0.045, a + 0.3],
