@@ -497,11 +497,15 @@ def write_pelvis(out_dir: Path, pelvis: dict, trunk: dict) -> None:
         (out_dir / name).write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
 
 
-def write(out_dir: Path, angles: np.ndarray, meta: dict, norm: dict) -> None:
-    """Write the npz and the json."""
+def write(out_dir: Path, angles: np.ndarray, meta: dict, norm: dict,
+          linear: tuple[np.ndarray, dict]) -> None:
+    """Write the npz (the swing-closed datasets as ``angles``/``meta``, the linear
+    closure's as ``angles_linear``/``meta_linear``: ``ElevInterpConfig.stair_closure``)
+    and the json."""
     out_dir.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(
-        out_dir / "elevation_datasets.npz", angles=angles, meta=np.array(json.dumps(_fields(meta)))
+        out_dir / "elevation_datasets.npz", angles=angles, meta=np.array(json.dumps(_fields(meta))),
+        angles_linear=linear[0], meta_linear=np.array(json.dumps(_fields(linear[1]))),
     )
     (out_dir / "normative.json").write_text(json.dumps(norm, indent=2) + "\n", encoding="utf-8")
 
@@ -526,11 +530,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--check", action="store_true", help="compare with the shipped files")
     parser.add_argument("--plots", type=Path, help="also draw the shipped datasets into DIR")
     parser.add_argument("--stair-closure", choices=STAIR_CLOSURES, default="swing",
-                        help="periodic closure of the stair cycles (default swing; linear: "
-                             "the data shipped before gait11)")
+                        help="closure of the stair cycles whose table is printed "
+                             "(default swing; linear: the data before gait11); the npz "
+                             "holds both (ElevInterpConfig.stair_closure)")
     args = parser.parse_args(argv)
     angles, meta, norm = derive_all(args.gait_dir, args.stair_closure)
-    print_table(angles, meta)
+    other = "linear" if args.stair_closure == "swing" else "swing"
+    angles_o, meta_o = derive_datasets(args.gait_dir, other)
+    meta_o = {"header": meta["header"], "datasets": meta_o}
+    print_table(angles, meta)  # the closure asked for
+    # the npz keeps the swing closure as "angles" and the linear one as "angles_linear"
+    (angles, meta), linear = (((angles, meta), (angles_o, meta_o)) if other == "linear"
+                              else ((angles_o, meta_o), (angles, meta)))
     check = cross_check(args.gait_dir, angles, meta, norm)
     for joint in ("knee", "ankle"):
         c = check[joint]
@@ -551,13 +562,15 @@ def main(argv: list[str] | None = None) -> int:
         with np.load(args.out_dir / "elevation_datasets.npz") as shipped:
             same = np.array_equal(shipped["angles"], angles) and json.loads(
                 str(shipped["meta"])) == json.loads(json.dumps(_fields(meta)))
+            same &= np.array_equal(shipped["angles_linear"], linear[0]) and json.loads(
+                str(shipped["meta_linear"])) == json.loads(json.dumps(_fields(linear[1])))
         same &= json.loads((args.out_dir / "normative.json").read_text()) == norm
         for name, data in (("pelvis_motion.json", pelvis), ("trunk_motion.json", trunk)):
             same &= json.loads((args.out_dir / name).read_text()) == json.loads(
                 json.dumps(data))
         print("shipped files match" if same else "shipped files DIFFER")
         return 0 if same else 1
-    write(args.out_dir, angles, meta, norm)
+    write(args.out_dir, angles, meta, norm, linear)
     write_pelvis(args.out_dir, pelvis, trunk)
     print(f"wrote {args.out_dir / 'elevation_datasets.npz'}, normative.json, "
           "pelvis_motion.json and trunk_motion.json")

@@ -42,6 +42,7 @@ __all__ = [
     "DATASET_KINDS",
     "ElevationDataset",
     "load_datasets",
+    "STAIR_CLOSURES",
     "dataset_by_name",
     "sample",
     "normative",
@@ -255,19 +256,36 @@ def _series_kernel(coef, k, t, out):  # pragma: no cover - compiled
         out[a] = acc
 
 
+#: How the stair cycles, which do not close, were made periodic (``load_datasets``):
+#: "swing" — the drift removed over the swing alone, the stance as measured (default);
+#: "linear" — removed linearly over the whole cycle, as the level cycles (before gait11).
+STAIR_CLOSURES: tuple[str, ...] = ("swing", "linear")
+
+
 @cache
-def _load_npz() -> tuple[ElevationDataset, ...]:
+def _load_npz(stair_closure: str = "swing") -> tuple[ElevationDataset, ...]:
+    if stair_closure not in STAIR_CLOSURES:
+        raise invalid("load_datasets", "stair_closure", f"one of {STAIR_CLOSURES}",
+                      stair_closure)
+    suffix = "" if stair_closure == "swing" else "_linear"
     ref = resources.files("crowdwalk").joinpath("data", "elevation_datasets.npz")
     with ref.open("rb") as handle, np.load(handle, allow_pickle=False) as data:
-        meta = json.loads(str(data["meta"]))
-        angles = data["angles"].astype(float)
+        meta = json.loads(str(data["meta" + suffix]))
+        angles = data["angles" + suffix].astype(float)
     return tuple(
         ElevationDataset(angles=angles[k], **entry) for k, entry in enumerate(meta["datasets"])
     )
 
 
-def load_datasets() -> list[ElevationDataset]:
+def load_datasets(stair_closure: str = "swing") -> list[ElevationDataset]:
     """The shipped elevation-angle datasets, derived from Bovi et al. (2011).
+
+    Parameters
+    ----------
+    stair_closure : {"swing", "linear"}
+        How the stair cycles (Bovi's do not close: the ascent thigh ends 48° below its
+        start) are made periodic (:data:`STAIR_CLOSURES`); the level datasets are the
+        same in both.
 
     Returns
     -------
@@ -276,7 +294,7 @@ def load_datasets() -> list[ElevationDataset]:
         ``level_m``, ``level_l``; increasing stride length) and ``stairs_up``,
         ``stairs_down``.
     """
-    return list(_load_npz())
+    return list(_load_npz(stair_closure))
 
 
 def dataset_by_name(name: str) -> ElevationDataset:

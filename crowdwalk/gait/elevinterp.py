@@ -61,7 +61,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, cKDTree
 
 from crowdwalk.errors import invalid
-from crowdwalk.gait.datasets import ElevationDataset, load_datasets, sample
+from crowdwalk.gait.datasets import STAIR_CLOSURES, ElevationDataset, load_datasets, sample
 
 __all__ = [
     "ElevInterp",
@@ -321,6 +321,12 @@ class ElevInterpConfig:
         docs/architecture.md "Knee closure of long level steps"); False: such steps (a
         1.75 m body's level steps beyond about 0.81 m) are served from the paper's
         triangulation, clamped, the swing foot 0.5-2 cm below the floor.
+    stair_closure : {"swing", "linear"}
+        The shipped stair datasets used when no ``datasets`` are given
+        (:func:`~crowdwalk.gait.datasets.load_datasets`): "swing" (default), Bovi's stair
+        cycles closed over the swing, the stance as measured; "linear", closed linearly
+        over the whole cycle (before gait11: the ascending stance knee 20° more flexed
+        than Bovi's; docs/architecture.md "Stair datasets closed over the swing").
     """
 
     tolerance: float = 0.002
@@ -337,9 +343,12 @@ class ElevInterpConfig:
     level_fade: float = 0.04
     level_line_beyond: float = 1.5
     knee_closure: bool = True
+    stair_closure: str = "swing"
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
+        if self.stair_closure not in STAIR_CLOSURES:
+            raise invalid(owner, "stair_closure", f"one of {STAIR_CLOSURES}", self.stair_closure)
         units = {"tolerance": "m", "insert_spacing": "1", "shape_resolution": "1",
                  "speed_fade": "1", "level_fade": "1"}
         for name, unit in units.items():
@@ -546,14 +555,15 @@ class ElevInterp:
         datasets: Sequence[ElevationDataset] | None = None,
         config: ElevInterpConfig | None = None,
     ):
-        datasets = list(load_datasets() if datasets is None else datasets)
+        config = config or ElevInterpConfig()
+        datasets = list(load_datasets(config.stair_closure) if datasets is None else datasets)
         if len(datasets) < 3:
             raise invalid("ElevInterp", "datasets", "at least 3 datasets", len(datasets))
         sizes = {d.samples for d in datasets}
         if len(sizes) != 1:
             raise invalid("ElevInterp", "datasets", "of one sample count N", sorted(sizes))
         self.datasets = tuple(datasets)
-        self.config = config or ElevInterpConfig()
+        self.config = config
         self._curves = np.stack([d.angles for d in datasets])
         self._phases = np.array([[d.stance_fraction, d.double_support] for d in datasets])
         self._level = np.array([i for i, d in enumerate(datasets) if d.kind == "level"], int)

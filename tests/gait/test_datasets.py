@@ -97,6 +97,16 @@ def test_stair_datasets_rise_alike_up_and_down():
     assert abs(rise_up - rise_down) < 0.01
 
 
+def test_stair_closure_switch_changes_the_stair_datasets_only():
+    swing, linear = load_datasets(), load_datasets("linear")
+    for a, b in zip(swing, linear, strict=True):
+        assert a.name == b.name
+        same = np.array_equal(a.angles, b.angles)
+        assert same == (a.kind == "level"), a.name
+    with pytest.raises(InputError, match=r"stair_closure"):
+        load_datasets("cubic")
+
+
 def test_curves_are_periodic_and_smooth():
     for d in load_datasets():
         a = deg(d.angles)

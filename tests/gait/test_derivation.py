@@ -36,9 +36,14 @@ def derived(script):
 
 def test_shipped_npz_matches_rederivation(script, derived):
     angles, meta, _ = derived
+    linear, meta_linear = script.derive_datasets(GAIT_DIR, "linear")
+    meta_linear = {"header": meta["header"], "datasets": meta_linear}
     with np.load(DATA / "elevation_datasets.npz") as shipped:
         np.testing.assert_array_equal(shipped["angles"], angles)
         assert json.loads(str(shipped["meta"])) == json.loads(json.dumps(script._fields(meta)))
+        np.testing.assert_array_equal(shipped["angles_linear"], linear)
+        assert json.loads(str(shipped["meta_linear"])) == json.loads(
+            json.dumps(script._fields(meta_linear)))
 
 
 def test_shipped_normative_matches_rederivation(derived):

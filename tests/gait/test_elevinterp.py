@@ -405,3 +405,17 @@ def test_long_level_steps_are_closed_by_the_trailing_knee():
     # the data bend it more at longer steps (level_l 17°, natural 15°); closed, the longest
     # step has the straightest
     assert knee[-1] < knee[:-1].min()
+
+
+def test_stair_closure_selects_the_shipped_stair_datasets():
+    """``ElevInterpConfig.stair_closure``: "swing" (default) and "linear" (before gait11)
+    put the stair corners of the region where their datasets' Eq. 10 steps are — a 1.75 m
+    body's ascent corner at 0.45 m with the swing closure, 0.26 m with the linear one —
+    and anything else is refused."""
+    body = leg(1.75)
+    swing = ElevInterp().source_steps(body)
+    linear = ElevInterp(config=ElevInterpConfig(stair_closure="linear")).source_steps(body)
+    np.testing.assert_array_equal(swing[:5], linear[:5])  # level datasets: the same
+    assert swing[5, 0] > 0.4 > 0.3 > linear[5, 0]
+    with pytest.raises(InputError, match=r"stair_closure"):
+        ElevInterpConfig(stair_closure="cubic")
