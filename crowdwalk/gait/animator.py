@@ -17,8 +17,12 @@ Around the walker the Animator adds what a crowd needs:
 - **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
   Bezier swing curve and the data-driven swing foot would come within 2 mm of the ground
   between toe-off and landing (stair nosings, blocks), the swing ankle follows the
-  Bezier instead (blended in after toe-off, out before the landing). Steps are "over
-  uneven ground" when the ground rises above the line from the trailing foot to the
+  Bezier instead (blended in after toe-off, out before the landing) — with
+  ``GaitStyle(lift_swing=False)``. By default (``lift_swing``, gait11) the swing keeps the
+  data and the anticipated lift below raises it where the sole would come within
+  ``GaitStyle.toe_clearance`` of the ground (the Bezier flexed the ascending swing knee
+  to 110–115°; docs/architecture.md "Stair datasets closed over the swing"). Steps are
+  "over uneven ground" when the ground rises above the line from the trailing foot to the
   stance foothold or from there to the target, along the ankles' or the toes' path.
 - **Whole-sole clearance (deviation: the papers give none for unplanned steps).** The
   planner's Bezier is for the ankle of the steps it planned; shortened and positioning
