@@ -154,6 +154,45 @@ def test_footsteps_read_back_as_a_typed_frozen_table(tmp_path):
         FootstepTable(**{**steps.columns(), "x": np.zeros(2)})  # ragged
 
 
+def test_footsteps_text_is_what_csv_writer_writes(tmp_path):
+    """write_footsteps joins the rows itself; the bytes are csv.writer's (str of each
+    value rounded to 5 decimals, quoting, \\r\\n), also for nan, inf, -0.0, 1e-05, 1e+16
+    and names csv must quote."""
+    import csv
+    import io
+
+    rng = np.random.default_rng(7)
+    batches = []
+    for names in (["g", "section_0"], ['a,b', 'say "hi"'], ["x", "line\nbreak"]):
+        rows = _steps(40)
+        for c in ("x", "y", "z", "energy", "heading", "spin"):
+            v = rng.normal(0, 10.0 ** rng.integers(-7, 18, 40))
+            v[::7], v[1::11], v[2::13], v[3::5] = np.nan, np.inf, -0.0, 1e-5
+            rows[c] = v
+        rows["group"] = np.array(names * 20)
+        rows["on_obstacle"] = rng.integers(0, 2, 40)
+        batches.append(rows)
+    w = RunWriter(tmp_path, scenario_text="", walkable_wkt=SQUARE, fps=10.0)
+    want = io.StringIO(newline="")
+    ref = csv.writer(want)
+    ref.writerow(FOOTSTEP_COLUMNS)
+    for rows in batches:
+        w.write_footsteps(rows)
+        ref.writerows(zip(*[np.round(r, 5).tolist() if np.asarray(r).dtype.kind == "f"
+                            else np.asarray(r).tolist()
+                            for r in (rows[c] for c in FOOTSTEP_COLUMNS)], strict=True))
+    w.write_footsteps({c: np.zeros(0) for c in FOOTSTEP_COLUMNS})  # no rows: no line
+    w.close()
+    assert (tmp_path / "footsteps.csv").read_bytes() == want.getvalue().encode()
+    steps = open_run(tmp_path).footsteps()
+    assert steps.group.tolist()[40:42] == ['a,b', 'say "hi"']
+    rows = _steps(3)
+    rows["x"] = np.zeros(2)
+    with pytest.raises(ValueError, match="RunWriter.footsteps must be columns of one length"):
+        RunWriter(tmp_path / "b", scenario_text="", walkable_wkt=SQUARE,
+                  fps=10.0).write_footsteps(rows)
+
+
 def test_footsteps_of_old_and_broken_files(tmp_path):
     _write(tmp_path)
     path = tmp_path / "footsteps.csv"
