@@ -115,7 +115,6 @@ def _insert_rows(con: sqlite3.Connection, table: str, columns: Sequence[list]) -
         con.execute(_insert_sql(table, m, (len(flat) - full) // m), flat[full:])
 
 
-
 def _csv_text(columns: Sequence[np.ndarray]) -> str | None:
     """The text csv.writer writes for the rows of ``columns`` (m arrays (k,): int, float
     rounded to 5 decimals, or str), ``\\r\\n`` after each row, or None when a value is
