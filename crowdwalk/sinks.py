@@ -142,8 +142,8 @@ class BackgroundSink:
 
     The sink is built in that thread (an SQLite connection belongs to the thread that
     opens it). A failure there is raised here by the next call; :meth:`wait` and
-    :meth:`end` return when every call before them is done. At most ``backlog`` calls
-    wait at a time [-]; ``name`` names the thread.
+    :meth:`end` return when every call before them is done (``end`` raising a failure).
+    At most ``backlog`` calls wait at a time [-]; ``name`` names the thread.
     """
 
     def __init__(self, factory: Callable[[], RunSink], *, backlog: int = 32,
@@ -171,9 +171,9 @@ class BackgroundSink:
         self._put(name, *args)
 
     def wait(self) -> None:
-        """Return when every call made so far is done (raising a failure of one)."""
+        """Return when every call made so far is done. A failure of one is raised by the
+        next call or :meth:`end` (so that a run still writes its summary first)."""
         self._calls.join()
-        self._raise()
 
     def end(self, summary: dict) -> None:
         self._put("end", summary)

@@ -158,7 +158,8 @@ def test_a_mixed_engine_poses_no_agents_as_an_empty_frame():
 
 def test_a_background_sink_waits_for_every_call_and_raises_its_failure():
     """BackgroundSink.wait (the run reads the overlap check's result after it): every
-    call made before it is done, in order; a failing call is raised by wait."""
+    call made before it is done, in order; a failing call is raised by end, not wait
+    (the run writes its summary between the two)."""
     import threading
     import time
 
@@ -184,5 +185,7 @@ def test_a_background_sink_waits_for_every_call_and_raises_its_failure():
     assert sink.frames == [0, 1, 2, 3, 4]
     bg.frame(0.5, Snapshot(9, np.arange(2), np.zeros((2, 2)), np.zeros(2),
                            np.zeros((2, 2))), None)  # out of order: the Recorder asserts
+    bg.wait()
+    assert sink.frames == [0, 1, 2, 3, 4]
     with pytest.raises(AssertionError):
-        bg.wait()
+        bg.end({})
