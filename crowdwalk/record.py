@@ -32,7 +32,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-import numba as nb
 import numpy as np
 
 from crowdwalk.errors import InputError, invalid
@@ -113,137 +112,6 @@ def _insert_rows(con: sqlite3.Connection, table: str, columns: Sequence[list]) -
                         [flat[j:j + width] for j in range(0, full, width)])
     if full < len(flat):
         con.execute(_insert_sql(table, m, (len(flat) - full) // m), flat[full:])
-
-
-def _csv_text(columns: Sequence[np.ndarray]) -> str | None:
-    """The text csv.writer writes for the rows of ``columns`` (m arrays (k,): int, float
-    rounded to 5 decimals, or str), ``\\r\\n`` after each row, or None when a value is
-    one :func:`_csv_kernel` does not format (a float |x| >= 8e9, the least int64, a text
-    csv.writer quotes) or a column of a dtype it does not take (bool, unsigned, object)."""
-    k = len(columns[0])
-    kinds = np.empty(len(columns), np.int64)
-    ints = np.zeros((len(columns), k), np.int64)
-    floats = np.zeros((len(columns), k))
-    codes = np.zeros((len(columns), k), np.int64)
-    names: list[bytes] = []
-    for j, col in enumerate(columns):
-        if col.dtype.kind == "i":
-            if k and col.min() == np.iinfo(np.int64).min:  # no positive counterpart
-                return None
-            kinds[j], ints[j] = 0, col
-        elif col.dtype.kind == "f":
-            kinds[j], floats[j] = 1, np.round(col, 5)
-        elif col.dtype.kind == "U":
-            values, index = np.unique(col, return_inverse=True)
-            if any(ch in "".join(values.tolist()) for ch in _CSV_SPECIAL):
-                return None  # csv.writer quotes it
-            kinds[j], codes[j] = 2, index.reshape(-1) + len(names)
-            names.extend(str(v).encode() for v in values)
-        else:
-            return None
-    width = max([len(b) for b in names] + [1])
-    table = np.zeros((max(len(names), 1), width), np.uint8)
-    lengths = np.zeros(max(len(names), 1), np.int64)
-    for i, b in enumerate(names):
-        table[i, :len(b)] = np.frombuffer(b, np.uint8)
-        lengths[i] = len(b)
-    out = np.empty(k * (int((kinds == 2).sum()) * width + 24 * len(columns) + 2), np.uint8)
-    n = _csv_kernel(kinds, ints, floats, codes, table, lengths, out)
-    return None if n < 0 else out[:n].tobytes().decode()
-
-
-@nb.njit(cache=True, nogil=True)
-def _csv_kernel(kinds, ints, floats, codes, table, lengths, out):  # pragma: no cover - numba
-    """Write rows into ``out`` (uint8) as csv.writer does: column j of row i is
-    ``ints[j, i]`` (kind 0) as ``str(int)``, ``floats[j, i]`` (kind 1, already rounded
-    to 5 decimals) as ``repr(float)`` or ``table[codes[j, i]]`` (kind 2); commas between,
-    ``\\r\\n`` after each row. Returns the bytes written, -1 at a float it does not format.
-
-    A float r = round(x, 5) with 1e-4 <= |r| < 8e9 is the double nearest to m / 1e5 (m =
-    rint(r * 1e5), checked); below 2**33 distinct 5-decimal numbers are distinct doubles,
-    so m / 1e5 with its trailing zeros dropped is the shortest text that reads back as r:
-    repr's digits, positional there. |m| < 10 (repr's exponent form), zeros, nan and inf
-    as repr writes them."""
-    m, k = ints.shape[0], ints.shape[1]
-    digits = np.empty(24, np.uint8)
-    p = 0
-    for i in range(k):
-        for j in range(m):
-            if j:
-                out[p] = 44  # ','
-                p += 1
-            kind = kinds[j]
-            if kind == 2:
-                c = codes[j, i]
-                for b in range(lengths[c]):
-                    out[p] = table[c, b]
-                    p += 1
-                continue
-            if kind == 0:
-                q = ints[j, i]
-                if q < 0:
-                    out[p] = 45  # '-'
-                    p += 1
-                    q = -q
-                n = 0
-                while True:
-                    digits[n] = 48 + q % 10
-                    n += 1
-                    q //= 10
-                    if q == 0:
-                        break
-                for d in range(n - 1, -1, -1):
-                    out[p] = digits[d]
-                    p += 1
-                continue
-            v = floats[j, i]
-            if v != v:  # nan
-                out[p], out[p + 1], out[p + 2] = 110, 97, 110
-                p += 3
-                continue
-            if v < 0.0 or (v == 0.0 and np.signbit(v)):
-                out[p] = 45
-                p += 1
-            a = abs(v)
-            if a == np.inf:
-                out[p], out[p + 1], out[p + 2] = 105, 110, 102  # 'inf'
-                p += 3
-                continue
-            if a >= 8.0e9:
-                return -1
-            mm = np.rint(a * 1e5)
-            if mm / 1e5 != a:
-                return -1
-            q = np.int64(mm)
-            if 0 < q < 10:  # repr: 'de-05'
-                out[p], out[p + 1], out[p + 2], out[p + 3] = 48 + q, 101, 45, 48
-                out[p + 4] = 53
-                p += 5
-                continue
-            whole, frac = q // 100000, q % 100000
-            n = 0
-            while True:
-                digits[n] = 48 + whole % 10
-                n += 1
-                whole //= 10
-                if whole == 0:
-                    break
-            for d in range(n - 1, -1, -1):
-                out[p] = digits[d]
-                p += 1
-            out[p] = 46  # '.'
-            p += 1
-            nf = 5
-            while nf > 1 and frac % 10 == 0:
-                frac //= 10
-                nf -= 1
-            for d in range(nf - 1, -1, -1):
-                out[p + d] = 48 + frac % 10
-                frac //= 10
-            p += nf
-        out[p], out[p + 1] = 13, 10
-        p += 2
-    return p
 
 
 class RunWriter:
@@ -420,19 +288,23 @@ class RunWriter:
         missing = [c for c in FOOTSTEP_COLUMNS if c not in rows]
         if missing:
             raise invalid("RunWriter", "footsteps", f"a table with columns {missing}", sorted(rows))
-        arrays = [np.asarray(rows[c]) for c in FOOTSTEP_COLUMNS]
-        if len({a.shape for a in arrays}) > 1 or arrays[0].ndim != 1:
-            raise invalid("RunWriter", "footsteps", "columns of one length, shape (k,)",
-                          {c: a.shape for c, a in zip(FOOTSTEP_COLUMNS, arrays, strict=True)})
-        if arrays[0].size == 0:
-            return
-        text = _csv_text(arrays)  # csv.writer's text, by a kernel
-        if text is not None:
-            self._steps_file.write(text)
-            return
-        columns = [np.round(a, 5).tolist() if a.dtype.kind == "f" else a.tolist()
-                   for a in arrays]
-        self._steps.writerows(zip(*columns, strict=True))
+        columns, plain = [], True
+        for c in FOOTSTEP_COLUMNS:
+            col = np.asarray(rows[c])
+            if col.dtype.kind == "f":
+                col = np.round(col, 5)
+            elif col.dtype.kind not in "iub":  # text: plain unless csv would quote it
+                plain &= col.dtype.kind == "U" and not any(
+                    ch in "".join(col.tolist()) for ch in _CSV_SPECIAL)
+            columns.append(col.tolist())
+        if len({len(col) for col in columns}) > 1:
+            raise invalid("RunWriter", "footsteps", "columns of one length",
+                          {c: len(col) for c, col in zip(FOOTSTEP_COLUMNS, columns, strict=True)})
+        if not plain:
+            self._steps.writerows(zip(*columns, strict=True))
+        elif columns[0]:  # csv.writer's text, a third cheaper than its row-by-row writes
+            text = [list(map(str, col)) for col in columns]
+            self._steps_file.write("\r\n".join(map(",".join, zip(*text, strict=True))) + "\r\n")
 
     # --- poses ----------------------------------------------------------------------
 

@@ -163,12 +163,10 @@ def test_footsteps_text_is_what_csv_writer_writes(tmp_path):
 
     rng = np.random.default_rng(7)
     batches = []
-    for names, top in ((["g", "section_0"], 9), (["g", "séction_1"], 18),
-                       (['a,b', 'say "hi"'], 18), (["x", "line\nbreak"], 9)):
+    for names in (["g", "section_0"], ['a,b', 'say "hi"'], ["x", "line\nbreak"]):
         rows = _steps(40)
-        rows["step"] = rng.integers(-10**12, 10**12, 40)
         for c in ("x", "y", "z", "energy", "heading", "spin"):
-            v = rng.normal(0, 10.0 ** rng.integers(-7, top, 40))  # top 18: > 8e9 too
+            v = rng.normal(0, 10.0 ** rng.integers(-7, 18, 40))
             v[::7], v[1::11], v[2::13], v[3::5] = np.nan, np.inf, -0.0, 1e-5
             rows[c] = v
         rows["group"] = np.array(names * 20)
@@ -187,33 +185,12 @@ def test_footsteps_text_is_what_csv_writer_writes(tmp_path):
     w.close()
     assert (tmp_path / "footsteps.csv").read_bytes() == want.getvalue().encode()
     steps = open_run(tmp_path).footsteps()
-    assert steps.group.tolist()[80:82] == ['a,b', 'say "hi"']
+    assert steps.group.tolist()[40:42] == ['a,b', 'say "hi"']
     rows = _steps(3)
     rows["x"] = np.zeros(2)
     with pytest.raises(ValueError, match="RunWriter.footsteps must be columns of one length"):
         RunWriter(tmp_path / "b", scenario_text="", walkable_wkt=SQUARE,
                   fps=10.0).write_footsteps(rows)
-
-
-def test_the_csv_kernel_writes_repr_of_every_rounded_float():
-    """record._csv_text formats floats rounded to 5 decimals as repr does (the shortest
-    text that reads back), ints as str; None where it does not (|x| >= 8e9)."""
-    from crowdwalk.record import _csv_text
-
-    rng = np.random.default_rng(11)
-    v = rng.normal(0, 10.0 ** rng.integers(-8, 10, 200_000))
-    v[:12] = [0.0, -0.0, 1e-5, -3e-5, 9e-5, 1e-4, 9.999995, 10.0, -123.456785, np.nan,
-              np.inf, -np.inf]
-    v = v[np.abs(v) < 8e9]
-    want = [repr(x) for x in np.round(v, 5).tolist()]
-    assert _csv_text([v]) == "\r\n".join(want) + "\r\n"
-    i = rng.integers(-2**62, 2**62, 1000)
-    i[:2] = [0, -(2**63) + 1]
-    assert _csv_text([i, np.array(["a"] * 1000)]) == "".join(
-        f"{x},a\r\n" for x in i.tolist())
-    assert _csv_text([np.array([-(2**63)])]) is None
-    assert _csv_text([np.array([1.0, 8e9])]) is None
-    assert _csv_text([np.array([True])]) is None
 
 
 def test_footsteps_of_old_and_broken_files(tmp_path):
