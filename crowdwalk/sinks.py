@@ -141,16 +141,18 @@ class BackgroundSink:
     work overlaps the simulation (SQLite and file writes release the GIL).
 
     The sink is built in that thread (an SQLite connection belongs to the thread that
-    opens it). A failure there is raised here by the next call; :meth:`end` returns when
-    every call before it is done. At most ``backlog`` calls wait at a time [-].
+    opens it). A failure there is raised here by the next call; :meth:`wait` and
+    :meth:`end` return when every call before them is done (``end`` raising a failure).
+    At most ``backlog`` calls wait at a time [-]; ``name`` names the thread.
     """
 
-    def __init__(self, factory: Callable[[], RunSink], *, backlog: int = 32) -> None:
+    def __init__(self, factory: Callable[[], RunSink], *, backlog: int = 32,
+                 name: str = "crowdwalk-sink") -> None:
         self._calls: queue.Queue = queue.Queue(maxsize=backlog)
         self._error: BaseException | None = None
         self._ready = threading.Event()
         self._thread = threading.Thread(target=self._serve, args=(factory,), daemon=True,
-                                        name="crowdwalk-sink")
+                                        name=name)
         self._thread.start()
         self._ready.wait()
         self._raise()  # the sink could not be built
@@ -167,6 +169,11 @@ class BackgroundSink:
     def call(self, name: str, *args) -> None:
         """Call the sink's method ``name`` with ``args``, in order with the others."""
         self._put(name, *args)
+
+    def wait(self) -> None:
+        """Return when every call made so far is done. A failure of one is raised by the
+        next call or :meth:`end` (so that a run still writes its summary first)."""
+        self._calls.join()
 
     def end(self, summary: dict) -> None:
         self._put("end", summary)
@@ -186,6 +193,8 @@ class BackgroundSink:
                     getattr(sink, call[0])(*call[1])
                 except BaseException as exc:  # noqa: BLE001 - raised in the calling thread
                     self._error = exc
+            self._calls.task_done()
+        self._calls.task_done()
 
     def _put(self, name: str, *args) -> None:
         self._raise()

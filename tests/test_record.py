@@ -77,6 +77,44 @@ def test_round_trip(tmp_path):
     track = poses.agent_track(3)
     assert track["time"].shape == (4,) and track["positions"].shape == (4, 3, 3)
     assert poses.body_heights == {3: 1.7, 7: 1.8}
+    assert _indices(tmp_path) == ["frame_id_idx"]  # built when the writer closed
+
+
+def _indices(run_dir) -> list[str]:
+    import sqlite3
+    from contextlib import closing
+
+    with closing(sqlite3.connect(run_dir / "trajectories.sqlite")) as con:
+        return [r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type='index' "
+                                          "AND tbl_name='trajectory_data'")]
+
+
+def test_frames_of_many_walkers_keep_every_row_in_order(tmp_path):
+    """Rows go in by multi-row INSERTs of _ROWS_PER_INSERT rows and one of the rest."""
+    from crowdwalk.record import _ROWS_PER_INSERT
+
+    rng = np.random.default_rng(3)
+    w = RunWriter(tmp_path, scenario_text="", walkable_wkt=SQUARE, fps=10.0)
+    sizes = [2 * _ROWS_PER_INSERT + 7, _ROWS_PER_INSERT, 1, _ROWS_PER_INSERT - 1]
+    frames = []
+    for f, k in enumerate(sizes):
+        ids = np.sort(rng.choice(10**6, k, replace=False))
+        xy, z = rng.uniform(0, 5, (k, 2)), rng.uniform(-1, 1, k)
+        ang = rng.uniform(-np.pi, np.pi, k)
+        ori = np.column_stack([np.cos(ang), np.sin(ang)])
+        w.write_frame(f, ids, xy, z, ori)
+        frames.append((np.full(k, f), ids, xy, z, ori))
+    w.close()
+    traj = open_run(tmp_path).trajectories()
+    f, ids, xy, z, ori = (np.concatenate(c) for c in zip(*frames, strict=True))
+    assert traj.frame.tolist() == f.tolist() and traj.id.tolist() == ids.tolist()
+    assert np.array_equal(np.column_stack([traj.x, traj.y]), xy)  # bit for bit
+    assert np.array_equal(traj.z, z)
+    assert np.array_equal(np.column_stack([traj.ori_x, traj.ori_y]), ori)
+    with pytest.raises(ValueError, match="RunWriter.frame"):
+        RunWriter(tmp_path / "bad", scenario_text="", walkable_wkt=SQUARE,
+                  fps=10.0).write_frame(0, np.arange(3), np.zeros((2, 2)), np.zeros(3),
+                                        np.zeros((3, 2)))
 
 
 def test_pedpy_reads_trajectory_unchanged(tmp_path):
@@ -114,6 +152,45 @@ def test_footsteps_read_back_as_a_typed_frozen_table(tmp_path):
     assert len(one) == 1 and one.x.tolist() == [1.5] and one.foot.tolist() == ["right"]
     with pytest.raises(ValueError, match="FootstepTable.x"):
         FootstepTable(**{**steps.columns(), "x": np.zeros(2)})  # ragged
+
+
+def test_footsteps_text_is_what_csv_writer_writes(tmp_path):
+    """write_footsteps joins the rows itself; the bytes are csv.writer's (str of each
+    value rounded to 5 decimals, quoting, \\r\\n), also for nan, inf, -0.0, 1e-05, 1e+16
+    and names csv must quote."""
+    import csv
+    import io
+
+    rng = np.random.default_rng(7)
+    batches = []
+    for names in (["g", "section_0"], ['a,b', 'say "hi"'], ["x", "line\nbreak"]):
+        rows = _steps(40)
+        for c in ("x", "y", "z", "energy", "heading", "spin"):
+            v = rng.normal(0, 10.0 ** rng.integers(-7, 18, 40))
+            v[::7], v[1::11], v[2::13], v[3::5] = np.nan, np.inf, -0.0, 1e-5
+            rows[c] = v
+        rows["group"] = np.array(names * 20)
+        rows["on_obstacle"] = rng.integers(0, 2, 40)
+        batches.append(rows)
+    w = RunWriter(tmp_path, scenario_text="", walkable_wkt=SQUARE, fps=10.0)
+    want = io.StringIO(newline="")
+    ref = csv.writer(want)
+    ref.writerow(FOOTSTEP_COLUMNS)
+    for rows in batches:
+        w.write_footsteps(rows)
+        ref.writerows(zip(*[np.round(r, 5).tolist() if np.asarray(r).dtype.kind == "f"
+                            else np.asarray(r).tolist()
+                            for r in (rows[c] for c in FOOTSTEP_COLUMNS)], strict=True))
+    w.write_footsteps({c: np.zeros(0) for c in FOOTSTEP_COLUMNS})  # no rows: no line
+    w.close()
+    assert (tmp_path / "footsteps.csv").read_bytes() == want.getvalue().encode()
+    steps = open_run(tmp_path).footsteps()
+    assert steps.group.tolist()[40:42] == ['a,b', 'say "hi"']
+    rows = _steps(3)
+    rows["x"] = np.zeros(2)
+    with pytest.raises(ValueError, match="RunWriter.footsteps must be columns of one length"):
+        RunWriter(tmp_path / "b", scenario_text="", walkable_wkt=SQUARE,
+                  fps=10.0).write_footsteps(rows)
 
 
 def test_footsteps_of_old_and_broken_files(tmp_path):
@@ -177,6 +254,7 @@ def test_killed_writer_leaves_readable_files(tmp_path):
     assert np.array_equal(traj.frame, np.arange(traj.frame.size))
     assert run.poses().frames.size >= 30
     assert run.footsteps().agent.size >= 30
+    assert _indices(tmp_path) == []  # the index is built at close: killed, none
     pedpy = pytest.importorskip("pedpy")
     assert len(pedpy.load_trajectory_from_jupedsim_sqlite(
         trajectory_file=tmp_path / "trajectories.sqlite").data) >= 30
@@ -224,6 +302,7 @@ def test_killed_crowdwalk_run_stays_readable(tmp_path):
     assert traj.frame.max() >= 20 and len(np.unique(traj.id)) >= 2
     steps = run.footsteps()
     assert steps.agent.size > 0 and np.isfinite(steps.x).all()
+    assert _indices(tmp_path) == []
     pedpy = pytest.importorskip("pedpy")
     data = pedpy.load_trajectory_from_jupedsim_sqlite(
         trajectory_file=tmp_path / "trajectories.sqlite")
@@ -243,6 +322,7 @@ def test_interrupted_crowdwalk_run_exits_130_with_a_summary(tmp_path):
     assert "Traceback" not in err and "interrupted" in err
     summary = open_run(tmp_path).summary
     assert summary["interrupted"] is True and summary["complete"] is False
+    assert _indices(tmp_path) == ["frame_id_idx"]  # the interrupted writer closed
     assert 1.0 <= summary["simulated_time_s"] < 70.0
 
 

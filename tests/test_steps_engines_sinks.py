@@ -154,3 +154,38 @@ def test_a_mixed_engine_poses_no_agents_as_an_empty_frame():
     engines = [make_engine(name, body=body, ground=None) for name in ("elevation_angles", "klaw")]
     frame = MixedEngine(engines, np.array([0, 1])).pose(0.0, np.array([], dtype=int))
     assert frame.agents.size == 0 and frame.positions.shape[0] == 0
+
+
+def test_a_background_sink_waits_for_every_call_and_raises_its_failure():
+    """BackgroundSink.wait (the run reads the overlap check's result after it): every
+    call made before it is done, in order; a failing call is raised by end, not wait
+    (the run writes its summary between the two)."""
+    import threading
+    import time
+
+    from crowdwalk.sinks import BackgroundSink, Snapshot
+
+    gate = threading.Event()
+
+    class Slow(Recorder):
+        def frame(self, time_, snapshot, poses) -> None:
+            gate.wait(5)
+            time.sleep(0.002)
+            super().frame(time_, snapshot, poses)
+
+    sink = Slow()
+    bg = BackgroundSink(lambda: sink, name="test-sink")
+    assert bg._thread.name == "test-sink"
+    for f in range(5):
+        bg.frame(f / 10, Snapshot(f, np.arange(2), np.zeros((2, 2)), np.zeros(2),
+                                  np.zeros((2, 2))), None)
+    assert sink.frames == []  # held at the gate: nothing done yet
+    gate.set()
+    bg.wait()
+    assert sink.frames == [0, 1, 2, 3, 4]
+    bg.frame(0.5, Snapshot(9, np.arange(2), np.zeros((2, 2)), np.zeros(2),
+                           np.zeros((2, 2))), None)  # out of order: the Recorder asserts
+    bg.wait()
+    assert sink.frames == [0, 1, 2, 3, 4]
+    with pytest.raises(AssertionError):
+        bg.end({})

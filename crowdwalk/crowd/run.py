@@ -216,8 +216,11 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
     writer = BackgroundSink(partial(RunWriter, out, scenario_text=text, fps=sim.fps,
                                     walkable_wkt=world.routes.walkable_area.wkt,
                                     skeleton=skeleton))
+    # and the outlines are checked in another (cKDTree and numpy release the GIL): the
+    # check's result is read once, for the summary
     overlap = OverlapMonitor()
-    everyone: list[RunSink] = [writer, overlap, *sinks]
+    checker = BackgroundSink(lambda: overlap, name="crowdwalk-overlap")
+    everyone: list[RunSink] = [writer, checker, *sinks]
     pop = sim.pop
     info = RunInfo(fps=sim.fps, body_height=pop.body_height, shape=sim.shape,
                    group=np.asarray(pop.group_names, dtype=object)[pop.group].astype(str),
@@ -278,6 +281,7 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dic
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
                       step_commands_s=sim.wall_commands)
+        checker.wait()
         summary = summarise(sim, sc, timing=timing, max_overlap=overlap.max_overlap,
                             interrupted=interrupted, poses=pose_note)
         for sink in everyone:
