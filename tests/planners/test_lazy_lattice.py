@@ -54,3 +54,41 @@ def test_best_first_reads_a_small_part_of_the_lattice(leg):
     assert p.stats["lattice_steps"] < full.stats["lattice_steps"] / 3
     assert p.stats["swing_curves"] + p.stats["swing_curves_reused"] < full.stats[
         "swing_curves"] + full.stats["swing_curves_reused"]
+
+
+@settings(max_examples=6, deadline=None)
+@given(terrain_profiles())
+def test_deferred_swings_give_the_same_search_and_count_the_curves_built(leg, profile):
+    from planners.lattice import DEFER_SWINGS
+
+    config = PlannerConfig()
+    A = 8
+    args = ([profile] * A, [leg] * A, np.linspace(0.9, 1.6, A), None, np.zeros(A), config)
+    for name in sorted(DEFER_SWINGS):
+        search = _SEARCHES[name]
+        eager = build_tables(*args)
+        deferred = build_tables(*args, defer_swings=True)
+        assert deferred.deferred and not eager.deferred
+        want, got = search(eager), search(deferred)
+        assert np.array_equal(want.found, got.found), name
+        assert np.array_equal(want.configs, got.configs), name
+        assert np.array_equal(want.expanded, got.expanded), name
+        assert np.array_equal(want.checks, got.checks), name
+        # the steps are the eager tables' own; the curves built are a subset of theirs
+        for field in _STEP_FIELDS:
+            assert np.array_equal(getattr(deferred, field), getattr(eager, field)), name
+        built = deferred.lattice.swing_done
+        assert (built <= eager.lattice.swing_done).all(), name
+        assert np.array_equal(deferred.swing_ok[built], eager.swing_ok[built]), name
+        assert np.array_equal(deferred.controls[built], eager.controls[built]), name
+        # the counters count the curves built and reused, no more, no less
+        work = deferred.work
+        assert np.array_equal(work.swing_curves + work.swing_curves_reused,
+                              built.sum(axis=1)), name
+        assert (work.swing_curves <= eager.work.swing_curves).all(), name
+        # completing the tables builds exactly the eager tables' curves
+        deferred.complete()
+        assert np.array_equal(deferred.lattice.swing_done, eager.lattice.swing_done), name
+        assert np.array_equal(deferred.swing_ok, eager.swing_ok), name
+        assert np.array_equal(deferred.controls, eager.controls), name
+        assert np.array_equal(deferred.work.swing_curves, eager.work.swing_curves), name
