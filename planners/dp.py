@@ -15,7 +15,6 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables, Structure, run_parts
-from planners.lattice_kernel import read_swing
 
 __all__ = ["DPWork", "cheapest", "dp_one", "dp_scratch"]
 
@@ -81,14 +80,14 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     found = np.zeros(B, dtype=np.bool_)
     states = np.zeros(B, dtype=np.int64)
     transitions = np.zeros(B, dtype=np.int64)
-    run_parts(_cheapest, B, tables.reader, tables.step_legal, tables.swing_ok, step_cost,
+    run_parts(_cheapest, B, tables.step_legal, tables.swing_ok, step_cost,
               agents.astype(np.int64), J, st._step_offsets, st._swing_offsets,
               st._swing_strides, configs, found, states, transitions)
     return configs, found, DPWork(states, transitions)
 
 
 @nb.njit(cache=True, nogil=True)
-def _cheapest(L, step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
+def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
               configs, found, states, transitions, part, parts):
     """The DP of :func:`cheapest` (:func:`dp_one`) for every ``parts``-th agent from
     ``part`` (:func:`planners.lattice.run_parts`)."""
@@ -96,7 +95,7 @@ def _cheapest(L, step_legal, swing_ok, step_cost, agents, J, step_off, swing_off
     value, new, choice = dp_scratch(J, n)
     for b in range(part, B, parts):
         found[b], states[b], transitions[b] = dp_one(
-            L, step_legal, swing_ok, step_cost[b], agents[b], J, step_off, swing_off, strides,
+            step_legal, swing_ok, step_cost[b], agents[b], J, step_off, swing_off, strides,
             value, new, choice, configs[b])
 
 
@@ -109,22 +108,18 @@ def dp_scratch(J, n):
 
 
 @nb.njit(cache=True, nogil=True)
-def dp_one(L, step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, value,
-           new, choice, config):
+def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, value, new,
+           choice, config):
     """The DP of :func:`cheapest` for table row ``a`` and its step costs ``step_cost``
     (Ns,): per depth k, the value of each state (m_{k-1}, j_{k-1}) plus each step j_k, the
-    least over j_{k-1} of a legal swing (the first on ties), then the way back from the
-    least final state into ``config`` (n,). States of infinite value (no legal way to
-    them) are skipped: they cannot lower any value. The predecessors of a step are tried
-    in order of value (then of j_{k-1}) up to the first whose swing is legal, which is the
-    least: only those swings are read (through ``L``,
-    :func:`~planners.lattice_kernel.read_swing`). ``value``, ``new``, ``choice``:
-    :func:`dp_scratch`. Returns (found, states, transitions)."""
+    least over j_{k-1} (the first on ties), then the way back from the least final state
+    into ``config`` (n,). States of infinite value (no legal way to them) are skipped:
+    they cannot lower any value. ``value``, ``new``, ``choice``: :func:`dp_scratch`.
+    Returns (found, states, transitions)."""
     n = config.size
     M_last = (J - 1) * n + 1
     states = 0
     transitions = 0
-    total = np.empty(J)
     value[0, 0] = 0.0
     for k in range(1, n + 1):
         M = (J - 1) * (k - 1) + 1
@@ -145,38 +140,22 @@ def dp_one(L, step_legal, swing_ok, step_cost, a, J, step_off, swing_off, stride
                 if not step_legal[a, step]:
                     continue
                 cost = step_cost[step]
-                candidates = 0
-                for jp in range(P):
-                    v = value[m, jp]
-                    total[jp] = np.inf
-                    if not v < np.inf:
-                        continue
-                    if k > 1:
-                        m2 = m - jp
-                        if not 0 <= m2 <= (J - 1) * (k - 2):
-                            continue
-                    if v + cost < np.inf:
-                        total[jp] = v + cost
-                        candidates += 1
                 best = np.inf
                 arg = 0
-                while candidates > 0:  # the least total not yet tried, the first on ties
-                    pick = -1
-                    low = np.inf
-                    for jp in range(P):
-                        if total[jp] < low:
-                            low = total[jp]
-                            pick = jp
-                    total[pick] = np.inf
-                    candidates -= 1
+                for jp in range(P):
+                    v = value[m, jp]
+                    if not v < np.inf:
+                        continue
                     if k == 1:
-                        swing = swing_off[0] + j
+                        ok = swing_ok[a, swing_off[0] + j]
                     else:
-                        swing = swing_off[k - 1] + (m - pick) * strides[k - 1] + pick + j
-                    if read_swing(L, swing_ok, a, swing):
-                        best = low
-                        arg = pick
-                        break
+                        m2 = m - jp
+                        ok = (0 <= m2 <= (J - 1) * (k - 2)
+                              and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
+                                           + jp + j])
+                    if ok and v + cost < best:
+                        best = v + cost
+                        arg = jp
                 new[m + j, j] = best
                 choice[k - 1, m + j, j] = arg
         M_next = M + J - 1

@@ -74,12 +74,6 @@ PRUNE = True
 #: is faster than entry by entry. Empty: every plan evaluates its tables up front (the
 #: plans are the same).
 LAZY = frozenset({"best_first", "fixed"})
-#: The planners whose plans, in chunks of at least :data:`PARALLEL_AGENTS` agents, get
-#: their steps up front and their swing curves where the search reads them
-#: (``build_tables(..., defer_swings=True)``): the DP reads the swings of a state's
-#: predecessors in order of value up to the first legal one, so about half of the curves
-#: the pruned tables build are never read. Empty: every swing up front (the same plans).
-DEFER_SWINGS = frozenset({"optimal", "best_first_multistart"})
 
 
 @dataclass(frozen=True, eq=False)
@@ -313,10 +307,6 @@ class StepTables:
         Entries are evaluated where a search reads them; an entry not evaluated
         (``evaluated`` False) is illegal, E = +inf, ``Reason.UNREACHED``, its other
         values undefined. :meth:`complete` evaluates what a search may read.
-    deferred : bool
-        Steps evaluated up front, the swing curves needing the §5.2 adjustment built
-        where a search's kernel reads them (:attr:`reader`); ``swing_ok`` holds those
-        built so far (:meth:`complete` builds the rest a search may read).
     """
 
     struct: Structure
@@ -343,14 +333,6 @@ class StepTables:
     reach: np.ndarray
     lattice: Lattice
     lazy: bool
-    deferred: bool = False
-
-    @property
-    def reader(self) -> Lattice | None:
-        """What the searches' kernels read swings through
-        (:func:`~planners.lattice_kernel.read_swing`): the lattice where swing curves
-        are deferred, else None (``swing_ok`` as it is)."""
-        return self.lattice if self.deferred else None
 
     @property
     def work(self) -> TableWork:
@@ -443,8 +425,7 @@ def _constants(config: PlannerConfig, st: Structure) -> tuple:
 
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
-                 origins: np.ndarray, config: PlannerConfig, lazy: bool = False,
-                 defer_swings: bool = False) -> StepTables:
+                 origins: np.ndarray, config: PlannerConfig, lazy: bool = False) -> StepTables:
     """Step tables of every agent: evaluated up front, or (``lazy``) left for the
     searches to evaluate where they read them.
 
@@ -464,10 +445,6 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         Evaluate only the nodes (footholds, support, terminal energies) and leave every
         step and swing to the searches (else every entry :data:`PRUNE` allows, in one
         compiled pass per agent, agents in parallel).
-    defer_swings : bool
-        With the tables up front (not ``lazy``): leave the swing curves that need the
-        §5.2 adjustment to the searches, which build one where they first read it
-        (:func:`planners.lattice_kernel.read_swing`; :data:`DEFER_SWINGS`).
 
     Notes
     -----
@@ -521,7 +498,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     tables = StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, L.node_s, L.node_z,
                         L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,
                         L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
-                        lattice, lazy, bool(defer_swings and not lazy))
+                        lattice, lazy)
     t0 = stages.add("arrays", t0)
     if lazy:
         tables.prepare()
@@ -534,9 +511,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                   L.step_offset, st.swing_back, st.swing_front, st.swing_stride, first,
                   second, valid, basis, influence, fparams, iparams, weights, L.node_s,
                   L.node_z, L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.cost,
-                  L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work,
-                  defer_swings, L.slope, L.support, L.consts, L.r_start, L.r_count, L.r_levels,
-                  L.r_built, L.ready)
+                  L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work)
         np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
         np.greater_equal(L.rounds, 0, out=L.swing_done)
     stages.add("kernel", t0)

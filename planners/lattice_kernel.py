@@ -21,7 +21,6 @@ from collections import namedtuple
 
 import numba as nb
 import numpy as np
-from numba.extending import overload
 
 from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, key_frame_from, leg_constants, next_swing_leg, stance_leg
@@ -29,8 +28,7 @@ from planners.swing import _cell, adjust_one
 
 __all__ = ["Lattice", "build_agents", "complete", "complete_agents",
            "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
-           "prepare_agents", "probe", "probe_efficiency", "read_swing", "step_legal",
-           "swing_legal"]
+           "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_legal"]
 
 _EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
 _VERTICAL = 1e-12
@@ -555,22 +553,6 @@ def swing_legal(L, a, q):
     return L.swing_ok[a, q]
 
 
-def read_swing(L, swing_ok, a, q):
-    """Whether swing ``q`` of agent ``a`` clears the ground, in the searches' kernels:
-    ``swing_ok[a, q]`` where ``L`` is None (tables evaluated up front), else
-    :func:`swing_legal` (the curve built on first read: tables whose swings are
-    deferred, :func:`planners.lattice.build_tables` ``defer_swings``). Compiled for
-    each case (numba overload)."""
-    return swing_ok[a, q] if L is None else swing_legal(L, a, q)
-
-
-@overload(read_swing, inline="always")
-def _read_swing(L, swing_ok, a, q):
-    if isinstance(L, nb.types.NoneType):
-        return lambda L, swing_ok, a, q: swing_ok[a, q]
-    return lambda L, swing_ok, a, q: swing_legal(L, a, q)
-
-
 @_inline
 def complete(L, a):
     """Every table entry of agent ``a`` a search or a diagnosis may read: with
@@ -722,9 +704,7 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
                  step_depth, step_offset, swing_back, swing_front, swing_stride,
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-                 progress, terminal, far, swing_ok, controls, rounds, work, defer, slope_out,
-                 support_out, consts_out, r_start, r_count, r_levels, r_built, ready, part,
-                 parts):
+                 progress, terminal, far, swing_ok, controls, rounds, work, part, parts):
     """Fill every table of every ``parts``-th agent from ``part`` (see
     :func:`planners.lattice.build_tables`, which runs it on every core through
     :func:`planners.lattice.run_parts`).
@@ -740,12 +720,7 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
     ``iparams``: snap, terminal_cost, prune, max_adjustments, table levels.
     ``weights``: alpha, beta, gamma, down_ratio, linear, frequency*alpha, c_thigh,
     c_calf. ``work`` (A, 5): key-frame solves, curves built, reused, adjustment rounds,
-    steps evaluated. With ``defer`` the swing curves that need the §5.2 adjustment are
-    left unbuilt (``rounds`` -1) for the searches to build where they read them
-    (:func:`read_swing`), and what :func:`eval_swing` needs of the agent is stored as
-    :func:`prepare` stores it (``slope_out``, ``support_out``, ``consts_out``, the
-    raster's extent ``r_start``, ``r_count``, ``r_levels``, ``r_built`` False; ``ready``
-    True).
+    steps evaluated.
     """
     for a in range(part, base.size, parts):
         _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
@@ -753,8 +728,7 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
                node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
                swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
                fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-               progress, terminal, far, swing_ok, controls, rounds, work, defer, slope_out,
-               support_out, consts_out, r_start, r_count, r_levels, r_built, ready)
+               progress, terminal, far, swing_ok, controls, rounds, work)
 
 
 @_jit
@@ -764,8 +738,7 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
                  step_depth, step_offset, swing_back, swing_front, swing_stride,
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-                 progress, terminal, far, swing_ok, controls, rounds, work, defer, slope_out,
-                 support_out, consts_out, r_start, r_count, r_levels, r_built, ready):
+                 progress, terminal, far, swing_ok, controls, rounds, work):
     """Every table of agent ``a`` (see :func:`build_agents`)."""
     Nn = node_depth.size
     Ns = step_stance.size
@@ -957,24 +930,6 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
         rest_hi = max(rest_hi, end)
     built = 0
     adjustments = 0
-    if defer:  # the rest are built where a search reads them (eval_swing)
-        lowest, highest = np.inf, -np.inf
-        for v in range(Nn):
-            lowest = min(lowest, b0 + node_s[a, v])
-            highest = max(highest, b0 + node_s[a, v])
-            support_out[a, v] = support[v]
-        span = 2 * leg[2]
-        r_lo = np.floor((lowest - span) / cell) * cell
-        count = max(1, int(np.ceil((highest + span - r_lo) / cell)))
-        r_start[a] = r_lo
-        r_count[a] = count
-        r_levels[a] = min(levels, _bit_length(count))
-        r_built[a] = False
-        slope_out[bounds[a]:bounds[a + 1]] = slope
-        for i in range(7):
-            consts_out[a, i] = constants[i]
-        ready[a] = True
-        rest_hi = -np.inf
     if rest_hi >= rest_lo:
         span = 2 * leg[2]
         r_start = np.floor((rest_lo - span) / cell) * cell

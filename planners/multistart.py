@@ -15,7 +15,6 @@ import numpy as np
 
 from planners.dp import cheapest
 from planners.lattice import StepTables, run_parts
-from planners.lattice_kernel import read_swing
 from planners.search import SearchResult, evaluate_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
@@ -55,7 +54,7 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
     A = agents.size
     configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
     legal = np.empty(A, dtype=np.bool_)
-    _legal_each(tables.reader, tables.step_legal, tables.swing_ok, st.J, st._step_offsets,
+    _legal_each(tables.step_legal, tables.swing_ok, st.J, st._step_offsets,
                 st._swing_offsets, st._swing_strides, np.asarray(agents, dtype=np.int64),
                 configs, legal)
     found = legal.copy()
@@ -76,12 +75,10 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
 
 
 @nb.njit(cache=True, nogil=True)
-def _legal_each(L, step_legal, swing_ok, J, step_off, swing_off, strides, agents, configs,
+def _legal_each(step_legal, swing_ok, J, step_off, swing_off, strides, agents, configs,
                 legal):
     """Whether each configuration ``configs[b]`` (B, n) is legal for table row
-    ``agents[b]`` (compiled, as :meth:`~planners.lattice.StepTables.evaluate`; swings
-    read through ``L``, :func:`~planners.lattice_kernel.read_swing`, up to the first
-    illegal step or swing)."""
+    ``agents[b]`` (compiled, as :meth:`~planners.lattice.StepTables.evaluate`)."""
     B, n = configs.shape
     for b in range(B):
         a = agents[b]
@@ -91,9 +88,8 @@ def _legal_each(L, step_legal, swing_ok, J, step_off, swing_off, strides, agents
             j = configs[b, k]
             step = step_off[k] + m_prev * J + j
             swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-            if not (step_legal[a, step] and read_swing(L, swing_ok, a, swing)):
+            if not (step_legal[a, step] and swing_ok[a, swing]):
                 ok = False
-                break
             if k > 0:
                 m_prev2 += j_prev
             m_prev += j
@@ -116,7 +112,7 @@ def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
     current = np.empty(B)
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
-    run_parts(_climb, B, tables.reader, tables.step_legal, tables.swing_ok,
+    run_parts(_climb, B, tables.step_legal, tables.swing_ok,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress), st.J,
               st._step_offsets, st._swing_offsets, st._swing_strides, _deltas(st.n),
               np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
@@ -132,7 +128,7 @@ def _deltas(n: int) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True)
-def _climb(L, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
+def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
            agents, configs, current, expanded, checks, part, parts):
     """The climbs of :func:`hill_climb`, every ``parts``-th from ``part``
     (:func:`planners.lattice.run_parts`; efficiencies rounded to 1e-12 as
@@ -142,7 +138,7 @@ def _climb(L, step_legal, swing_ok, cost, progress, J, step_off, swing_off, stri
     for b in range(part, B, parts):
         a = agents[b]
         q = configs[b]
-        _, cur = evaluate_one(L, a, q, step_legal, swing_ok, cost, progress, J, step_off,
+        _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
                            swing_off, strides)
         while True:
             expanded[b] += 1
@@ -156,7 +152,7 @@ def _climb(L, step_legal, swing_ok, cost, progress, J, step_off, swing_off, stri
                 if not inside:
                     continue
                 checks[b] += 1
-                legal, e = evaluate_one(L, a, r, step_legal, swing_ok, cost, progress, J,
+                legal, e = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
                                      step_off, swing_off, strides)
                 if legal and e > best_eff:
                     best_eff, best_d = e, d
@@ -174,19 +170,19 @@ def greedy(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, st.n, st.J
     configs = np.zeros((A, n), dtype=np.int64)
     found = np.ones(A, dtype=bool)
-    run_parts(_greedy, A, tables.reader, tables.step_legal, tables.swing_ok, tables.length,
-              tables.E, J, st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
+    run_parts(_greedy, A, tables.step_legal, tables.swing_ok, tables.length, tables.E, J,
+              st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
     checks = np.full(A, n * J, dtype=np.int64)
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
 
 
 @nb.njit(cache=True, nogil=True)
-def _greedy(L, step_legal, swing_ok, length, E, J, step_off, swing_off, strides, configs,
+def _greedy(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, configs,
             found, part, parts):
     """The steps of :func:`greedy`, compiled, for every ``parts``-th agent from ``part``
     (:func:`planners.lattice.run_parts`): at step k the first j of highest ``length / E``
     among the legal steps (of the swing from f_{k-2}), as ``np.argmax`` (a NaN score
-    wins; where none is legal, j = 0, not found, and the later steps stay 0)."""
+    wins; where none is legal, j = 0 and not found)."""
     A, n = configs.shape
     for a in range(part, A, parts):
         m_prev, m_prev2, j_prev = 0, 0, 0
@@ -196,17 +192,15 @@ def _greedy(L, step_legal, swing_ok, length, E, J, step_off, swing_off, strides,
                 step = step_off[k] + m_prev * J + j
                 swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
                 score = (length[a, step] / E[a, step]
-                         if step_legal[a, step] and read_swing(L, swing_ok, a, swing)
-                         else -np.inf)
+                         if step_legal[a, step] and swing_ok[a, swing] else -np.inf)
                 if np.isnan(score):
                     best_j, nan = j, True
                     break
                 if score > best:
                     best, best_j = score, j
-            configs[a, k] = best_j
             if nan or not np.isfinite(best):
                 found[a] = False
-                break  # (the steps beyond are of no use: not read past a dead end)
+            configs[a, k] = best_j
             if k > 0:
                 m_prev2 += j_prev
             m_prev += best_j

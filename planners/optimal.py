@@ -37,7 +37,7 @@ def optimal(tables: StepTables) -> SearchResult:
     configs = init.configs.copy()
     expanded, checks = init.expanded.copy(), init.checks.copy()
     agents = np.flatnonzero(init.found)
-    run_parts(_dinkelbach, agents.size, tables.reader, tables.step_legal, tables.swing_ok,
+    run_parts(_dinkelbach, agents.size, tables.step_legal, tables.swing_ok,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               st.J, st._step_offsets, st._swing_offsets, st._swing_strides, agents, configs,
               expanded, checks, MAX_ITERATIONS)
@@ -45,7 +45,7 @@ def optimal(tables: StepTables) -> SearchResult:
 
 
 @nb.njit(cache=True, nogil=True)
-def _dinkelbach(L, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+def _dinkelbach(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
                 agents, configs, expanded, checks, iterations, part, parts):
     """Dinkelbach's iterations of :func:`optimal` from the legal ``configs[a]`` of every
     ``parts``-th agent ``a`` in ``agents`` from ``part``
@@ -61,21 +61,19 @@ def _dinkelbach(L, step_legal, swing_ok, cost, progress, J, step_off, swing_off,
     best = np.empty(n, dtype=np.int64)
     for i in range(part, agents.size, parts):
         a = agents[i]
-        _, eff = evaluate_one(L, a, configs[a], step_legal, swing_ok, cost, progress, J,
+        _, eff = evaluate_one(a, configs[a], step_legal, swing_ok, cost, progress, J,
                               step_off, swing_off, strides)
         for _ in range(iterations):
             lam = 1.0 / eff
             for t in range(Ns):
                 row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
-            ok, states, transitions = dp_one(L, step_legal, swing_ok, row, a, J, step_off,
+            ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off,
                                              swing_off, strides, value, new, choice, best)
             expanded[a] += states
             checks[a] += transitions
-            if not ok:
-                break
-            _, moved = evaluate_one(L, a, best, step_legal, swing_ok, cost, progress, J,
+            _, moved = evaluate_one(a, best, step_legal, swing_ok, cost, progress, J,
                                     step_off, swing_off, strides)
-            if not moved > eff * (1 + 1e-12):
+            if not (ok and moved > eff * (1 + 1e-12)):
                 break
             configs[a, :] = best
             eff = moved

@@ -252,9 +252,7 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         t0 = time.perf_counter()
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
                               None if trailing is None else trailing[sl], origins[sl], config,
-                              lazy=lattice.PRUNE and planner in lattice.LAZY,
-                              defer_swings=(lattice.PRUNE and planner in lattice.DEFER_SWINGS
-                                            and len(profiles[sl]) >= lattice.PARALLEL_AGENTS))
+                              lazy=lattice.PRUNE and planner in lattice.LAZY)
         t1 = time.perf_counter()
         result = _SEARCHES[planner](tables)
         t2 = stages.add("search", t1)
@@ -314,7 +312,7 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     messages = {}
     if not result.found.all():
         failed = np.flatnonzero(~result.found)
-        if tables.lazy or tables.deferred:
+        if tables.lazy:
             tables.complete(failed)  # the diagnosis reads every legal prefix
         for a, (message, prefix, depth) in zip(failed.tolist(),
                                                _diagnose(tables, failed, profiles, origins),

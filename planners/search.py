@@ -8,7 +8,6 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
-from planners.lattice_kernel import read_swing
 
 __all__ = ["SearchResult", "all_configs_evaluated", "evaluate_one", "neighbour_deltas"]
 
@@ -73,13 +72,10 @@ def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
 
 
 @nb.njit(cache=True, nogil=True)
-def evaluate_one(L, a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off,
-                 strides):
+def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
     """Legality and efficiency of configuration ``q`` (n,) for table row ``a``, rounded
     to 1e-12 as :meth:`~planners.lattice.StepTables.evaluate` (compiled, for the
-    searches' kernels). Swings are read through ``L``
-    (:func:`~planners.lattice_kernel.read_swing`), up to the first illegal step or
-    swing."""
+    searches' kernels)."""
     n = q.size
     m_prev = 0  # lattice index of the stance foothold f_{k-1}
     m_prev2 = 0  # of the lift-off foothold f_{k-2}
@@ -91,7 +87,7 @@ def evaluate_one(L, a, q, step_legal, swing_ok, cost, progress, J, step_off, swi
         step = step_off[k] + m_prev * J + q[k]
         stride = q[k] + (j_prev if k > 0 else 0)
         swing = swing_off[k] + m_prev2 * strides[k] + stride
-        if legal and not (step_legal[a, step] and read_swing(L, swing_ok, a, swing)):
+        if not (step_legal[a, step] and swing_ok[a, swing]):
             legal = False
         energy += cost[a, step]
         length += progress[a, step]
