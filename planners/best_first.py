@@ -45,7 +45,10 @@ def _orders(tables: StepTables):
     (A,) and the configurations q_init (A, n)."""
     n, J = tables.struct.n, tables.struct.J
     centres = tables.neutral.astype(np.int64)
-    distinct, which = np.unique(centres, return_inverse=True)
+    if centres.size == 1:  # a single plan
+        distinct, which = centres, np.zeros(1, dtype=np.int64)
+    else:
+        distinct, which = np.unique(centres, return_inverse=True)
     orders = (fifo_order(int(distinct[0]), n, J)[None] if distinct.size == 1
               else np.stack([fifo_order(int(c), n, J) for c in distinct]))
     return orders, which.astype(np.int64), np.repeat(centres[:, None], n, axis=1)

@@ -14,9 +14,9 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from planners.lattice import StepTables, Structure
+from planners.lattice import StepTables, Structure, run_parts
 
-__all__ = ["DPWork", "cheapest"]
+__all__ = ["DPWork", "cheapest", "dp_one", "dp_scratch"]
 
 
 class DPWork(NamedTuple):
@@ -80,76 +80,96 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     found = np.zeros(B, dtype=np.bool_)
     states = np.zeros(B, dtype=np.int64)
     transitions = np.zeros(B, dtype=np.int64)
-    _cheapest(tables.step_legal, tables.swing_ok, step_cost, agents.astype(np.int64), J,
-              st._step_offsets, st._swing_offsets, st._swing_strides, configs, found,
-              states, transitions)
+    run_parts(_cheapest, B, tables.step_legal, tables.swing_ok, step_cost,
+              agents.astype(np.int64), J, st._step_offsets, st._swing_offsets,
+              st._swing_strides, configs, found, states, transitions)
     return configs, found, DPWork(states, transitions)
 
 
 @nb.njit(cache=True, nogil=True)
 def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
-              configs, found, states, transitions):
-    """The DP of :func:`cheapest`, one agent at a time: per depth k, the value of each
-    state (m_{k-1}, j_{k-1}) plus each step j_k, the least over j_{k-1} (the first on
-    ties), then the way back from the least final state. States of infinite value (no
-    legal way to them) are skipped: they cannot lower any value."""
+              configs, found, states, transitions, part, parts):
+    """The DP of :func:`cheapest` (:func:`dp_one`) for every ``parts``-th agent from
+    ``part`` (:func:`planners.lattice.run_parts`)."""
     B, n = configs.shape
+    value, new, choice = dp_scratch(J, n)
+    for b in range(part, B, parts):
+        found[b], states[b], transitions[b] = dp_one(
+            step_legal, swing_ok, step_cost[b], agents[b], J, step_off, swing_off, strides,
+            value, new, choice, configs[b])
+
+
+@nb.njit(cache=True, nogil=True)
+def dp_scratch(J, n):
+    """The work arrays of :func:`dp_one` for ``J`` step lengths and horizon ``n``."""
     M_last = (J - 1) * n + 1
-    value = np.empty((M_last, J))
-    new = np.empty((M_last, J))
-    choice = np.zeros((n, M_last, J), dtype=np.int64)
-    for b in range(B):
-        a = agents[b]
-        value[0, 0] = 0.0
-        for k in range(1, n + 1):
-            M = (J - 1) * (k - 1) + 1
-            P = 1 if k == 1 else J
-            new[:M + J - 1, :] = np.inf
-            choice[k - 1, :M + J - 1, :] = 0
-            for m in range(M):
-                reachable = 0  # states (m, jp) of this depth some legal sequence reaches
-                for jp in range(P):
-                    if value[m, jp] < np.inf:
-                        reachable += 1
-                states[b] += reachable
-                if reachable == 0:
-                    continue  # new[m + j, j] stays +inf
-                for j in range(J):
-                    transitions[b] += reachable
-                    step = step_off[k - 1] + m * J + j
-                    if not step_legal[a, step]:
-                        continue
-                    cost = step_cost[b, step]
-                    best = np.inf
-                    arg = 0
-                    for jp in range(P):
-                        v = value[m, jp]
-                        if not v < np.inf:
-                            continue
-                        if k == 1:
-                            ok = swing_ok[a, swing_off[0] + j]
-                        else:
-                            m2 = m - jp
-                            ok = (0 <= m2 <= (J - 1) * (k - 2)
-                                  and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
-                                               + jp + j])
-                        if ok and v + cost < best:
-                            best = v + cost
-                            arg = jp
-                    new[m + j, j] = best
-                    choice[k - 1, m + j, j] = arg
-            M_next = M + J - 1
-            value[:M_next, :] = new[:M_next, :]
-        best = np.inf
-        last_m, last_j = 0, 0
-        for m in range(M_last):
+    return (np.empty((M_last, J)), np.empty((M_last, J)),
+            np.zeros((n, M_last, J), dtype=np.int64))
+
+
+@nb.njit(cache=True, nogil=True)
+def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, value, new,
+           choice, config):
+    """The DP of :func:`cheapest` for table row ``a`` and its step costs ``step_cost``
+    (Ns,): per depth k, the value of each state (m_{k-1}, j_{k-1}) plus each step j_k, the
+    least over j_{k-1} (the first on ties), then the way back from the least final state
+    into ``config`` (n,). States of infinite value (no legal way to them) are skipped:
+    they cannot lower any value. ``value``, ``new``, ``choice``: :func:`dp_scratch`.
+    Returns (found, states, transitions)."""
+    n = config.size
+    M_last = (J - 1) * n + 1
+    states = 0
+    transitions = 0
+    value[0, 0] = 0.0
+    for k in range(1, n + 1):
+        M = (J - 1) * (k - 1) + 1
+        P = 1 if k == 1 else J
+        new[:M + J - 1, :] = np.inf
+        choice[k - 1, :M + J - 1, :] = 0
+        for m in range(M):
+            reachable = 0  # states (m, jp) of this depth some legal sequence reaches
+            for jp in range(P):
+                if value[m, jp] < np.inf:
+                    reachable += 1
+            states += reachable
+            if reachable == 0:
+                continue  # new[m + j, j] stays +inf
             for j in range(J):
-                if value[m, j] < best:
-                    best = value[m, j]
-                    last_m, last_j = m, j
-        found[b] = best < np.inf
-        m_cur, j_cur = last_m, last_j
-        for k in range(n, 0, -1):
-            configs[b, k - 1] = j_cur
-            jp = choice[k - 1, m_cur, j_cur]
-            m_cur, j_cur = m_cur - j_cur, jp
+                transitions += reachable
+                step = step_off[k - 1] + m * J + j
+                if not step_legal[a, step]:
+                    continue
+                cost = step_cost[step]
+                best = np.inf
+                arg = 0
+                for jp in range(P):
+                    v = value[m, jp]
+                    if not v < np.inf:
+                        continue
+                    if k == 1:
+                        ok = swing_ok[a, swing_off[0] + j]
+                    else:
+                        m2 = m - jp
+                        ok = (0 <= m2 <= (J - 1) * (k - 2)
+                              and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
+                                           + jp + j])
+                    if ok and v + cost < best:
+                        best = v + cost
+                        arg = jp
+                new[m + j, j] = best
+                choice[k - 1, m + j, j] = arg
+        M_next = M + J - 1
+        value[:M_next, :] = new[:M_next, :]
+    best = np.inf
+    last_m, last_j = 0, 0
+    for m in range(M_last):
+        for j in range(J):
+            if value[m, j] < best:
+                best = value[m, j]
+                last_m, last_j = m, j
+    m_cur, j_cur = last_m, last_j
+    for k in range(n, 0, -1):
+        config[k - 1] = j_cur
+        jp = choice[k - 1, m_cur, j_cur]
+        m_cur, j_cur = m_cur - j_cur, jp
+    return best < np.inf, states, transitions

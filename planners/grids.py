@@ -122,6 +122,9 @@ class _Cache:
         self.types = {"neutral": np.int64, "flat_reach": np.bool_, "flat_ok": np.bool_}
         self.arrays = {k: np.empty((0, *s), dtype=self.types.get(k, float))
                        for k, s in self.shapes.items()}
+        #: the LegGrids of single walkers, by (leg, speed): a single plan's grids are
+        #: gathered once (callers only read a LegGrids)
+        self.singles: dict = {}
 
     def add(self, keys: list, values: dict) -> None:
         if len(self.rows) + len(keys) > CACHE_ENTRIES:
@@ -140,8 +143,26 @@ _LAST: list = [None, None]  # the last configuration and its cache (hashing one 
 
 def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
     """The grids and level-ground caches of ``legs`` (A,) walking at ``speeds`` (A,)
-    [m/s] (entries missing from the cache are computed together)."""
+    [m/s] (entries missing from the cache are computed together; a single walker's
+    result is kept whole, per leg and speed: read it, do not write to it)."""
     speeds = np.asarray(speeds, dtype=float)
+    cache = _LAST[1] if _LAST[0] is config else _CACHES.get(config)
+    if cache is None:
+        cache = _CACHES.setdefault(config, _Cache(config))
+    _LAST[:] = config, cache
+    if len(legs) == 1:
+        key = legs[0], float(speeds[0])
+        got = cache.singles.get(key)
+        if got is None:
+            if len(cache.singles) >= CACHE_ENTRIES:
+                cache.singles.clear()
+            got = cache.singles[key] = _gathered(legs, speeds, config, cache)
+        return got
+    return _gathered(legs, speeds, config, cache)
+
+
+def _gathered(legs, speeds: np.ndarray, config: PlannerConfig, cache: _Cache) -> LegGrids:
+    """:func:`leg_grids` from the per-(leg, shift) entries of ``cache``."""
     legs_col = LegArrays(legs)
     normal_mode = config.step_model == "normal_mode"
     if normal_mode:  # each grid anchored on the normal-mode step (to 1/32 increment)
@@ -154,10 +175,6 @@ def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
     else:
         normal = np.zeros(len(legs))
         keys = [(leg, 0.0, -1) for leg in legs]
-    cache = _LAST[1] if _LAST[0] is config else _CACHES.get(config)
-    if cache is None:
-        cache = _CACHES.setdefault(config, _Cache(config))
-    _LAST[:] = config, cache
     missing = list(dict.fromkeys(key for key in keys if key not in cache.rows))
     if missing:
         cache.add(missing, _entries(missing, config))

@@ -396,6 +396,34 @@ class StepTables:
         return legal, np.round(length / energy, 12)
 
 
+_CONSTANTS: list = [None, None, None, None]  # config, structure, PRUNE, constants
+
+
+def _constants(config: PlannerConfig, st: Structure) -> tuple:
+    """The kernels' inputs that depend on the configuration alone (kept for the last
+    configuration: a plan's tables need them every time, a crowd uses one or two)."""
+    if _CONSTANTS[0] is config and _CONSTANTS[1] is st and _CONSTANTS[2] == PRUNE:
+        return _CONSTANTS[3]
+    w = config.weights
+    first, second, valid = st.pair_steps
+    basis, influence = swing_basis(config.bezier_samples)
+    fparams = np.array([config.max_step_rise, config.max_foot_slope, config.support_tolerance,
+                        config.edge_margin, config.swing_lift, config.pelvis_height_ratio,
+                        float(np.cos(np.pi - config.knee_max_flexion)), config.min_step_ratio,
+                        config.max_step_ratio, config.intervals, config.clearance,
+                        config.max_swing_lift, RASTER_CELL])
+    iparams = np.array([config.snap, config.terminal_cost, PRUNE,
+                        config.max_adjustments, TABLE_LEVELS], dtype=np.int64)
+    weights = np.array([w.alpha, w.beta, w.gamma, w.down_ratio, w.vertical == "linear",
+                        w.frequency * w.alpha, w.c_thigh, w.c_calf], dtype=float)
+    constants = (first, second, valid, basis, influence, fparams, iparams, weights,
+                 np.asarray(st.step_offset, dtype=np.int64),
+                 np.asarray(st.swing_offset, dtype=np.int64),
+                 np.asarray(st.swing_strides, dtype=np.int64))
+    _CONSTANTS[:] = config, st, PRUNE, constants
+    return constants
+
+
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
                  origins: np.ndarray, config: PlannerConfig, lazy: bool = False) -> StepTables:
     """Step tables of every agent: evaluated up front, or (``lazy``) left for the
@@ -440,19 +468,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     bounds = np.concatenate([[0], np.cumsum(sizes)])
     prof_s = np.concatenate([p.s + o for p, o in zip(profiles, offsets.tolist(), strict=True)])
     prof_z = np.concatenate([p.z for p in profiles])
-    w = config.weights
-    first, second, valid = st.pair_steps
-    basis, influence = swing_basis(config.bezier_samples)
+    (first, second, valid, basis, influence, fparams, iparams, weights, step_offset,
+     swing_offset, swing_strides) = _constants(config, st)
     Nn, Ns, Np = st.node_depth.size, st.step_stance.size, st.swing_back.size
-    fparams = np.array([config.max_step_rise, config.max_foot_slope, config.support_tolerance,
-                        config.edge_margin, config.swing_lift, config.pelvis_height_ratio,
-                        float(np.cos(np.pi - config.knee_max_flexion)), config.min_step_ratio,
-                        config.max_step_ratio, config.intervals, config.clearance,
-                        config.max_swing_lift, RASTER_CELL])
-    iparams = np.array([config.snap, config.terminal_cost, PRUNE,
-                        config.max_adjustments, TABLE_LEVELS], dtype=np.int64)
-    weights = np.array([w.alpha, w.beta, w.gamma, w.down_ratio, w.vertical == "linear",
-                        w.frequency * w.alpha, w.c_thigh, w.c_calf], dtype=float)
     # the swing raster of an agent spans its nodes (each within half an increment of the
     # grid) and two foot lengths either side
     reach_s = st.n * (g.lo + g.delta * st.J) - np.minimum(trailing, 0.0)
@@ -460,9 +478,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     empty, zeros = np.empty, np.zeros
     lattice = Lattice(
         st.node_depth, st.node_m, st.step_stance, st.step_front, st.step_j, st.step_depth,
-        np.asarray(st.step_offset, dtype=np.int64), st.swing_back, st.swing_front,
-        st.swing_stride, np.asarray(st.swing_offset, dtype=np.int64),
-        np.asarray(st.swing_strides, dtype=np.int64), first, second, valid,
+        step_offset, st.swing_back, st.swing_front, st.swing_stride, swing_offset,
+        swing_strides, first, second, valid,
         prof_s, prof_z, bounds, base,
         g.lo, g.delta, trailing, np.asarray(speeds, dtype=float), g.normal, g.per_metre,
         g.lo + g.delta * g.neutral, g.legs, g.flat_Ej, g.flat_reach, g.flat_ctrl,

@@ -14,7 +14,7 @@ import numba as nb
 import numpy as np
 
 from planners.dp import cheapest
-from planners.lattice import StepTables
+from planners.lattice import StepTables, run_parts
 from planners.search import SearchResult, evaluate_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
@@ -112,10 +112,10 @@ def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
     current = np.empty(B)
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
-    _climb(tables.step_legal, tables.swing_ok, np.ascontiguousarray(tables.cost),
-           np.ascontiguousarray(tables.progress), st.J, st._step_offsets,
-           st._swing_offsets, st._swing_strides, _deltas(st.n),
-           np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
+    run_parts(_climb, B, tables.step_legal, tables.swing_ok,
+              np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress), st.J,
+              st._step_offsets, st._swing_offsets, st._swing_strides, _deltas(st.n),
+              np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
     return configs, current, expanded, checks
 
 
@@ -129,12 +129,13 @@ def _deltas(n: int) -> np.ndarray:
 
 @nb.njit(cache=True, nogil=True)
 def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
-           agents, configs, current, expanded, checks):
-    """The climbs of :func:`hill_climb`, one after the other (efficiencies rounded to
-    1e-12 as :meth:`~planners.lattice.StepTables.evaluate`)."""
+           agents, configs, current, expanded, checks, part, parts):
+    """The climbs of :func:`hill_climb`, every ``parts``-th from ``part``
+    (:func:`planners.lattice.run_parts`; efficiencies rounded to 1e-12 as
+    :meth:`~planners.lattice.StepTables.evaluate`)."""
     B, n = configs.shape
     r = np.empty(n, dtype=np.int64)
-    for b in range(B):
+    for b in range(part, B, parts):
         a = agents[b]
         q = configs[b]
         _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
@@ -169,20 +170,21 @@ def greedy(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, st.n, st.J
     configs = np.zeros((A, n), dtype=np.int64)
     found = np.ones(A, dtype=bool)
-    _greedy(tables.step_legal, tables.swing_ok, tables.length, tables.E, J,
-            st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
+    run_parts(_greedy, A, tables.step_legal, tables.swing_ok, tables.length, tables.E, J,
+              st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
     checks = np.full(A, n * J, dtype=np.int64)
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
 
 
 @nb.njit(cache=True, nogil=True)
 def _greedy(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, configs,
-            found):
-    """The steps of :func:`greedy` (A agents), compiled: at step k the first j of highest
-    ``length / E`` among the legal steps (of the swing from f_{k-2}), as ``np.argmax``
-    (a NaN score wins; where none is legal, j = 0 and not found)."""
+            found, part, parts):
+    """The steps of :func:`greedy`, compiled, for every ``parts``-th agent from ``part``
+    (:func:`planners.lattice.run_parts`): at step k the first j of highest ``length / E``
+    among the legal steps (of the swing from f_{k-2}), as ``np.argmax`` (a NaN score
+    wins; where none is legal, j = 0 and not found)."""
     A, n = configs.shape
-    for a in range(A):
+    for a in range(part, A, parts):
         m_prev, m_prev2, j_prev = 0, 0, 0
         for k in range(n):
             best, best_j, nan = -np.inf, 0, False

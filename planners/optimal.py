@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
-from planners.dp import cheapest
-from planners.lattice import StepTables
+from planners.dp import dp_one, dp_scratch
+from planners.lattice import StepTables, run_parts
 from planners.multistart import nearest_legal
-from planners.search import SearchResult
+from planners.search import SearchResult, evaluate_one
 
 __all__ = ["optimal"]
 
@@ -22,35 +23,57 @@ def optimal(tables: StepTables) -> SearchResult:
     solves it exactly: with ``lam`` the energy per metre (1 / efficiency) of the best
     configuration so far, dynamic programming finds the legal configuration minimising
     ``sum(E - lam * L)``; if that sum is negative the new configuration is more efficient
-    and ``lam`` moves to it, otherwise ``lam`` is optimal. All agents iterate together.
-    ``nodes_expanded`` counts the reachable DP states and ``legality_checks`` their
-    transitions in every pass (:class:`~planners.dp.DPWork`; plus those of the start,
-    :func:`~planners.multistart.nearest_legal`). E and L are
-    the tables' ``cost`` and ``progress``: with ``PlannerConfig.terminal_cost`` every
-    configuration progresses equally and the optimum is the least energy for it.
+    and ``lam`` moves to it, otherwise ``lam`` is optimal. ``nodes_expanded`` counts the
+    reachable DP states and ``legality_checks`` their transitions in every pass
+    (:class:`~planners.dp.DPWork`; plus those of the start,
+    :func:`~planners.multistart.nearest_legal`). E and L are the tables' ``cost`` and
+    ``progress``: with ``PlannerConfig.terminal_cost`` every configuration progresses
+    equally and the optimum is the least energy for it. Each agent iterates on its own,
+    in one compiled kernel (:func:`_dinkelbach`), agents on every core
+    (:func:`~planners.lattice.run_parts`).
     """
-    A = tables.neutral.size
+    st = tables.struct
     init = nearest_legal(tables)
     configs = init.configs.copy()
-    found = init.found.copy()
-    agents = np.flatnonzero(found)
-    eff = np.zeros(A)
-    if agents.size:
-        _, eff[agents] = tables.evaluate(agents, configs[agents])
     expanded, checks = init.expanded.copy(), init.checks.copy()
-    active = agents
-    for _ in range(MAX_ITERATIONS):
-        if active.size == 0:
-            break
-        lam = 1.0 / eff[active, None]
-        best, ok, work = cheapest(tables, tables.cost[active] - lam * tables.progress[active],
-                                  active)
-        expanded[active] += work.states
-        checks[active] += work.transitions
-        _, new = tables.evaluate(active, best)
-        better = ok & (new > eff[active] * (1 + 1e-12))
-        movers = active[better]
-        configs[movers] = best[better]
-        eff[movers] = new[better]
-        active = movers
-    return SearchResult(configs, found, expanded, checks)
+    agents = np.flatnonzero(init.found)
+    run_parts(_dinkelbach, agents.size, tables.step_legal, tables.swing_ok,
+              np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
+              st.J, st._step_offsets, st._swing_offsets, st._swing_strides, agents, configs,
+              expanded, checks, MAX_ITERATIONS)
+    return SearchResult(configs, init.found.copy(), expanded, checks)
+
+
+@nb.njit(cache=True, nogil=True)
+def _dinkelbach(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+                agents, configs, expanded, checks, iterations, part, parts):
+    """Dinkelbach's iterations of :func:`optimal` from the legal ``configs[a]`` of every
+    ``parts``-th agent ``a`` in ``agents`` from ``part``
+    (:func:`planners.lattice.run_parts`), each until a DP pass no longer improves the
+    efficiency or ``iterations`` passes. The arithmetic of the vectorised iteration it
+    replaced: efficiencies rounded to 1e-12 (:func:`~planners.search.evaluate_one`, as
+    :meth:`~planners.lattice.StepTables.evaluate`), step costs ``E - lam * L`` rounded to
+    1e-10 (as :func:`~planners.dp.cheapest`)."""
+    n = configs.shape[1]
+    Ns = cost.shape[1]
+    value, new, choice = dp_scratch(J, n)
+    row = np.empty(Ns)
+    best = np.empty(n, dtype=np.int64)
+    for i in range(part, agents.size, parts):
+        a = agents[i]
+        _, eff = evaluate_one(a, configs[a], step_legal, swing_ok, cost, progress, J,
+                              step_off, swing_off, strides)
+        for _ in range(iterations):
+            lam = 1.0 / eff
+            for t in range(Ns):
+                row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
+            ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off,
+                                             swing_off, strides, value, new, choice, best)
+            expanded[a] += states
+            checks[a] += transitions
+            _, moved = evaluate_one(a, best, step_legal, swing_ok, cost, progress, J,
+                                    step_off, swing_off, strides)
+            if not (ok and moved > eff * (1 + 1e-12)):
+                break
+            configs[a, :] = best
+            eff = moved

@@ -286,6 +286,13 @@ def _turned(p: Plan, change: float | None, foot: str, config: PlannerConfig) -> 
 
 
 def _vector(values, count: int, name: str) -> np.ndarray:
+    if type(values) is list and len(values) == 1 and isinstance(values[0], float | int):
+        values = values[0]  # plan(): one walker
+    if isinstance(values, float | int):  # a number for every walker (no broadcasting)
+        number = float(values)
+        if not math.isfinite(number):
+            raise invalid("plan", name, "finite", number)
+        return np.full(count, number)
     try:
         arr = np.broadcast_to(np.asarray(values, dtype=float), (count,)).copy()
     except (TypeError, ValueError):
@@ -302,15 +309,16 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     st = tables.struct
     A = speeds.size
     rows = np.arange(A)[:, None]
-    failed = np.flatnonzero(~result.found)
-    if tables.lazy:
-        tables.complete(failed)  # the diagnosis reads every legal prefix
     messages = {}
-    for a, (message, prefix, depth) in zip(failed.tolist(),
-                                           _diagnose(tables, failed, profiles, origins),
-                                           strict=True):
-        messages[a] = message, depth
-        result.configs[a] = prefix  # a failed agent keeps its longest legal prefix
+    if not result.found.all():
+        failed = np.flatnonzero(~result.found)
+        if tables.lazy:
+            tables.complete(failed)  # the diagnosis reads every legal prefix
+        for a, (message, prefix, depth) in zip(failed.tolist(),
+                                               _diagnose(tables, failed, profiles, origins),
+                                               strict=True):
+            messages[a] = message, depth
+            result.configs[a] = prefix  # a failed agent keeps its longest legal prefix
     steps, swings = st.indices(result.configs)
     front = st.step_front[steps]
     foot_nodes = np.concatenate([np.ones((A, 1), dtype=np.int64), front], axis=1)
@@ -318,7 +326,7 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     foot_z = tables.node_z[rows, foot_nodes]
     lengths = tables.length[rows, steps]
     rises = tables.rise[rows, steps]
-    controls = tables.controls[rows, swings].copy()
+    controls = tables.controls[rows, swings]  # a copy (fancy indexing)
     controls[..., 0] += origins[:, None, None]
     leg_length = np.array([leg.length for leg in legs])[:, None]
     terms = {name: getattr(tables, name)[rows, steps] for name in ("En", "Ev", "Ej", "E")}
@@ -327,17 +335,19 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
         efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
-    work = tables.work
+    work = tables.lattice.work.tolist()  # TableWork's counters, in the kernels' order
+    expanded, checks = result.expanded.tolist(), result.checks.tolist()
     plans = []
     for a in range(A):
+        key_frames, built, reused, adjustments, steps_done = work[a]
         stats = {
-            "nodes_expanded": int(result.expanded[a]),
-            "legality_checks": int(result.checks[a]),
-            "lattice_steps": int(work.steps[a]),
-            "key_frame_solves": int(work.key_frames[a]),
-            "swing_curves": int(work.swing_curves[a]),
-            "swing_curves_reused": int(work.swing_curves_reused[a]),
-            "swing_adjustments": int(work.swing_adjustments[a]),
+            "nodes_expanded": int(expanded[a]),
+            "legality_checks": int(checks[a]),
+            "lattice_steps": steps_done,
+            "key_frame_solves": key_frames,
+            "swing_curves": built,
+            "swing_curves_reused": reused,
+            "swing_adjustments": adjustments,
             "time_s": elapsed,
             "step_min": float(tables.step_min[a]),
             "step_increment": float(tables.step_delta[a]),
