@@ -679,25 +679,49 @@ def _lane_order(traj, group_of: dict, x0: float, x1: float, rng) -> tuple[float,
     return observed, (float(np.percentile(null, 2.5)), float(np.percentile(null, 97.5)))
 
 
-def counterflow(fast: bool, tmp: Path, *, seeds: int | None = None) -> list[Check]:
+def counterflow_scenario(seed: int, *, n: int = 50, length: float = 30.0,
+                         start_density: float | None = None) -> dict:
+    """The counterflow case's scenario: a corridor ``length`` [m] long and 4 m wide, its
+    end nodes 2.5 m from its ends, ``n`` walkers starting at each end for the other.
+
+    ``start_density`` None (the case as verified): each group is drawn at random in its
+    end node's 4.8 × 3.6 m area (2.9 /m² for 50). Else each group starts on a hexagonal
+    lattice at that density [1/m²] (``groups[].density``) in a strip of the corridor
+    from its end, as long as the lattice needs (``n`` / (3.6 m × density), 15 % spare,
+    +0.5 m), the points nearest the group's destination kept."""
+    nodes = [{"name": "west", "xy": [2.5, 2.0], "area": _rect(0.2, 0.2, 5.0, 3.8)},
+             {"name": "east", "xy": [length - 2.5, 2.0],
+              "area": _rect(length - 5.0, 0.2, length - 0.2, 3.8)}]
+    if start_density is None:
+        west, east, extra = "west", "east", {}
+    else:
+        strip = n / (3.6 * start_density) * 1.15 + 0.5
+        west = _rect(0.2, 0.2, 0.2 + strip, 3.8)
+        east = _rect(length - 0.2 - strip, 0.2, length - 0.2, 3.8)
+        extra = {"density": float(start_density)}
+    return _scenario("counterflow", (0, 0, length, 4), nodes,
+                     [{"from": "west", "to": "east", "width": 4.0}],
+                     [_group("eastward", n, west, ["east"], **extra),
+                      _group("westward", n, east, ["west"], **extra)], 120.0, seed=seed)
+
+
+def counterflow(fast: bool, tmp: Path, *, seeds: int | None = None, length: float = 30.0,
+                start_density: float | None = None) -> list[Check]:
     """2 × 50 walkers in a 4 m wide corridor (issue target): lanes form (adjacent walkers
-    walk the same way more often than randomly relabelled walkers, 95 % interval), no
-    walker stands ≥ 10 s, trips within 1.5 × the free walk. ``seeds``: run seeds 1 to
-    that (default 1 fast, 5 full)."""
+    walk the same way more often than randomly relabelled walkers, 95 % interval, in the
+    middle 10 m), no walker stands ≥ 10 s, trips within 1.5 × the free walk. ``seeds``:
+    run seeds 1 to that (default 1 fast, 5 full). ``length``, ``start_density``: the
+    setup (:func:`counterflow_scenario`; the defaults are the verified case)."""
     seeds = range(1, (seeds or (1 if fast else 5)) + 1)
     n = 50
     rng = np.random.default_rng(0)
     checks = []
     for s in seeds:
-        nodes = [{"name": "west", "xy": [2.5, 2.0], "area": _rect(0.2, 0.2, 5.0, 3.8)},
-                 {"name": "east", "xy": [27.5, 2.0], "area": _rect(25.0, 0.2, 29.8, 3.8)}]
-        data = _scenario("counterflow", (0, 0, 30, 4), nodes,
-                         [{"from": "west", "to": "east", "width": 4.0}],
-                         [_group("eastward", n, "west", ["east"]),
-                          _group("westward", n, "east", ["west"])], 120.0, seed=s)
+        data = counterflow_scenario(s, n=n, length=length, start_density=start_density)
         run = _run(data, tmp / f"counterflow_{s}")
         group_of = {a["id"]: a["group"] == "eastward" for a in run.summary["agents"]}
-        order, (lo, hi) = _lane_order(run.traj, group_of, 10.0, 20.0, rng)
+        order, (lo, hi) = _lane_order(run.traj, group_of, length / 2 - 5.0,
+                                      length / 2 + 5.0, rng)
         speed = _frames_speed(run.traj)
         # longest run of frames below 0.1 m/s per agent
         t = run.traj
@@ -741,11 +765,14 @@ def table(checks: list[Check]) -> str:
 
 
 def run_verification(*, full: bool = False, out: Path | None = None, only=(),
-                     seeds: int | None = None, params=None, echo=print) -> list[Check]:
+                     seeds: int | None = None, params=None, echo=print,
+                     counterflow_setup: dict | None = None) -> list[Check]:
     """Run the cases (``only``: their names; default all), print each row as it comes
     and write the Markdown table to ``out``. ``seeds``: how many seeds the counterflow
     case runs (default 1 fast, 5 full); ``params``: the
-    :class:`~crowdwalk.crowd.CrowdParams` every case runs with (None: the default)."""
+    :class:`~crowdwalk.crowd.CrowdParams` every case runs with (None: the default);
+    ``counterflow_setup``: ``length`` and ``start_density`` of the counterflow case
+    (:func:`counterflow_scenario`; for measurements, not the verified table)."""
     from crowdwalk.errors import invalid
 
     names = list(only) or list(CASES)
@@ -757,7 +784,8 @@ def run_verification(*, full: bool = False, out: Path | None = None, only=(),
     try:
         with tempfile.TemporaryDirectory(prefix="crowdwalk-verify-") as tmp:
             for name in names:
-                case = partial(counterflow, seeds=seeds) if name == "counterflow" else CASES[name]
+                case = (partial(counterflow, seeds=seeds, **(counterflow_setup or {}))
+                        if name == "counterflow" else CASES[name])
                 rows = case(not full, Path(tmp))
                 for c in rows:
                     echo(f"{c.case:<30} {_mark(c.passed):<4}  {c.figure}  [{c.criterion}]")

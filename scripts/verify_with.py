@@ -3,7 +3,9 @@ set (the CLI sets only ``--speed-model``), printing each row as verify does.
 
 Usage: ``python scripts/verify_with.py --only rimea4,bottleneck,counterflow [--seeds 5]
 [--full] --set speed_model='headway' headway_free_margin=1.0`` (``--set``: Python literals;
-a bare word is taken as a string).
+a bare word is taken as a string). ``--counterflow-length L`` and ``--counterflow-density D``
+change the counterflow case's corridor length [m] and start the groups on a lattice at D
+[1/m²] (``crowdwalk.verify.counterflow_scenario``; measurements, not the verified case).
 """
 
 from __future__ import annotations
@@ -29,12 +31,19 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=None, help="counterflow seeds 1..N")
     ap.add_argument("--full", action="store_true", help="full sizes")
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
+    ap.add_argument("--counterflow-length", type=float, default=None, metavar="M")
+    ap.add_argument("--counterflow-density", type=float, default=None, metavar="PER_M2")
     args = ap.parse_args()
+    setup = {}
+    if args.counterflow_length is not None:
+        setup["length"] = args.counterflow_length
+    if args.counterflow_density is not None:
+        setup["start_density"] = args.counterflow_density
     fields = {k: _value(v) for k, v in (item.split("=", 1) for item in args.set)}
     params = replace(CrowdParams(), **fields)
-    print(f"# CrowdParams overrides: {fields}")
+    print(f"# CrowdParams overrides: {fields}" + (f"; counterflow {setup}" if setup else ""))
     run_verification(full=args.full, only=args.only.split(","), seeds=args.seeds,
-                     params=params)
+                     params=params, counterflow_setup=setup)
 
 
 if __name__ == "__main__":

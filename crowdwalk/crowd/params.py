@@ -105,7 +105,12 @@ class CrowdParams:
         within ``headway_lane`` × its own holding radius of its line (2.0: the two
         bodies' reach, Tordeux et al.'s criterion). Validated on Weidmann (1993) and
         SFPE; 1.0 (the own lateral extent only, so that zipper lanes close up) ran
-        0.77 m/s at 2 /m² against Weidmann's 0.62.
+        0.77 m/s at 2 /m² against Weidmann's 0.62. 1.233 (half the shoulder width,
+        0.1295 / 0.105, so that a zipper neighbour is not followed; measured, not the
+        default): full ring within Weidmann ± 0.15 at all seven densities, counterflow
+        trips 1.58 / 1.55 / 1.55 / 3.41 / 1.67 × the free walk (seed 4 gridlocks),
+        doors with ``headway_free_margin`` 1.0 as with 2.0 (docs/architecture.md,
+        "Headway leader's lateral rule").
     headway_free_margin : float, optional
         With ``"headway"``: walkers inside an opening zone (corridors at most
         ``opening_width`` wide, minus the rooms, grown by this margin [m]) follow
