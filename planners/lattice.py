@@ -396,14 +396,18 @@ class StepTables:
         return legal, np.round(length / energy, 12)
 
 
-_CONSTANTS: list = [None, None, None, None]  # config, structure, PRUNE, constants
+# (config, structure, PRUNE, constants) of the last configuration, replaced as one tuple so
+# that a thread never reads one configuration's key with another's constants
+_CONSTANTS: tuple = (None, None, None, None)
 
 
 def _constants(config: PlannerConfig, st: Structure) -> tuple:
     """The kernels' inputs that depend on the configuration alone (kept for the last
     configuration: a plan's tables need them every time, a crowd uses one or two)."""
-    if _CONSTANTS[0] is config and _CONSTANTS[1] is st and _CONSTANTS[2] == PRUNE:
-        return _CONSTANTS[3]
+    global _CONSTANTS
+    last_config, last_st, last_prune, last = _CONSTANTS
+    if last_config is config and last_st is st and last_prune == PRUNE:
+        return last
     w = config.weights
     first, second, valid = st.pair_steps
     basis, influence = swing_basis(config.bezier_samples)
@@ -420,7 +424,7 @@ def _constants(config: PlannerConfig, st: Structure) -> tuple:
                  np.asarray(st.step_offset, dtype=np.int64),
                  np.asarray(st.swing_offset, dtype=np.int64),
                  np.asarray(st.swing_strides, dtype=np.int64))
-    _CONSTANTS[:] = config, st, PRUNE, constants
+    _CONSTANTS = config, st, PRUNE, constants
     return constants
 
 
