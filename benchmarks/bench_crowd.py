@@ -12,9 +12,12 @@ the share of planning, steering, poses and writing, and how the cost grows with 
 ``--workers 0 auto`` runs each case in one process and with the run's worker processes
 (:mod:`crowdwalk.workers`; ``auto``: one per further core from 500 walkers), alternately,
 ``--repeats`` times each; the table gives the median and, in brackets, the range.
+``--threads N`` steers (and gathers neighbours) in N threads of this process instead of
+one per core (:class:`crowdwalk.workers.RowThreads`; 1: one thread), to measure what the
+split gains.
 
 Usage: ``python benchmarks/bench_crowd.py [--agents 100 1000 5000] [--seconds S]
-[--workers auto] [--repeats 1]``
+[--workers auto] [--repeats 1] [--threads N]``
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+import crowdwalk.workers as W
 from crowdwalk.crowd.run import RunOverrides, run_scenario
 
 ROOT = Path(__file__).parents[1]
@@ -97,7 +101,11 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--outputs", nargs="+", default=["traj+steps", "poses"],
                         choices=["traj+steps", "poses"])
+    parser.add_argument("--threads", type=int, default=None,
+                        help="row threads of this process (default: one per core)")
     args = parser.parse_args()
+    if args.threads is not None:  # the process's RowThreads, which every run uses
+        W._ROW_THREADS = W.RowThreads(args.threads)
     variants = [None if w == "auto" else int(w) for w in args.workers]
     plain = {100: 20.0, 1000: 20.0, 5000: 10.0}
     posed = {100: 10.0, 1000: 6.0, 5000: 2.0}
