@@ -19,7 +19,8 @@ second, counterfactual call of ``choose_steps`` on the same rows): a stand by ch
 not a hard block.
 
 Usage: ``python scripts/bottleneck_diagnose.py WIDTH SEED [--count 60] [--why]
-[--set body="three_discs" ...]`` (``--set``: CrowdParams fields, Python literals).
+[--set body="three_discs" steering.twists_deg="(60.0,)" ...]`` (``--set``: CrowdParams
+fields, ``steering.``-prefixed SteeringParams fields, Python literals).
 """
 
 from __future__ import annotations
@@ -127,7 +128,10 @@ def main() -> None:
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
     fields = {k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.set)}
-    params = replace(CrowdParams(), **fields)
+    steer = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("steering.")}
+    params = replace(CrowdParams(), **{k: v for k, v in fields.items()
+                                       if not k.startswith("steering.")})
+    params = replace(params, steering=replace(params.steering, **steer))
     counts: dict = {}
     if args.why:
         _count_soft_stands(counts)
