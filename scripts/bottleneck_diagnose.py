@@ -16,7 +16,9 @@ Also, with ``--why``: of the decisions of walkers in front of the opening and in
 how many stand, and how many of those would have stepped without the soft neighbour
 and wall terms (``SteeringParams.personal_weight``, ``wall_weight`` set to 0 in a
 second, counterfactual call of ``choose_steps`` on the same rows): a stand by choice,
-not a hard block.
+not a hard block; and how many would have stepped with no neighbours at all (a third
+call with every neighbour invalid: the walls and the walker's own target allow a step,
+so it stands for its neighbours).
 
 Usage: ``python scripts/bottleneck_diagnose.py WIDTH SEED [--count 60] [--why]
 [--set body="three_discs" steering.twists_deg="(60.0,)" ...]`` (``--set``: CrowdParams
@@ -109,11 +111,16 @@ def _count_soft_stands(counts: dict):
         if any(z.any() for z in zones.values()):
             bare = base(position, stance, **{**kw, "params": replace(
                 kw["params"], personal_weight=0.0, wall_weight=0.0)})
+            nb = kw["neighbours"]
+            alone = base(position, stance, **{**kw, "neighbours": replace(
+                nb, valid=np.zeros_like(nb.valid))})
             for name, z in zones.items():
-                c = counts.setdefault(name, {"decisions": 0, "stand": 0, "stand_by_choice": 0})
+                c = counts.setdefault(name, {"decisions": 0, "stand": 0, "stand_by_choice": 0,
+                                             "stand_free_of_walls": 0})
                 c["decisions"] += int(z.sum())
                 c["stand"] += int((z & ~res.move).sum())
                 c["stand_by_choice"] += int((z & ~res.move & bare.move).sum())
+                c["stand_free_of_walls"] += int((z & ~res.move & alone.move).sum())
         return res
 
     simulation.choose_steps = wrapped
