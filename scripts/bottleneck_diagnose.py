@@ -20,7 +20,11 @@ not a hard block; and how many would have stepped with no neighbours at all (a t
 call with every neighbour invalid: the walls and the walker's own target allow a step,
 so it stands for its neighbours).
 
-Usage: ``python scripts/bottleneck_diagnose.py WIDTH SEED [--count 60] [--why]
+With ``--blockers SECONDS``: for walkers standing longer than that against the wall
+beside the opening, the single neighbours whose removal would let them step (an arch
+at the mouth shows as one walker blocking two).
+
+Usage: ``python scripts/bottleneck_diagnose.py WIDTH SEED [--count 60] [--why] [--blockers 4]
 [--set body="three_discs" steering.twists_deg="(60.0,)" ...]`` (``--set``: CrowdParams
 fields, ``steering.``-prefixed SteeringParams fields, Python literals).
 """
@@ -126,12 +130,46 @@ def _count_soft_stands(counts: dict):
     simulation.choose_steps = wrapped
 
 
+def _print_blockers(stuck_after: float, every: int = 25) -> None:
+    """Wrap ``choose_steps`` to print, for walkers standing in front of the opening's
+    walls (7.7 < x ≤ 8, 0.15 < |y − 5| < 0.6) for more than ``stuck_after`` seconds,
+    every ``every``-th such decision, the single neighbours whose removal (a
+    counterfactual call without it) lets the walker step, with that step."""
+    base, seen = simulation.choose_steps, [0]
+
+    def wrapped(position, stance, **kw):
+        res = base(position, stance, **kw)
+        x, y = position[:, 0], position[:, 1] - 5.0
+        z = np.flatnonzero((x > 7.7) & (x <= 8.0) & (np.abs(y) > 0.15) & (np.abs(y) < 0.6)
+                           & ~res.move & (np.asarray(kw["stuck"]) > stuck_after))
+        if z.size:
+            seen[0] += 1
+            if seen[0] % every == 0:
+                r, nb, found = z[0], kw["neighbours"], []
+                for k in np.flatnonzero(nb.valid[r]):
+                    v = nb.valid.copy()
+                    v[:, k] = False
+                    alt = base(position, stance, **{**kw, "neighbours": replace(nb, valid=v)})
+                    if alt.move[r]:
+                        d = alt.direction[r]
+                        found.append({"blocker": np.round(nb.now[r, k] - (0, 5), 2).tolist(),
+                                      "step_deg": round(float(np.degrees(np.arctan2(d[1], d[0])))),
+                                      "step_m": round(float(alt.free_length[r]), 2)})
+                print(json.dumps({"walker": np.round(position[r] - (0, 5), 3).tolist(),
+                                  "stuck_s": round(float(kw["stuck"][r]), 2),
+                                  "single_blockers": found}), flush=True)
+        return res
+
+    simulation.choose_steps = wrapped
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("width", type=float)
     ap.add_argument("seed", type=int)
     ap.add_argument("--count", type=int, default=60)
     ap.add_argument("--why", action="store_true")
+    ap.add_argument("--blockers", type=float, default=None, metavar="SECONDS")
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
     fields = {k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.set)}
@@ -142,6 +180,8 @@ def main() -> None:
     counts: dict = {}
     if args.why:
         _count_soft_stands(counts)
+    if args.blockers is not None:
+        _print_blockers(args.blockers)
     with tempfile.TemporaryDirectory() as tmp:
         run = _run(_bottleneck(args.width, args.seed, args.count), Path(tmp) / "run", params)
         print(json.dumps({"width": args.width, "seed": args.seed, **fields,
