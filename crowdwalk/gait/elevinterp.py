@@ -372,7 +372,7 @@ class ElevInterpConfig:
     low_rise_line: bool = False
     stair_closure: str = "swing"
     extrapolate_hull: bool = False
-    low_rise_blend: bool = False
+    low_rise_blend: bool = True
     extrapolation_beyond: float = 1.0
 
     def __post_init__(self) -> None:

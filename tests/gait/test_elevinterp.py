@@ -454,3 +454,18 @@ def test_extrapolate_hull_serves_a_stair_tread_exactly():
     assert not out.clamped.any() and out.converged.all()
     np.testing.assert_allclose(out.step_length, [0.30, 0.30, 0.62], atol=2e-3)
     np.testing.assert_allclose(out.step_height, [0.17, -0.17, 0.0], atol=2e-3)
+
+
+def test_low_rise_blend_is_continuous_at_level():
+    """``ElevInterpConfig.low_rise_blend``: a rise of 1 mm changes the served dataset by
+    next to nothing against the level step of the same length. Without it the level datum
+    sends a 1 mm rise to the triangulation, whose short-step corner is spanned by the
+    stair datasets: a 0.5 m step rising 1 mm got 22° different angles (a jump at SH = 0)."""
+    body = leg(1.75)
+    for length in (0.5, 0.55, 0.62, 0.7):
+        out = ElevInterp().request(body, [length] * 3, [0.0, 0.001, -0.001])
+        assert out.converged.all() and not out.clamped.any()
+        np.testing.assert_allclose(out.step_height, [0.0, 0.001, -0.001], atol=2e-3)
+        jump = np.rad2deg(np.abs(out.angles[1:] - out.angles[0]).max())
+        assert jump < 2.0, (length, jump)
+
