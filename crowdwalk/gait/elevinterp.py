@@ -42,6 +42,13 @@ Implementation notes (deviations and choices, each measured in the tests/benchma
   ball's circle) and the length solved again, so the swing foot lands on the floor. The
   line extrapolates ``level_line_beyond`` (1.5) end intervals past the shortest and the
   longest level dataset, and a closed line step is served at the requested height.
+- Low rises (extension, switch ``ElevInterpConfig.low_rise_blend``, on by default): a rise
+  below ``level_fade`` blends the triangulation's dataset with the level line, the line's
+  share fading out with the rise, so a step of a few mm is not suddenly a blend with the
+  stair datasets (docs/architecture.md "Low rises blended with the level line").
+- Outside the hull (extension, switch ``ElevInterpConfig.extrapolate_hull``, off): the
+  nearest triangle's weights extrapolated and Gauss–Newton instead of the clamp; measured
+  worse on the stairs (docs/architecture.md "Stair steps outside the hull").
 - Speed blend (extension, switch ``ElevInterpConfig.speed_blend``; the paper blends by
   step length and height only). Given each step's walking speed, the level datasets
   (Bovi's xs … l) blended by *speed* replace, in mid-stance and mid-swing, the level
