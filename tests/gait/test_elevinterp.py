@@ -440,3 +440,32 @@ def test_low_rises_land_like_level_steps():
     level = [d for d in load_datasets() if d.kind == "level"]
     bound = max(np.rad2deg(d.angles[0, 2] - d.angles[0, 1]) for d in level)
     assert knee_at_strike.max() <= bound
+
+
+def test_extrapolate_hull_serves_a_stair_tread_exactly():
+    """``ElevInterpConfig.extrapolate_hull`` (default off): a 0.30 m tread rising 17 cm,
+    outside the hull for a 1.75 m body (the stair datasets step 0.45 m), is served at its
+    length by extrapolated blend weights instead of being clamped to the hull."""
+    body = leg(1.75)
+    clamped = ElevInterp().request(body, [0.30, 0.30], [0.17, -0.17])
+    assert clamped.clamped.all() and (clamped.step_length > 0.4).all()
+    out = ElevInterp(config=ElevInterpConfig(extrapolate_hull=True)).request(
+        body, [0.30, 0.30, 0.62], [0.17, -0.17, 0.0])
+    assert not out.clamped.any() and out.converged.all()
+    np.testing.assert_allclose(out.step_length, [0.30, 0.30, 0.62], atol=2e-3)
+    np.testing.assert_allclose(out.step_height, [0.17, -0.17, 0.0], atol=2e-3)
+
+
+def test_low_rise_blend_is_continuous_at_level():
+    """``ElevInterpConfig.low_rise_blend``: a rise of 1 mm changes the served dataset by
+    next to nothing against the level step of the same length. Without it the level datum
+    sends a 1 mm rise to the triangulation, whose short-step corner is spanned by the
+    stair datasets: a 0.5 m step rising 1 mm got 22° different angles (a jump at SH = 0)."""
+    body = leg(1.75)
+    for length in (0.5, 0.55, 0.62, 0.7):
+        out = ElevInterp().request(body, [length] * 3, [0.0, 0.001, -0.001])
+        assert out.converged.all() and not out.clamped.any()
+        np.testing.assert_allclose(out.step_height, [0.0, 0.001, -0.001], atol=2e-3)
+        jump = np.rad2deg(np.abs(out.angles[1:] - out.angles[0]).max())
+        assert jump < 2.0, (length, jump)
+
