@@ -46,9 +46,6 @@ Implementation notes (deviations and choices, each measured in the tests/benchma
   below ``level_fade`` blends the triangulation's dataset with the level line, the line's
   share fading out with the rise, so a step of a few mm is not suddenly a blend with the
   stair datasets (docs/architecture.md "Low rises blended with the level line").
-- Outside the hull (extension, switch ``ElevInterpConfig.extrapolate_hull``, off): the
-  nearest triangle's weights extrapolated and Gauss–Newton instead of the clamp; measured
-  worse on the stairs (docs/architecture.md "Stair steps outside the hull").
 - Speed blend (extension, switch ``ElevInterpConfig.speed_blend``; the paper blends by
   step length and height only). Given each step's walking speed, the level datasets
   (Bovi's xs … l) blended by *speed* replace, in mid-stance and mid-swing, the level
@@ -342,16 +339,6 @@ class ElevInterpConfig:
         cycles closed over the swing, the stance as measured; "linear", closed linearly
         over the whole cycle (before gait11: the ascending stance knee 20° more flexed
         than Bovi's; docs/architecture.md "Stair datasets closed over the swing").
-    extrapolate_hull : bool
-        A request outside the hull is first asked of the triangle at its nearest hull
-        point with extrapolated weights (each ≥ −``extrapolation_beyond``) and
-        Gauss–Newton on Eq. 10; served exactly where that reaches it, clamped otherwise
-        (an extension of §5, docs/architecture.md "Stair steps outside the hull"). False
-        (default, measured worse on the stairs): clamped to the hull. A 1.75 m body's
-        0.30 m stair tread (the datasets step 0.45 / 0.42 m) is then served at its
-        length, but by a crouched dataset (knee at heel strike 89° vs Bovi's 66°).
-    extrapolation_beyond : float
-        Weight bound of ``extrapolate_hull`` [1].
     low_rise_blend : bool
         With ``level_datum``, a low rise (0 < |SH| < ``level_fade``) is served by the
         paper's triangulation blended with the level line at its length, the line's
@@ -378,9 +365,7 @@ class ElevInterpConfig:
     knee_closure: bool = True
     low_rise_line: bool = False
     stair_closure: str = "swing"
-    extrapolate_hull: bool = False
     low_rise_blend: bool = True
-    extrapolation_beyond: float = 1.0
 
     def __post_init__(self) -> None:
         owner = "ElevInterpConfig"
@@ -392,8 +377,7 @@ class ElevInterpConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise invalid(owner, name, f"finite and > 0 [{unit}]", value)
-        for name in ("extrapolation", "last_resort_extrapolation", "level_line_beyond",
-                     "extrapolation_beyond"):
+        for name in ("extrapolation", "last_resort_extrapolation", "level_line_beyond"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise invalid(owner, name, "finite and >= 0 [1]", value)
@@ -606,8 +590,7 @@ class ElevInterp:
         self._phases = np.array([[d.stance_fraction, d.double_support] for d in datasets])
         self._level = np.array([i for i, d in enumerate(datasets) if d.kind == "level"], int)
         self._spaces: dict[tuple[int, ...], _ShapeSpace] = {}
-        self.stats = {"requests": 0, "refined": 0, "clamped": 0, "inserted": 0, "failed": 0,
-                      "extrapolated": 0}
+        self.stats = {"requests": 0, "refined": 0, "clamped": 0, "inserted": 0, "failed": 0}
 
     # -- public -----------------------------------------------------------------------
     def request(
@@ -864,23 +847,7 @@ class ElevInterp:
         """Steps 1–6 of §5.1 for requests of one body shape (lengths in leg lengths)."""
         cfg = self.config
         tol = cfg.tolerance / metres  # in leg lengths, per request
-        asked = target
         target, clamped = space.clamp(target)  # extrapolation: nearest legal request
-        if cfg.extrapolate_hull and clamped.any():
-            out = self._extrapolate(space, asked[clamped], target[clamped], props[clamped],
-                                    tol[clamped])
-            reached = out[0]
-            if reached.any():
-                rows = np.flatnonzero(clamped)[reached]
-                rest = np.flatnonzero(~np.isin(np.arange(len(asked)), rows))
-                res = [np.empty((len(asked), *a.shape[1:]), a.dtype) for a in out[1:]]
-                if len(rest):
-                    sub = self._solve(space, asked[rest], props[rest], metres[rest])
-                    for mine, theirs in zip(res, sub, strict=True):
-                        mine[rest] = theirs
-                for mine, theirs in zip(res, out[1:], strict=True):
-                    mine[rows] = theirs[reached]
-                return tuple(res)
         simplex, w = space.locate(target)  # steps 1-2
         verts = space.tri.simplices[simplex]
         step = _blend_step(space, simplex, w, props)  # step 3: Eq. 9 blend, Eq. 10 measure
@@ -918,33 +885,6 @@ class ElevInterp:
         self.stats["inserted"] += space.insert(curves[good], phases[good], cfg.max_inserted)
         flags = np.stack([clamped | ~converged, refine, converged], axis=1)
         return curves, phases, step, target, flags
-
-
-    def _extrapolate(self, space: _ShapeSpace, asked: np.ndarray, near: np.ndarray,
-                     props: np.ndarray, tol: np.ndarray):
-        """Requests outside the hull served by the Eq. 9 blend of the triangle at their
-        nearest hull point ``near`` with weights extrapolated (≥ −``extrapolation_beyond``)
-        and Gauss–Newton on Eq. 10 (``ElevInterpConfig.extrapolate_hull``). Returns
-        (reached (k,) bool, curves, phases, step, target, flags); rows not reached are
-        left to the clamp."""
-        cfg = self.config
-        simplex, _ = space.locate(near)
-        margin = cfg.extrapolation_beyond
-        w0 = np.clip(space.weights_in(simplex, asked), -margin, None)
-        w0 /= w0.sum(axis=1, keepdims=True)
-        s0 = _blend_step(space, simplex, w0, props)
-        keys = space.keys[space.tri.simplices[simplex]]
-        w, step, err = _gauss_newton(keys, props, w0, asked, s0,
-                                     np.linalg.norm(s0 - asked, axis=1), 0.1 * tol,
-                                     cfg.max_iterations, margin)
-        reached = err <= tol
-        verts = space.tri.simplices[simplex]
-        curves = np.einsum("kv,kvnj->knj", w, space.angles[verts])
-        phases = np.einsum("kv,kvp->kp", w, space.phases[verts])
-        n = len(asked)
-        flags = np.stack([~reached, np.ones(n, bool), reached], axis=1)
-        self.stats["extrapolated"] += int(reached.sum())
-        return reached, curves, phases, step, asked.copy(), flags
 
 
 _RISE_FROM, _RISE_OVER, _FALL_OVER = 0.3, 0.2, 0.2  # heel-rise window [stride fraction]

@@ -442,20 +442,6 @@ def test_low_rises_land_like_level_steps():
     assert knee_at_strike.max() <= bound
 
 
-def test_extrapolate_hull_serves_a_stair_tread_exactly():
-    """``ElevInterpConfig.extrapolate_hull`` (default off): a 0.30 m tread rising 17 cm,
-    outside the hull for a 1.75 m body (the stair datasets step 0.45 m), is served at its
-    length by extrapolated blend weights instead of being clamped to the hull."""
-    body = leg(1.75)
-    clamped = ElevInterp().request(body, [0.30, 0.30], [0.17, -0.17])
-    assert clamped.clamped.all() and (clamped.step_length > 0.4).all()
-    out = ElevInterp(config=ElevInterpConfig(extrapolate_hull=True)).request(
-        body, [0.30, 0.30, 0.62], [0.17, -0.17, 0.0])
-    assert not out.clamped.any() and out.converged.all()
-    np.testing.assert_allclose(out.step_length, [0.30, 0.30, 0.62], atol=2e-3)
-    np.testing.assert_allclose(out.step_height, [0.17, -0.17, 0.0], atol=2e-3)
-
-
 def test_low_rise_blend_is_continuous_at_level():
     """``ElevInterpConfig.low_rise_blend``: a rise of 1 mm changes the served dataset by
     next to nothing against the level step of the same length. Without it the level datum
