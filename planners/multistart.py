@@ -13,7 +13,7 @@ from functools import lru_cache
 import numba as nb
 import numpy as np
 
-from planners.dp import cheapest
+from planners.dp import cheapest, dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
 from planners.search import SearchResult, evaluate_one, neighbour_deltas
 
@@ -131,37 +131,51 @@ def _deltas(n: int) -> np.ndarray:
 def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
            agents, configs, current, expanded, checks, part, parts):
     """The climbs of :func:`hill_climb`, every ``parts``-th from ``part``
-    (:func:`planners.lattice.run_parts`; efficiencies rounded to 1e-12 as
-    :meth:`~planners.lattice.StepTables.evaluate`)."""
+    (:func:`planners.lattice.run_parts`; :func:`_climb_one`)."""
     B, n = configs.shape
     r = np.empty(n, dtype=np.int64)
     for b in range(part, B, parts):
-        a = agents[b]
-        q = configs[b]
-        _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
-                           swing_off, strides)
-        while True:
-            expanded[b] += 1
-            best_eff, best_d = -np.inf, 0
-            for d in range(deltas.shape[0]):
-                inside = True
-                for k in range(n):
-                    r[k] = q[k] + deltas[d, k]
-                    if r[k] < 0 or r[k] >= J:
-                        inside = False
-                if not inside:
-                    continue
-                checks[b] += 1
-                legal, e = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
-                                     step_off, swing_off, strides)
-                if legal and e > best_eff:
-                    best_eff, best_d = e, d
-            if not best_eff > cur * (1 + 1e-12):
-                break
+        current[b], exp, chk = _climb_one(step_legal, swing_ok, cost, progress, J, step_off,
+                                          swing_off, strides, deltas, agents[b], configs[b],
+                                          r)
+        expanded[b] += exp
+        checks[b] += chk
+
+
+@nb.njit(cache=True, nogil=True)
+def _climb_one(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
+               a, q, r):
+    """One climb of :func:`hill_climb` from the legal ``q`` (n,) of table row ``a``, in
+    place (``r``: scratch (n,)); efficiencies rounded to 1e-12 as
+    :meth:`~planners.lattice.StepTables.evaluate`. Returns (efficiency, expansions,
+    checks)."""
+    n = q.size
+    expanded = 0
+    checks = 0
+    _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
+                          swing_off, strides)
+    while True:
+        expanded += 1
+        best_eff, best_d = -np.inf, 0
+        for d in range(deltas.shape[0]):
+            inside = True
             for k in range(n):
-                q[k] += deltas[best_d, k]
-            cur = best_eff
-        current[b] = cur
+                r[k] = q[k] + deltas[d, k]
+                if r[k] < 0 or r[k] >= J:
+                    inside = False
+            if not inside:
+                continue
+            checks += 1
+            legal, e = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
+                                    step_off, swing_off, strides)
+            if legal and e > best_eff:
+                best_eff, best_d = e, d
+        if not best_eff > cur * (1 + 1e-12):
+            break
+        for k in range(n):
+            q[k] += deltas[best_d, k]
+        cur = best_eff
+    return cur, expanded, checks
 
 
 def greedy(tables: StepTables) -> SearchResult:
@@ -179,32 +193,43 @@ def greedy(tables: StepTables) -> SearchResult:
 @nb.njit(cache=True, nogil=True)
 def _greedy(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, configs,
             found, part, parts):
-    """The steps of :func:`greedy`, compiled, for every ``parts``-th agent from ``part``
-    (:func:`planners.lattice.run_parts`): at step k the first j of highest ``length / E``
-    among the legal steps (of the swing from f_{k-2}), as ``np.argmax`` (a NaN score
-    wins; where none is legal, j = 0 and not found)."""
-    A, n = configs.shape
-    for a in range(part, A, parts):
-        m_prev, m_prev2, j_prev = 0, 0, 0
-        for k in range(n):
-            best, best_j, nan = -np.inf, 0, False
-            for j in range(J):
-                step = step_off[k] + m_prev * J + j
-                swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-                score = (length[a, step] / E[a, step]
-                         if step_legal[a, step] and swing_ok[a, swing] else -np.inf)
-                if np.isnan(score):
-                    best_j, nan = j, True
-                    break
-                if score > best:
-                    best, best_j = score, j
-            if nan or not np.isfinite(best):
-                found[a] = False
-            configs[a, k] = best_j
-            if k > 0:
-                m_prev2 += j_prev
-            m_prev += best_j
-            j_prev = best_j
+    """The steps of :func:`greedy` (:func:`_greedy_one`), compiled, for every
+    ``parts``-th agent from ``part`` (:func:`planners.lattice.run_parts`)."""
+    for a in range(part, configs.shape[0], parts):
+        if not _greedy_one(step_legal, swing_ok, length, E, J, step_off, swing_off, strides,
+                           a, configs[a]):
+            found[a] = False
+
+
+@nb.njit(cache=True, nogil=True)
+def _greedy_one(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, a, config):
+    """The steps of :func:`greedy` for table row ``a`` into ``config`` (n,): at step k
+    the first j of highest ``length / E`` among the legal steps (of the swing from
+    f_{k-2}), as ``np.argmax`` (a NaN score wins; where none is legal, j = 0 and not
+    found). Returns whether found."""
+    n = config.size
+    found = True
+    m_prev, m_prev2, j_prev = 0, 0, 0
+    for k in range(n):
+        best, best_j, nan = -np.inf, 0, False
+        for j in range(J):
+            step = step_off[k] + m_prev * J + j
+            swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
+            score = (length[a, step] / E[a, step]
+                     if step_legal[a, step] and swing_ok[a, swing] else -np.inf)
+            if np.isnan(score):
+                best_j, nan = j, True
+                break
+            if score > best:
+                best, best_j = score, j
+        if nan or not np.isfinite(best):
+            found = False
+        config[k] = best_j
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += best_j
+        j_prev = best_j
+    return found
 
 
 def budget(tables: StepTables) -> SearchResult:
@@ -240,6 +265,26 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     configuration (:func:`budget`), the step-by-step greedy configuration, the nearest
     legal ones to constant steps spread over the grid -- keeping the best local optimum.
     """
+    starts = tables.config.search_starts if starts is None else starts
+    st = tables.struct
+    A = tables.neutral.size
+    configs = np.empty((A, st.n), dtype=np.int64)
+    found = np.zeros(A, dtype=np.bool_)
+    expanded = np.zeros(A, dtype=np.int64)
+    checks = np.zeros(A, dtype=np.int64)
+    run_parts(_multistart, A, tables.step_legal, tables.swing_ok,
+              np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
+              tables.length, tables.E, tables.neutral.astype(np.int64), tables.neutral_cost,
+              st.step_j, st.J, st._step_offsets, st._swing_offsets, st._swing_strides,
+              _deltas(st.n), _extra_starts(starts, st.J), starts, configs, found, expanded,
+              checks)
+    return SearchResult(configs, found, expanded, checks)
+
+
+def _composed(tables: StepTables, starts: int | None = None) -> SearchResult:
+    """:func:`best_first_multistart` composed of the public steps (:func:`nearest_legal`,
+    :func:`budget`, :func:`greedy`, :func:`hill_climb`), vectorised over the agents: what
+    the compiled :func:`_multistart` does agent by agent (a test compares the two)."""
     J = tables.struct.J
     starts = tables.config.search_starts if starts is None else starts
     seeds = [nearest_legal(tables)]
@@ -268,6 +313,127 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
         better = win_eff > eff[winners]
         configs[winners[better]] = local[order][firsts][better]
     return SearchResult(configs, found, expanded, checks)
+
+
+
+
+@nb.njit(cache=True, nogil=True)
+def _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off, swing_off, strides, a,
+                 centre, row, value, new, choice, config):
+    """:func:`nearest_legal` from ``(centre, ..., centre)`` for table row ``a`` into
+    ``config`` (n,) (``row``: scratch (Ns,); ``value``, ``new``, ``choice``:
+    :func:`~planners.dp.dp_scratch`). Returns (found, expanded, checks)."""
+    n = config.size
+    m_prev, m_prev2, j_prev = 0, 0, 0
+    legal = True
+    for k in range(n):
+        step = step_off[k] + m_prev * J + centre
+        swing = swing_off[k] + m_prev2 * strides[k] + centre + (j_prev if k > 0 else 0)
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            legal = False
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += centre
+        j_prev = centre
+    config[:] = centre
+    if legal:
+        return True, 0, 1
+    for t in range(row.size):  # np.round(dist + 1e-7 * cost, 10), as cheapest
+        row[t] = np.rint((abs(step_j[t] - centre) + 1e-7 * cost[a, t]) * 1e10) / 1e10
+    best = np.empty(n, dtype=np.int64)
+    ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off, swing_off,
+                                     strides, value, new, choice, best)
+    if ok:
+        config[:] = best
+    return ok, states, 1 + transitions
+
+
+@nb.njit(cache=True, nogil=True)
+def _multistart(step_legal, swing_ok, cost, progress, length, E, neutral, neutral_cost,
+                step_j, J, step_off, swing_off, strides, deltas, extra, starts, configs,
+                found, expanded, checks, part, parts):
+    """:func:`best_first_multistart` of every ``parts``-th agent from ``part``
+    (:func:`planners.lattice.run_parts`), in one pass per agent: the starts
+    (:func:`_nearest_one`, the budget DP, :func:`_greedy_one`), a climb from each one
+    found (:func:`_climb_one`), the best kept as :func:`_keep_best` (the first among
+    equals; a NaN only where all are NaN), and where the local optima differ by more
+    than :data:`AGREE`, the climbs from the nearest legal configurations to the
+    ``extra`` constant steps, the best of them (the first among equals, NaN last) taken
+    where it is more efficient. The arithmetic of :func:`_composed`."""
+    A, n = configs.shape
+    Ns = cost.shape[1]
+    value, new, choice = dp_scratch(J, n)
+    row = np.empty(Ns)
+    seeds = np.empty((3, n), dtype=np.int64)
+    seed_found = np.zeros(3, dtype=np.bool_)
+    q = np.empty(n, dtype=np.int64)
+    r = np.empty(n, dtype=np.int64)
+    for a in range(part, A, parts):
+        exp_a, chk_a = 0, 0
+        ok, e_, c_ = _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off,
+                                  swing_off, strides, a, neutral[a], row, value, new,
+                                  choice, seeds[0])
+        seed_found[0] = ok
+        exp_a += e_
+        chk_a += c_
+        count = 1
+        if starts >= 2:  # budget: the least sum(E - lam0 * L), rounded as cheapest
+            lam0 = neutral_cost[a]
+            for t in range(Ns):
+                row[t] = np.rint((cost[a, t] - lam0 * progress[a, t]) * 1e10) / 1e10
+            ok, e_, c_ = dp_one(step_legal, swing_ok, row, a, J, step_off, swing_off,
+                                strides, value, new, choice, seeds[1])
+            seed_found[1] = ok
+            exp_a += e_
+            chk_a += c_
+            count = 2
+        if starts >= 3:
+            seed_found[2] = _greedy_one(step_legal, swing_ok, length, E, J, step_off,
+                                        swing_off, strides, a, seeds[2])
+            exp_a += n
+            chk_a += n * J
+            count = 3
+        configs[a, :] = seeds[0]
+        best_eff, worst = -np.inf, np.inf
+        seen = False
+        any_found = False
+        for i in range(count):
+            if not seed_found[i]:
+                continue
+            any_found = True
+            q[:] = seeds[i]
+            e, x, c = _climb_one(step_legal, swing_ok, cost, progress, J, step_off,
+                                 swing_off, strides, deltas, a, q, r)
+            exp_a += x
+            chk_a += c
+            if not np.isnan(worst) and (np.isnan(e) or e < worst):
+                worst = e
+            if not seen or (np.isnan(best_eff) and not np.isnan(e)) or e > best_eff:
+                seen = True
+                best_eff = e
+                configs[a, :] = q
+        found[a] = any_found
+        if any_found and extra.size and worst < best_eff * (1 - AGREE):
+            win_eff = np.nan
+            for i in range(extra.size):
+                ok, e_, c_ = _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off,
+                                          swing_off, strides, a, extra[i], row, value, new,
+                                          choice, q)
+                exp_a += e_
+                chk_a += c_
+                if not ok:
+                    continue
+                e, x, c = _climb_one(step_legal, swing_ok, cost, progress, J, step_off,
+                                     swing_off, strides, deltas, a, q, r)
+                exp_a += x
+                chk_a += c
+                if not np.isnan(e) and (np.isnan(win_eff) or e > win_eff):
+                    win_eff = e
+                    seeds[0, :] = q
+            if win_eff > best_eff:
+                configs[a, :] = seeds[0]
+        expanded[a] = exp_a
+        checks[a] = chk_a
 
 
 @lru_cache(maxsize=64)

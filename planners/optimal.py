@@ -7,7 +7,7 @@ import numpy as np
 
 from planners.dp import dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
-from planners.multistart import nearest_legal
+from planners.multistart import _nearest_one, nearest_legal
 from planners.search import SearchResult, evaluate_one
 
 __all__ = ["optimal"]
@@ -33,6 +33,24 @@ def optimal(tables: StepTables) -> SearchResult:
     (:func:`~planners.lattice.run_parts`).
     """
     st = tables.struct
+    A = tables.neutral.size
+    configs = np.empty((A, st.n), dtype=np.int64)
+    found = np.zeros(A, dtype=np.bool_)
+    expanded = np.zeros(A, dtype=np.int64)
+    checks = np.zeros(A, dtype=np.int64)
+    run_parts(_optimal, A, tables.step_legal, tables.swing_ok,
+              np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
+              tables.neutral.astype(np.int64), st.step_j, st.J, st._step_offsets,
+              st._swing_offsets, st._swing_strides, configs, found, expanded, checks,
+              MAX_ITERATIONS)
+    return SearchResult(configs, found, expanded, checks)
+
+
+def _composed(tables: StepTables) -> SearchResult:
+    """:func:`optimal` from :func:`~planners.multistart.nearest_legal` (vectorised over
+    the agents) and :func:`_dinkelbach`: what the compiled :func:`_optimal` does agent by
+    agent (a test compares the two)."""
+    st = tables.struct
     init = nearest_legal(tables)
     configs = init.configs.copy()
     expanded, checks = init.expanded.copy(), init.checks.copy()
@@ -42,6 +60,29 @@ def optimal(tables: StepTables) -> SearchResult:
               st.J, st._step_offsets, st._swing_offsets, st._swing_strides, agents, configs,
               expanded, checks, MAX_ITERATIONS)
     return SearchResult(configs, init.found.copy(), expanded, checks)
+
+
+@nb.njit(cache=True, nogil=True)
+def _optimal(step_legal, swing_ok, cost, progress, neutral, step_j, J, step_off, swing_off,
+             strides, configs, found, expanded, checks, iterations, part, parts):
+    """:func:`optimal` of every ``parts``-th agent from ``part``
+    (:func:`planners.lattice.run_parts`): the start
+    (:func:`~planners.multistart._nearest_one` from the neutral step), then, where one
+    is found, :func:`_dinkelbach`'s iterations from it."""
+    A, n = configs.shape
+    value, new, choice = dp_scratch(J, n)
+    row = np.empty(cost.shape[1])
+    best = np.empty(n, dtype=np.int64)
+    for a in range(part, A, parts):
+        ok, expanded[a], checks[a] = _nearest_one(step_legal, swing_ok, cost, step_j, J,
+                                                  step_off, swing_off, strides, a,
+                                                  neutral[a], row, value, new, choice,
+                                                  configs[a])
+        found[a] = ok
+        if ok:
+            _iterate(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+                     a, configs[a], expanded, checks, iterations, value, new, choice, row,
+                     best)
 
 
 @nb.njit(cache=True, nogil=True)
@@ -55,25 +96,35 @@ def _dinkelbach(step_legal, swing_ok, cost, progress, J, step_off, swing_off, st
     :meth:`~planners.lattice.StepTables.evaluate`), step costs ``E - lam * L`` rounded to
     1e-10 (as :func:`~planners.dp.cheapest`)."""
     n = configs.shape[1]
-    Ns = cost.shape[1]
     value, new, choice = dp_scratch(J, n)
-    row = np.empty(Ns)
+    row = np.empty(cost.shape[1])
     best = np.empty(n, dtype=np.int64)
     for i in range(part, agents.size, parts):
-        a = agents[i]
-        _, eff = evaluate_one(a, configs[a], step_legal, swing_ok, cost, progress, J,
-                              step_off, swing_off, strides)
-        for _ in range(iterations):
-            lam = 1.0 / eff
-            for t in range(Ns):
-                row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
-            ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off,
-                                             swing_off, strides, value, new, choice, best)
-            expanded[a] += states
-            checks[a] += transitions
-            _, moved = evaluate_one(a, best, step_legal, swing_ok, cost, progress, J,
-                                    step_off, swing_off, strides)
-            if not (ok and moved > eff * (1 + 1e-12)):
-                break
-            configs[a, :] = best
-            eff = moved
+        _iterate(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+                 agents[i], configs[agents[i]], expanded, checks, iterations, value, new,
+                 choice, row, best)
+
+
+@nb.njit(cache=True, nogil=True)
+def _iterate(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, a,
+             config, expanded, checks, iterations, value, new, choice, row, best):
+    """:func:`_dinkelbach`'s iterations for table row ``a`` from its legal ``config``
+    (n,), in place (``value``, ``new``, ``choice``: :func:`~planners.dp.dp_scratch`;
+    ``row`` (Ns,), ``best`` (n,): scratch)."""
+    Ns = cost.shape[1]
+    _, eff = evaluate_one(a, config, step_legal, swing_ok, cost, progress, J, step_off,
+                          swing_off, strides)
+    for _ in range(iterations):
+        lam = 1.0 / eff
+        for t in range(Ns):
+            row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
+        ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off,
+                                         swing_off, strides, value, new, choice, best)
+        expanded[a] += states
+        checks[a] += transitions
+        _, moved = evaluate_one(a, best, step_legal, swing_ok, cost, progress, J,
+                                step_off, swing_off, strides)
+        if not (ok and moved > eff * (1 + 1e-12)):
+            break
+        config[:] = best
+        eff = moved

@@ -320,16 +320,21 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
             messages[a] = message, depth
             result.configs[a] = prefix  # a failed agent keeps its longest legal prefix
     steps, swings = st.indices(result.configs)
-    front = st.step_front[steps]
-    foot_nodes = np.concatenate([np.ones((A, 1), dtype=np.int64), front], axis=1)
-    foot_s = tables.node_s[rows, foot_nodes] + origins[:, None]
-    foot_z = tables.node_z[rows, foot_nodes]
-    lengths = tables.length[rows, steps]
-    rises = tables.rise[rows, steps]
-    controls = tables.controls[rows, swings]  # a copy (fancy indexing)
+    foot_nodes = np.empty((A, st.n + 1), dtype=np.int64)
+    foot_nodes[:, 0] = 1
+    foot_nodes[:, 1:] = st.step_front[steps]
+    # gathers through flat indices (faster than indexing with broadcast row arrays)
+    at_node = rows * tables.node_s.shape[1] + foot_nodes
+    at_step = rows * tables.length.shape[1] + steps
+    foot_s = tables.node_s.take(at_node) + origins[:, None]
+    foot_z = tables.node_z.take(at_node)
+    lengths = tables.length.take(at_step)
+    rises = tables.rise.take(at_step)
+    Np = tables.controls.shape[1]
+    controls = tables.controls.reshape(A * Np, 4, 2).take(rows * Np + swings, axis=0)
     controls[..., 0] += origins[:, None, None]
     leg_length = np.array([leg.length for leg in legs])[:, None]
-    terms = {name: getattr(tables, name)[rows, steps] for name in ("En", "Ev", "Ej", "E")}
+    terms = {name: getattr(tables, name).take(at_step) for name in ("En", "Ev", "Ej", "E")}
     # a failed plan's steps beyond its legal prefix may be unevaluated (lazy tables):
     # their values are garbage and dropped below
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
