@@ -29,7 +29,7 @@ def optimal(tables: StepTables) -> SearchResult:
     :func:`~planners.multistart.nearest_legal`). E and L are the tables' ``cost`` and
     ``progress``: with ``PlannerConfig.terminal_cost`` every configuration progresses
     equally and the optimum is the least energy for it. Each agent iterates on its own,
-    in one compiled kernel (:func:`_dinkelbach`), agents on every core
+    with its start in one compiled kernel (:func:`_optimal`), agents on every core
     (:func:`~planners.lattice.run_parts`).
     """
     st = tables.struct
