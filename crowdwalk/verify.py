@@ -766,13 +766,15 @@ def table(checks: list[Check]) -> str:
 
 def run_verification(*, full: bool = False, out: Path | None = None, only=(),
                      seeds: int | None = None, params=None, echo=print,
-                     counterflow_setup: dict | None = None) -> list[Check]:
+                     counterflow_length: float = 30.0,
+                     counterflow_density: float | None = None) -> list[Check]:
     """Run the cases (``only``: their names; default all), print each row as it comes
     and write the Markdown table to ``out``. ``seeds``: how many seeds the counterflow
     case runs (default 1 fast, 5 full); ``params``: the
     :class:`~crowdwalk.crowd.CrowdParams` every case runs with (None: the default);
-    ``counterflow_setup``: ``length`` and ``start_density`` of the counterflow case
-    (:func:`counterflow_scenario`; for measurements, not the verified table)."""
+    ``counterflow_length`` [m], ``counterflow_density`` [1/m²]: the counterflow case's
+    ``length`` and ``start_density`` (:func:`counterflow_scenario`; other than the
+    defaults, for measurements, not the verified table)."""
     from crowdwalk.errors import invalid
 
     names = list(only) or list(CASES)
@@ -784,7 +786,8 @@ def run_verification(*, full: bool = False, out: Path | None = None, only=(),
     try:
         with tempfile.TemporaryDirectory(prefix="crowdwalk-verify-") as tmp:
             for name in names:
-                case = (partial(counterflow, seeds=seeds, **(counterflow_setup or {}))
+                case = (partial(counterflow, seeds=seeds, length=counterflow_length,
+                                start_density=counterflow_density)
                         if name == "counterflow" else CASES[name])
                 rows = case(not full, Path(tmp))
                 for c in rows:

@@ -31,19 +31,16 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=None, help="counterflow seeds 1..N")
     ap.add_argument("--full", action="store_true", help="full sizes")
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
-    ap.add_argument("--counterflow-length", type=float, default=None, metavar="M")
+    ap.add_argument("--counterflow-length", type=float, default=30.0, metavar="M")
     ap.add_argument("--counterflow-density", type=float, default=None, metavar="PER_M2")
     args = ap.parse_args()
-    setup = {}
-    if args.counterflow_length is not None:
-        setup["length"] = args.counterflow_length
-    if args.counterflow_density is not None:
-        setup["start_density"] = args.counterflow_density
     fields = {k: _value(v) for k, v in (item.split("=", 1) for item in args.set)}
     params = replace(CrowdParams(), **fields)
-    print(f"# CrowdParams overrides: {fields}" + (f"; counterflow {setup}" if setup else ""))
+    print(f"# CrowdParams overrides: {fields}; counterflow length {args.counterflow_length} m, "
+          f"start density {args.counterflow_density}")
     run_verification(full=args.full, only=args.only.split(","), seeds=args.seeds,
-                     params=params, counterflow_setup=setup)
+                     params=params, counterflow_length=args.counterflow_length,
+                     counterflow_density=args.counterflow_density)
 
 
 if __name__ == "__main__":
