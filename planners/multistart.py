@@ -79,22 +79,27 @@ def _legal_each(step_legal, swing_ok, J, step_off, swing_off, strides, agents, c
                 legal):
     """Whether each configuration ``configs[b]`` (B, n) is legal for table row
     ``agents[b]`` (compiled, as :meth:`~planners.lattice.StepTables.evaluate`)."""
-    B, n = configs.shape
-    for b in range(B):
-        a = agents[b]
-        m_prev, m_prev2, j_prev = 0, 0, 0
-        ok = True
-        for k in range(n):
-            j = configs[b, k]
-            step = step_off[k] + m_prev * J + j
-            swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-            if not (step_legal[a, step] and swing_ok[a, swing]):
-                ok = False
-            if k > 0:
-                m_prev2 += j_prev
-            m_prev += j
-            j_prev = j
-        legal[b] = ok
+    for b in range(configs.shape[0]):
+        legal[b] = _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides,
+                              agents[b], configs[b])
+
+
+@nb.njit(cache=True, nogil=True)
+def _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides, a, config):
+    """Whether ``config`` (n,) is legal for table row ``a`` (every step and swing)."""
+    m_prev, m_prev2, j_prev = 0, 0, 0
+    ok = True
+    for k in range(config.size):
+        j = config[k]
+        step = step_off[k] + m_prev * J + j
+        swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
+        if not (step_legal[a, step] and swing_ok[a, swing]):
+            ok = False
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += j
+        j_prev = j
+    return ok
 
 
 def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
@@ -268,17 +273,14 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     starts = tables.config.search_starts if starts is None else starts
     st = tables.struct
     A = tables.neutral.size
-    configs = np.empty((A, st.n), dtype=np.int64)
-    found = np.zeros(A, dtype=np.bool_)
-    expanded = np.zeros(A, dtype=np.int64)
-    checks = np.zeros(A, dtype=np.int64)
+    out = SearchResult.empty(A, st.n)
     run_parts(_multistart, A, tables.step_legal, tables.swing_ok,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               tables.length, tables.E, tables.neutral.astype(np.int64), tables.neutral_cost,
               st.step_j, st.J, st._step_offsets, st._swing_offsets, st._swing_strides,
-              _deltas(st.n), _extra_starts(starts, st.J), starts, configs, found, expanded,
-              checks)
-    return SearchResult(configs, found, expanded, checks)
+              _deltas(st.n), _extra_starts(starts, st.J), starts, out.configs, out.found,
+              out.expanded, out.checks)
+    return out
 
 
 def _composed(tables: StepTables, starts: int | None = None) -> SearchResult:
@@ -324,19 +326,8 @@ def _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off, swing_off, str
     ``config`` (n,) (``row``: scratch (Ns,); ``value``, ``new``, ``choice``:
     :func:`~planners.dp.dp_scratch`). Returns (found, expanded, checks)."""
     n = config.size
-    m_prev, m_prev2, j_prev = 0, 0, 0
-    legal = True
-    for k in range(n):
-        step = step_off[k] + m_prev * J + centre
-        swing = swing_off[k] + m_prev2 * strides[k] + centre + (j_prev if k > 0 else 0)
-        if not (step_legal[a, step] and swing_ok[a, swing]):
-            legal = False
-        if k > 0:
-            m_prev2 += j_prev
-        m_prev += centre
-        j_prev = centre
     config[:] = centre
-    if legal:
+    if _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides, a, config):
         return True, 0, 1
     for t in range(row.size):  # np.round(dist + 1e-7 * cost, 10), as cheapest
         row[t] = np.rint((abs(step_j[t] - centre) + 1e-7 * cost[a, t]) * 1e10) / 1e10

@@ -34,16 +34,13 @@ def optimal(tables: StepTables) -> SearchResult:
     """
     st = tables.struct
     A = tables.neutral.size
-    configs = np.empty((A, st.n), dtype=np.int64)
-    found = np.zeros(A, dtype=np.bool_)
-    expanded = np.zeros(A, dtype=np.int64)
-    checks = np.zeros(A, dtype=np.int64)
+    out = SearchResult.empty(A, st.n)
     run_parts(_optimal, A, tables.step_legal, tables.swing_ok,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               tables.neutral.astype(np.int64), st.step_j, st.J, st._step_offsets,
-              st._swing_offsets, st._swing_strides, configs, found, expanded, checks,
-              MAX_ITERATIONS)
-    return SearchResult(configs, found, expanded, checks)
+              st._swing_offsets, st._swing_strides, out.configs, out.found, out.expanded,
+              out.checks, MAX_ITERATIONS)
+    return out
 
 
 def _composed(tables: StepTables) -> SearchResult:

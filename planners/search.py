@@ -35,6 +35,13 @@ class SearchResult:
     expanded: np.ndarray
     checks: np.ndarray
 
+    @classmethod
+    def empty(cls, agents: int, n: int) -> SearchResult:
+        """A result for ``agents`` agents of ``n`` steps for a kernel to fill in: nothing
+        found, nothing counted."""
+        return cls(np.empty((agents, n), dtype=np.int64), np.zeros(agents, dtype=np.bool_),
+                   np.zeros(agents, dtype=np.int64), np.zeros(agents, dtype=np.int64))
+
 
 def neighbour_deltas(n: int, shifts: bool = True) -> np.ndarray:
     """Grid neighbours of a configuration, shape (2n [+ 2(n-1)], n).
