@@ -325,14 +325,6 @@ class ElevInterpConfig:
         docs/architecture.md "Knee closure of long level steps"); False: such steps (a
         1.75 m body's level steps beyond about 0.81 m) are served from the paper's
         triangulation, clamped, the swing foot 0.5-2 cm below the floor.
-    low_rise_line : bool
-        With ``level_datum`` and ``heel_rise``, a low rise (0 < |SH| < ``level_fade``) is
-        served like a level step — the level line at its length, closed to its height by
-        the trailing foot (and knee) — instead of the triangulation with the stair
-        datasets (an extension of §5, docs/architecture.md "Low rises from the level
-        line"); a rise the closure cannot reach gets the paper's blend. False (default:
-        measured mixed on the uneven park, see there): the triangulation with the level
-        datum (a 0.5 m step rising 2 cm lands with the knee at 35°).
     stair_closure : {"swing", "linear"}
         The shipped stair datasets used when no ``datasets`` are given
         (:func:`~crowdwalk.gait.datasets.load_datasets`): "swing" (default), Bovi's stair
@@ -363,7 +355,6 @@ class ElevInterpConfig:
     level_fade: float = 0.04
     level_line_beyond: float = 1.5
     knee_closure: bool = True
-    low_rise_line: bool = False
     stair_closure: str = "swing"
     low_rise_blend: bool = True
 
@@ -764,7 +755,7 @@ class ElevInterp:
         ask = target.copy()
         if cfg.level_datum:
             ask[:, 1] += fade * np.interp(target[:, 0], *level.T)
-        on_line = ((fade >= 1.0) | ((fade > 0.0) & cfg.low_rise_line)) & cfg.level_datum
+        on_line = (fade >= 1.0) & cfg.level_datum
 
         def serve(ask):
             out = self._solve(space, ask, props, metres)
