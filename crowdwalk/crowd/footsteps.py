@@ -236,6 +236,28 @@ class FootstepPlanner:
             self._planner_codes[name] = len(self._planner_codes)
         return np.array([self._planner_codes[name] for name in names], dtype=np.int64)
 
+    def _profiles(self, stance: np.ndarray, direction: np.ndarray) -> list:
+        """The ground profiles (s, z) along the local paths of agents at ``stance`` (m, 2)
+        [m] heading along ``direction`` (m, 2): ``_BEHIND`` behind the stance foot to
+        ``lookahead`` ahead, or to where the path leaves the walkable area."""
+        m = stance.shape[0]
+        ahead = np.full(m, self.lookahead)
+        if self.clearance is not None:
+            # the local path ends where it leaves the walkable area: the walker turns
+            # before a wall, so the ground beyond (a drop, a wall top) is not its plan's;
+            # past the end the profile continues level (planners.GroundProfile)
+            probe = np.arange(0.1, self.lookahead + 1e-9, 0.1)  # (P,)
+            pts = stance[:, None, :] + probe[None, :, None] * direction[:, None, :]
+            outside = self.clearance(pts) < 0.0  # (m, P)
+            first = np.where(outside.any(axis=1), np.argmax(outside, axis=1), probe.size)
+            ahead = np.maximum(np.where(first < probe.size, probe[np.minimum(
+                first, probe.size - 1)] - 0.1, self.lookahead), 0.3)
+        lines = np.stack([stance - _BEHIND * direction, stance + ahead[:, None] * direction],
+                         axis=1)  # (m, 2, 2): one straight local path per agent
+        if hasattr(self.terrain, "profiles"):
+            return self.terrain.profiles(lines)  # one batched terrain pass
+        return [self.terrain.profile_arrays(line) for line in lines]
+
     def plan(
         self,
         stance: np.ndarray,
@@ -247,6 +269,7 @@ class FootstepPlanner:
         planner: np.ndarray,
         trailing: np.ndarray | None = None,
         setting: np.ndarray | None = None,
+        threads=None,
     ) -> PlannedSteps:
         """Plan the first step of m agents.
 
@@ -268,6 +291,8 @@ class FootstepPlanner:
             Arc length of the trailing (swing) foot behind the stance foot [m], < 0.
         setting : (m,) int, optional
             Index into ``configs`` per agent (default 0, ``config``).
+        threads : crowdwalk.workers.RowThreads, optional
+            Finds the ground profiles of parts of the agents at once (the same result).
         """
         from planners import plan_batch
 
@@ -283,23 +308,11 @@ class FootstepPlanner:
         # speed classes of 5 cm/s for the planner (the walker keeps its own speed)
         speed_class = np.round(np.asarray(speed, float) / 0.05).astype(np.int64)
         speed = speed_class * 0.05
-        ahead = np.full(m, self.lookahead)
-        if self.clearance is not None:
-            # the local path ends where it leaves the walkable area: the walker turns
-            # before a wall, so the ground beyond (a drop, a wall top) is not its plan's;
-            # past the end the profile continues level (planners.GroundProfile)
-            probe = np.arange(0.1, self.lookahead + 1e-9, 0.1)  # (P,)
-            pts = stance[:, None, :] + probe[None, :, None] * direction[:, None, :]
-            outside = self.clearance(pts) < 0.0  # (m, P)
-            first = np.where(outside.any(axis=1), np.argmax(outside, axis=1), probe.size)
-            ahead = np.maximum(np.where(first < probe.size, probe[np.minimum(
-                first, probe.size - 1)] - 0.1, self.lookahead), 0.3)
-        lines = np.stack([stance - _BEHIND * direction, stance + ahead[:, None] * direction],
-                         axis=1)  # (m, 2, 2): one straight local path per agent
-        if hasattr(self.terrain, "profiles"):
-            arrays = self.terrain.profiles(lines)  # one batched terrain pass
-        else:
-            arrays = [self.terrain.profile_arrays(line) for line in lines]
+        if threads is None:
+            arrays = self._profiles(stance, direction)
+        else:  # row-independent: parts of the agents at once (numpy, the kernels and
+            # shapely release the GIL), the same profiles
+            arrays = threads.map(self._profiles, m, stance, direction)
         s_all, z_all, bounds = _relative_profiles(arrays, np.asarray(stance_z, float))
         names = [str(p) for p in planner]
         setting = np.zeros(m, np.int64) if setting is None else np.asarray(setting, np.int64)

@@ -404,7 +404,7 @@ class CrowdSimulation:
                 st, self.queue, agents=idx[mv], choice=choice.take(mv),
                 footsteps=self.footsteps, legs=self.legs, population=self.pop,
                 terrain=self.terrain, params=prm, plan_speed=self.plan_speed,
-                setting=self.setting))
+                setting=self.setting, threads=self.threads))
             self.wall_planning += _time.perf_counter() - w0
             # the exact step taken, in time, against each neighbour's committed step
             go = np.flatnonzero(plan.move)

@@ -95,7 +95,8 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
                   direction: np.ndarray, stance: np.ndarray, stance_z: np.ndarray,
                   trail: np.ndarray, leg: np.ndarray, speed: np.ndarray,
                   planner: np.ndarray, replan_turn_deg: float,
-                  setting: np.ndarray | None = None) -> tuple[StepPlan, np.ndarray]:
+                  setting: np.ndarray | None = None,
+                  threads=None) -> tuple[StepPlan, np.ndarray]:
     """The next step of k moving agents, and which of them planned anew (k,) bool.
 
     An agent takes the next step of its queued plan when the plan has one left, the
@@ -106,7 +107,9 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
     are queued. ``direction`` (k, 2) unit, ``stance`` (k, 2) and ``trail`` (k, 2) [m]
     centre-line points of the stance and the trailing foot, ``stance_z`` (k,) [m],
     ``leg`` (k,) leg classes, ``speed`` (k,) [m/s], ``planner`` (k,) names, ``setting``
-    (k,) the planner configuration of each (``FootstepPlanner.configs``; None: the first).
+    (k,) the planner configuration of each (``FootstepPlanner.configs``; None: the first);
+    ``threads`` (a :class:`crowdwalk.workers.RowThreads`, optional) finds the planners'
+    ground profiles for parts of them at once (the same plans).
     """
     a = agents
     k = a.size
@@ -129,7 +132,8 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
         trailing = -np.einsum("ij,ij->i", stance[p] - trail[p], d)
         planned = footsteps.plan(stance[p], stance_z[p], direction=d, leg=leg[p],
                                  speed=speed[p], planner=planner[p], trailing=trailing,
-                                 setting=None if setting is None else setting[p])
+                                 setting=None if setting is None else setting[p],
+                                 threads=threads)
         plan.move[p] = planned.ok
         plan.length[p], plan.rise[p] = planned.step_length[:, 0], planned.step_height[:, 0]
         plan.energy[p], plan.swing[p] = planned.energy[:, 0], planned.swing[:, 0]
@@ -175,7 +179,7 @@ def even_steps(terrain, *, stance: np.ndarray, stance_z: np.ndarray, direction: 
 
 def next_steps(state, queue: PlanQueue, *, agents: np.ndarray, choice, footsteps, legs,
                population, terrain, params, plan_speed: np.ndarray | None = None,
-               setting: np.ndarray | None = None) -> StepPlan:
+               setting: np.ndarray | None = None, threads=None) -> StepPlan:
     """The steps of k moving ``agents`` along their steering ``choice`` (a
     :class:`~crowdwalk.crowd.steering.StepChoice` of k rows): planned or reused
     (:func:`plan_or_reuse`); shortened to the free length where a neighbour or wall is
@@ -185,7 +189,8 @@ def next_steps(state, queue: PlanQueue, *, agents: np.ndarray, choice, footsteps
     even ground (0.3 m, else 0.2 m) changes the approach, as people do. Counts plans,
     failures and shortened steps in ``state``. ``plan_speed`` (n,) [m/s] is the speed
     the planner plans each walker's steps for (default its free speed) and ``setting``
-    (n,) its planner configuration (crowdwalk.style: a held step length, toe clearance)."""
+    (n,) its planner configuration (crowdwalk.style: a held step length, toe clearance);
+    ``threads`` as in :func:`plan_or_reuse`."""
     st, a = state, agents
     d, free = choice.direction, choice.free_length
     plan, planned = plan_or_reuse(
@@ -193,7 +198,7 @@ def next_steps(state, queue: PlanQueue, *, agents: np.ndarray, choice, footsteps
         stance_z=st.stance_z[a], trail=st.trail[a], leg=legs.index[a],
         speed=(population.free_speed if plan_speed is None else plan_speed)[a],
         planner=population.planner[a], replan_turn_deg=params.replan_turn_deg,
-        setting=None if setting is None else setting[a])
+        setting=None if setting is None else setting[a], threads=threads)
     ok = plan.move
     st.plans[a[planned]] += 1
     st.plan_failures[a[planned & ~ok]] += 1

@@ -58,3 +58,29 @@ def test_served_plan_is_the_planners_plan_for_the_agents_own_ground():
         assert g.ok[0] and want.ok
         np.testing.assert_allclose(g.step_length[0], want.step_lengths, atol=1e-9)
         np.testing.assert_allclose(g.step_height[0], np.diff(want.footholds_z), atol=1e-9)
+
+
+def test_profiles_found_in_threads_give_the_same_plans(monkeypatch):
+    # walkers spread over a flight and the ground around it, some near the area's edge
+    # (their local paths end early): the profiles are found for parts of them at once
+    import crowdwalk.workers as W
+
+    monkeypatch.setattr(W, "MIN_THREAD_ROWS", 1)
+    flight = StairFlight((0.0, 0.0), 0.0, 3.0, 0.30, 0.17, 10, z0=1.7, up=False)
+    terrain = Terrain((-5, -5, 10, 5), 0.0, (flight,))
+    area = shapely.box(-5, -5, 4.0, 5)
+    rng = np.random.default_rng(3)
+    stance = np.column_stack([rng.uniform(-2.0, 3.9, 40), rng.uniform(-1.0, 1.0, 40)])
+    z = terrain.height(stance)
+    angle = rng.uniform(-0.5, 0.5, 40)
+    direction = np.column_stack([np.cos(angle), np.sin(angle)])
+    runs = []
+    for threads in (None, W.RowThreads(3)):
+        fp = _planner(terrain, area)
+        runs.append(fp.plan(stance, z, direction=direction, leg=np.zeros(40, int),
+                            speed=np.full(40, 1.3), planner=np.full(40, "best_first"),
+                            trailing=np.full(40, -0.4), threads=threads))
+        assert len(fp._cache) > 1  # the walkers' grounds differ
+    one, split = runs
+    for name in ("ok", "step_length", "step_height", "swing", "energy", "from_cache"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(split, name))
