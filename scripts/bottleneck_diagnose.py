@@ -10,7 +10,8 @@ of consecutive pairs more than 0.2 m apart laterally, their time gaps apart and 
 file, and the median torso twist (facing against the walking direction; the disc body
 always faces its step); the mean number of walkers inside the opening and in front of
 it (7 < x < 8, |y − 5| < 1), and the share of those standing (< 0.1 m/s over a frame);
-the gaps longer than 1.5 s with what they add up to.
+the gaps longer than 1.5 s with what they add up to; and the mean speed of walkers 0–1,
+1–2 and 2–4 m past the opening's end (``speed_after``: a slow band there holds the door back).
 
 Also, with ``--why``: of the decisions of walkers in front of the opening and inside it,
 how many stand, and how many of those would have stepped without the soft neighbour
@@ -48,6 +49,12 @@ from crowdwalk.verify import _bottleneck, _run
 def _crossing(x: np.ndarray, at: float) -> int | None:
     c = np.flatnonzero((x[:-1] < at) & (x[1:] >= at))
     return int(c[0]) + 1 if c.size else None
+
+
+def _mean_or_none(values: np.ndarray) -> float | None:
+    """The mean of the finite ``values``, 2 decimals; None when there are none."""
+    v = values[np.isfinite(values)]
+    return round(float(v.mean()), 2) if v.size else None
 
 
 def diagnose(traj) -> dict:
@@ -99,6 +106,11 @@ def diagnose(traj) -> dict:
         "in_front_mean": round(float(front.sum() / frames.size), 2),
         "in_front_standing_share": round(float(np.mean(speed[front] < 0.1)), 2),
         "in_opening_standing_share": round(float(np.mean(speed[inside] < 0.1)), 2),
+        # behind the opening: the mean speed [m/s] of walkers 0-1, 1-2 and 2-4 m past its
+        # end (a slow band there holds the door back)
+        "speed_after": [_mean_or_none(speed[steady & (traj.x > 10.0 + a)
+                                            & (traj.x <= 10.0 + b)])
+                        for a, b in ((0.0, 1.0), (1.0, 2.0), (2.0, 4.0))],
     }
 
 

@@ -3,9 +3,11 @@ set (the CLI sets only ``--speed-model``), printing each row as verify does.
 
 Usage: ``python scripts/verify_with.py --only rimea4,bottleneck,counterflow [--seeds 5]
 [--full] --set speed_model='headway' headway_free_margin=1.0`` (``--set``: Python literals;
-a bare word is taken as a string). ``--counterflow-length L`` and ``--counterflow-density D``
-change the counterflow case's corridor length [m] and start the groups on a lattice at D
-[1/m²] (``crowdwalk.verify.counterflow_scenario``; measurements, not the verified case).
+a bare word is taken as a string; ``steering.FIELD=V`` sets a
+:class:`~crowdwalk.crowd.steering.SteeringParams` field). ``--counterflow-length L`` and
+``--counterflow-density D`` change the counterflow case's corridor length [m] and start the
+groups on a lattice at D [1/m²] (``crowdwalk.verify.counterflow_scenario``; measurements,
+not the verified case).
 """
 
 from __future__ import annotations
@@ -35,7 +37,10 @@ def main() -> None:
     ap.add_argument("--counterflow-density", type=float, default=None, metavar="PER_M2")
     args = ap.parse_args()
     fields = {k: _value(v) for k, v in (item.split("=", 1) for item in args.set)}
-    params = replace(CrowdParams(), **fields)
+    steer = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("steering.")}
+    params = replace(CrowdParams(), **{k: v for k, v in fields.items()
+                                       if not k.startswith("steering.")})
+    params = replace(params, steering=replace(params.steering, **steer))
     print(f"# CrowdParams overrides: {fields}; counterflow length {args.counterflow_length} m, "
           f"start density {args.counterflow_density}")
     run_verification(full=args.full, only=args.only.split(","), seeds=args.seeds,
