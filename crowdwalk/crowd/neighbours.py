@@ -51,7 +51,8 @@ def _gather(deciders, me, *, state, t, tree, now, walkers, packed, radius, k,
                    radius, packed, *out.arrays())
     return Neighbours(valid=out.valid, now=out.now, end=out.end, velocity=out.velocity,
                       heading=out.heading, radius=out.radius, remaining=out.remaining,
-                      yaw_now=out.yaw_now, yaw_end=out.yaw_end, shape=out.shape)
+                      yaw_now=out.yaw_now, yaw_end=out.yaw_end, shape=out.shape,
+                      agent=walkers[np.minimum(found, walkers.size - 1)])
 
 
 class _Gathered:

@@ -119,6 +119,17 @@ class CrowdParams:
         (not calibrated: chosen among 0–2 m on seed 4) raises the headway model's door
         flows to 1.22 / 1.49 / 1.66 / 1.94 / 1.95 /s at 0.8–1.2 m (full, seeds 4–6;
         alone 0.76 / 0.93 / 1.34 at 0.8 / 1.0 / 1.2, fast); counterflow still fails.
+    headway_same_way : {"heading", "route"}
+        With ``"headway"``: which neighbours count as walking the same way (the only ones
+        followed; the others are avoided by steering). ``"heading"`` (default): the
+        neighbour's last step direction within 90° of the walker's own. ``"route"``
+        ("route-direction leaders"): the neighbour's desired direction (the direction
+        of its route segment, Helbing & Molnár 1995's e_α) within 90° of the walker's:
+        Seyfried et al.'s and Weidmann's relations are for walkers going one way, and
+        an oncoming walker is one going the other way whatever its last step did. Named
+        deviation, measured in the 2 × 50 counterflow (docs/architecture.md,
+        "Route-direction headway leaders"): with ``"heading"`` an oncoming walker that
+        side-steps or steps back (the clog fan turned round) is followed, face to face.
     headway_steer : bool
         With ``"headway"``: steering scores each candidate direction at the step the
         model allows along it, as ``"contact_gap"`` does.
@@ -173,6 +184,7 @@ class CrowdParams:
     contact_time_gap: float = 1.2
     headway_time: float = 1.06
     headway_lane: float = 2.0
+    headway_same_way: Literal["heading", "route"] = "heading"
     headway_steer: bool = False
     headway_free_margin: float | None = None
     lane_keep: bool = False

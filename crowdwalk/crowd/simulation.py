@@ -304,7 +304,10 @@ class CrowdSimulation:
         if prm.speed_model == "headway":  # Seyfried et al. 2005's required length
             # followed: the neighbours walking (or facing, when standing) the same way;
             # the others are avoided by steering, not followed
-            if nbs.heading is not None:
+            if prm.headway_same_way == "route":  # route-direction leaders
+                e = self._route_directions()
+                followed = nbs.valid & (np.einsum("kmj,kj->km", e[nbs.agent], e[idx]) > -0.5)
+            elif nbs.heading is not None:
                 followed = nbs.valid & (np.cos(nbs.heading - h[:, None]) > 0.0)
             if self.free_zone is not None:  # in and near openings: walk into free space
                 followed &= ~self.free_zone.inside(pos)[:, None]
@@ -313,6 +316,14 @@ class CrowdSimulation:
                             free, leg, prm.headway_time, lane=lane)
         return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                         free, leg, prm.contact_time_gap)
+
+    def _route_directions(self) -> np.ndarray:
+        """Every agent's desired direction (n, 2): the unit direction of its current
+        route segment."""
+        st, table = self.state, self.routes.table
+        seg = np.minimum(st.segment, table.stop[st.route] - 1)
+        d = table.xy[seg + 1] - table.xy[seg]
+        return d / np.maximum(np.linalg.norm(d, axis=1), 1e-12)[:, None]
 
     def _opening_scales(self, pos: np.ndarray) -> dict:
         """``opening_ease``: the factors on the soft wall and neighbour terms (k,) for

@@ -171,6 +171,8 @@ class Neighbours:
     shape : (m, K, 3) float, optional
         Neighbour outlines (:meth:`~crowdwalk.crowd.shape.BodyShape.packed` rows;
         default: discs of ``radius``).
+    agent : (m, K) int, optional
+        The neighbours' agent indices (padding: any index, marked not ``valid``).
     """
 
     valid: np.ndarray
@@ -183,6 +185,7 @@ class Neighbours:
     yaw_now: np.ndarray | None = None
     yaw_end: np.ndarray | None = None
     shape: np.ndarray | None = None
+    agent: np.ndarray | None = None
 
     def outlines(self) -> np.ndarray:
         """(m, K, 3) the neighbours' outlines (discs of ``radius`` unless given)."""
