@@ -124,7 +124,8 @@ class CrowdParams:
         followed; the others are avoided by steering). ``"heading"`` (default): the
         neighbour's last step direction within 90° of the walker's own. ``"route"``
         ("route-direction leaders"): the neighbour's desired direction (the direction
-        of its route segment, Helbing & Molnár 1995's e_α) within 90° of the walker's:
+        of its route segment, Helbing & Molnár 1995's e_α) within 120° of the walker's
+        (a 90° corner keeps following the walker who has turned already):
         Seyfried et al.'s and Weidmann's relations are for walkers going one way, and
         an oncoming walker is one going the other way whatever its last step did. Named
         deviation, measured in the 2 × 50 counterflow (docs/architecture.md,
