@@ -48,3 +48,34 @@ def test_gathered_motion_is_the_numpy_arithmetic_bit_for_bit():
     for name, value in want.items():
         np.testing.assert_array_equal(getattr(got, name), value, err_msg=name, strict=True)
         assert getattr(got, name).tobytes() == value.tobytes(), name  # -0.0 too
+
+
+def _brute_force(now, me, k, reach):
+    """The k nearest within ``reach``, nearest first, equal distances by index."""
+    d2 = ((me[:, None, :] - now[None, :, :]) ** 2).sum(axis=2)
+    out = np.full((len(me), k), len(now), np.int64)
+    for r, row in enumerate(d2):
+        near = np.flatnonzero(row < reach**2)
+        near = near[np.lexsort((near, row[near]))][:k]
+        out[r, :near.size] = near
+    return out
+
+
+def test_grid_finds_the_nearest_with_ties_by_index_and_far_walkers():
+    """On a lattice (many equal distances), with walkers spread over 5 km (cells wider
+    than the reach) and deciders outside the walkers' extent."""
+    from crowdwalk.crowd.neighbours import _Grid, _nearest
+
+    rng = np.random.default_rng(5)
+    lattice = np.stack(np.meshgrid(np.arange(0, 8, 0.5), np.arange(0, 6, 0.5)), -1).reshape(-1, 2)
+    far = rng.uniform(0, 5000, (400, 2))
+    for now in (lattice, np.concatenate([lattice, far])):
+        me = np.concatenate([now[rng.integers(0, len(now), 40)], [[-2.0, 3.0], [9.5, 6.5]],
+                             rng.uniform(-10, 10, (10, 2))])
+        grid = _Grid(now, 1.2)
+        found = np.full((len(me), 9), len(now), np.int64)
+        _nearest(me, now, grid.origin, grid.cell, grid.shape, grid.start, grid.order,
+                 1.2**2, found)
+        np.testing.assert_array_equal(found, _brute_force(now, me, 9, 1.2))
+        assert (found < len(now)).sum(axis=1).min() == 0  # some find no one
+        assert (found[:40] < len(now)).all(axis=1).any()  # and some a full list
