@@ -6,7 +6,7 @@ pure functions over arrays, one module each:
 
 1. route ahead (:mod:`~crowdwalk.crowd.routing`): progress along its route polyline,
    arrival, the steering target ``target_distance`` ahead;
-2. local steering with the neighbours from one ``cKDTree`` query per tick
+2. local steering with the neighbours from one uniform grid per tick
    (:mod:`~crowdwalk.crowd.neighbours`, :mod:`~crowdwalk.crowd.steering`): a step
    direction and the longest clear step;
 3. footsteps (:mod:`~crowdwalk.crowd.stepping`): the next step of the agent's current
