@@ -101,6 +101,8 @@ def _nearest(me, now, origin, cell, shape, start, order, bound2, found):
     of ``me`` (m, 2), nearest first, equal squared distances by index, into ``found``
     (m, K) (already ``now.shape[0]`` where there are fewer)."""
     m, k = found.shape
+    if k == 0:
+        return
     best = np.empty(k)
     for r in range(m):
         fx = (me[r, 0] - origin[0]) / cell
