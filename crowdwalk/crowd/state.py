@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 __all__ = ["AgentState", "WAITING", "ACTIVE", "ARRIVED"]
@@ -51,13 +52,41 @@ class AgentState:
 
     def position(self, t: float, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Body positions (k, 2) [m] and heights (k,) [m] of agents ``idx`` at time t."""
-        span = self.t1[idx] - self.t0[idx]
-        f = np.clip((t - self.t0[idx]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
-        xy = self.pos0[idx] + f[:, None] * (self.pos1[idx] - self.pos0[idx])
-        return xy, self.z0[idx] + f * (self.z1[idx] - self.z0[idx])
+        return _position(float(t), np.asarray(idx, np.int64), self.t0, self.t1, self.pos0,
+                         self.pos1, self.z0, self.z1)
 
     def yaw(self, t: float, idx: np.ndarray) -> np.ndarray:
         """Torso facing (k,) [rad] of agents ``idx`` at time t (not wrapped)."""
-        span = self.t1[idx] - self.t0[idx]
-        f = np.clip((t - self.t0[idx]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
-        return self.yaw0[idx] + f * (self.yaw1[idx] - self.yaw0[idx])
+        return _between(float(t), np.asarray(idx, np.int64), self.t0, self.t1, self.yaw0,
+                        self.yaw1)
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _fraction(t, t0, t1):
+    """How far [0, 1] a step from t0 to t1 [s] has gone at t (a step of no length: by
+    the seconds since t0)."""
+    span = t1 - t0
+    f = (t - t0) / (span if span > 0 else 1.0)
+    return 0.0 if f < 0.0 else 1.0 if f > 1.0 else f
+
+
+@nb.njit(cache=True, nogil=True)
+def _position(t, idx, t0, t1, pos0, pos1, z0, z1):
+    xy = np.empty((idx.size, 2))
+    z = np.empty(idx.size)
+    for k in range(idx.size):
+        i = idx[k]
+        f = _fraction(t, t0[i], t1[i])
+        xy[k, 0] = pos0[i, 0] + f * (pos1[i, 0] - pos0[i, 0])
+        xy[k, 1] = pos0[i, 1] + f * (pos1[i, 1] - pos0[i, 1])
+        z[k] = z0[i] + f * (z1[i] - z0[i])
+    return xy, z
+
+
+@nb.njit(cache=True, nogil=True)
+def _between(t, idx, t0, t1, a, b):
+    out = np.empty(idx.size)
+    for k in range(idx.size):
+        i = idx[k]
+        out[k] = a[i] + _fraction(t, t0[i], t1[i]) * (b[i] - a[i])
+    return out
