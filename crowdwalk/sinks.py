@@ -12,15 +12,13 @@
 
 The simulation knows no output format: :class:`crowdwalk.record.RunWriter` (the run
 folder), :class:`OverlapMonitor` and ``scripts/foot_clearance_report.py``'s step log
-are sinks. :class:`BackgroundSink` runs a sink's calls in a thread of their own,
-:class:`RemoteSink` in a worker process (:class:`crowdwalk.workers.Workers`).
+are sinks. :class:`BackgroundSink` runs a sink's calls in a thread of their own.
 """
 
 from __future__ import annotations
 
 import queue
 import threading
-from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
@@ -33,9 +31,8 @@ from crowdwalk.steps import StepBatch
 if TYPE_CHECKING:
     from crowdwalk.crowd.shape import BodyShape
     from crowdwalk.gait.engine import PoseFrame
-    from crowdwalk.workers import Workers
 
-__all__ = ["RunInfo", "Snapshot", "RunSink", "OverlapMonitor", "BackgroundSink", "RemoteSink"]
+__all__ = ["RunInfo", "Snapshot", "RunSink", "OverlapMonitor", "BackgroundSink"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,7 +150,6 @@ class BackgroundSink:
                  name: str = "crowdwalk-sink") -> None:
         self._calls: queue.Queue = queue.Queue(maxsize=backlog)
         self._error: BaseException | None = None
-        self._sink: RunSink | None = None
         self._ready = threading.Event()
         self._thread = threading.Thread(target=self._serve, args=(factory,), daemon=True,
                                         name=name)
@@ -179,12 +175,6 @@ class BackgroundSink:
         next call or :meth:`end` (so that a run still writes its summary first)."""
         self._calls.join()
 
-    def read(self, name: str):
-        """The sink's attribute ``name`` once every call made so far is done."""
-        self.wait()
-        self._raise()
-        return getattr(self._sink, name)
-
     def end(self, summary: dict) -> None:
         self._put("end", summary)
         self._calls.put(None)
@@ -193,7 +183,7 @@ class BackgroundSink:
 
     def _serve(self, factory) -> None:
         try:
-            sink = self._sink = factory()
+            sink = factory()
         except BaseException as exc:  # noqa: BLE001 - raised in the calling thread
             self._error = exc
         self._ready.set()
@@ -213,55 +203,3 @@ class BackgroundSink:
     def _raise(self) -> None:
         if self._error is not None:
             raise self._error
-
-
-def _barrier() -> None:
-    """Nothing: answered in a worker after every message sent to it before."""
-
-
-class RemoteSink:
-    """The sink ``factory()`` builds, kept in worker ``worker`` of ``workers`` and called
-    there in order, so that its work (e.g. SQLite's row binding and the csv text, which
-    hold the GIL) runs beside the simulation on another core.
-
-    Calls return at once, but at most ``backlog`` frames wait in the worker at a time; a
-    failure there is raised (as :class:`crowdwalk.workers.WorkerError`) by a later
-    :meth:`frame`, or by :meth:`wait`, :meth:`read` or :meth:`end`. ``factory`` must be
-    picklable; ``key`` names the sink in the worker.
-    """
-
-    def __init__(self, factory: Callable[[], RunSink], workers: Workers, *, worker: int = 0,
-                 key: str = "sink", backlog: int = 32) -> None:
-        self._workers, self._worker, self._key = workers, worker, key
-        self._backlog = backlog
-        self._marks: deque[Callable[[], object]] = deque()  # one per frame sent
-        workers.keep(key, factory, build=True, worker=worker)
-
-    def begin(self, info: RunInfo) -> None:
-        self.call("begin", info)
-
-    def steps(self, batch: StepBatch) -> None:
-        self.call("steps", batch)
-
-    def frame(self, time: float, snapshot: Snapshot, poses) -> None:
-        self.call("frame", time, snapshot, poses)
-        self._marks.append(self._workers.call(self._worker, None, _barrier))
-        if len(self._marks) > self._backlog:
-            self._marks.popleft()()
-
-    def call(self, name: str, *args) -> None:
-        """Call the sink's method ``name`` with ``args``, in order with the others."""
-        self._workers.send(self._worker, self._key, name, *args)
-
-    def wait(self) -> None:
-        """Return when every call made so far is done (raising the first failure)."""
-        self._workers.call(self._worker, None, _barrier)()
-        while self._marks:  # answered by now
-            self._marks.popleft()()
-
-    def read(self, name: str):
-        """The sink's attribute ``name`` once every call made so far is done."""
-        return self._workers.call(self._worker, self._key, name)()
-
-    def end(self, summary: dict) -> None:
-        self._workers.call(self._worker, self._key, "end", summary)()

@@ -35,7 +35,7 @@ from itertools import count as _count
 import numpy as np
 
 __all__ = ["Workers", "WorkerError", "RowThreads", "available_cores", "row_threads",
-           "sinks_apart", "split_rows", "worker_count", "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS",
+           "split_rows", "worker_count", "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS",
            "MIN_THREAD_ROWS"]
 
 #: A run that writes poses and has fewer walkers stays in one process (workers cost ~2 s
@@ -75,16 +75,6 @@ def worker_count(agents: int, requested: int | None, *, poses: bool = True) -> i
     if mp.current_process().daemon:  # e.g. a Dask worker: a process per core already
         return 0
     return available_cores() - 1 if poses and agents >= MIN_PARALLEL_AGENTS else 0
-
-
-def sinks_apart(agents: int, requested: int | None, *, poses: bool) -> bool:
-    """Whether a run writes its outputs in a worker process of its own: when it writes no
-    ``poses``, has at least :data:`MIN_PARALLEL_AGENTS` walkers, the machine another core
-    and no worker count was ``requested``; not in a daemon process (e.g. a Dask worker).
-    The writer's Python (SQLite's row binding, the csv text) then leaves the GIL to the
-    steering threads."""
-    return (requested is None and not poses and agents >= MIN_PARALLEL_AGENTS
-            and available_cores() > 1 and not mp.current_process().daemon)
 
 
 class RowThreads:

@@ -161,66 +161,6 @@ def test_a_run_steered_in_threads_writes_the_same_run_folder(tmp_path, monkeypat
         _rows(b / "trajectories.sqlite", "trajectory_data")
 
 
-def test_a_run_written_apart_writes_the_same_run_folder(tmp_path, monkeypatch):
-    """A run without poses whose writer and overlap check live in a worker process
-    (sinks_apart) writes the run folder, summary and overlap of one written in threads."""
-    import json
-
-    import crowdwalk.crowd.run as R
-
-    monkeypatch.setattr(W, "MIN_PARALLEL_AGENTS", 1)
-    built = []
-
-    class Counted(R.RemoteSink):
-        def __init__(self, *args, **kwargs):
-            built.append(kwargs["key"])
-            super().__init__(*args, **kwargs)
-
-    monkeypatch.setattr(R, "RemoteSink", Counted)
-    scenario = ROOT / "scenarios" / "bottleneck.yaml"
-    runs = {}
-    for workers in (0, None):  # 0: no worker processes (threads); None: sinks apart
-        out = tmp_path / f"w{workers}"
-        summary = run_scenario(scenario, out, overrides=RunOverrides(
-            duration=4.0, poses=False, fps=10.0, workers=workers))
-        runs[workers] = (out, summary)
-    assert built == ["writer", "overlap"]  # only the second run wrote apart
-    (a, sa), (b, sb) = runs[0], runs[None]
-    assert len((a / "footsteps.csv").read_bytes().splitlines()) > 50
-    assert (a / "footsteps.csv").read_bytes() == (b / "footsteps.csv").read_bytes()
-    for table in ("trajectory_data", "trajectory_z", "frame_data"):
-        assert _rows(a / "trajectories.sqlite", table) == _rows(b / "trajectories.sqlite", table)
-    assert sa["max_overlap_m"] == sb["max_overlap_m"]
-    written = json.loads((b / "summary.json").read_text())
-    assert written["agents"] == json.loads((a / "summary.json").read_text())["agents"]
-
-
-def test_a_remote_sink_raises_its_failure_and_bounds_its_backlog(tmp_path):
-    """A call that fails in the worker surfaces as WorkerError at the next wait (and
-    every later frame), and frames wait for the worker beyond the backlog."""
-    from functools import partial
-
-    from crowdwalk.record import RunWriter
-    from crowdwalk.sinks import RemoteSink, Snapshot
-
-    def snap(f, k=2):
-        return Snapshot(f, np.arange(k), np.zeros((k, 2)), np.zeros(k), np.ones((k, 2)))
-
-    with Workers(1) as w:
-        sink = RemoteSink(partial(RunWriter, tmp_path / "run", scenario_text="x: 1\n",
-                                  fps=10.0, walkable_wkt="POLYGON((0 0,1 0,1 1,0 0))"),
-                          w, key="writer", backlog=2)
-        for f in range(6):
-            sink.frame(f / 10, snap(f), None)
-            assert len(sink._marks) <= 2
-        sink.wait()
-        assert not sink._marks  # every frame answered
-        sink.call("write_frame", 6, np.arange(3), np.zeros((2, 2)), np.zeros(3),
-                  np.zeros((2, 2)))  # 3 ids, 2 positions: bad input in the worker
-        with pytest.raises(WorkerError, match="ids"):
-            sink.wait()
-
-
 def test_a_negative_worker_count_is_bad_input():
     from crowdwalk.crowd.run import check_overrides
     from crowdwalk.errors import InputError

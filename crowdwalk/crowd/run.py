@@ -26,9 +26,9 @@ from crowdwalk.crowd.simulation import (
     build_parts,
 )
 from crowdwalk.errors import invalid
-from crowdwalk.sinks import BackgroundSink, OverlapMonitor, RemoteSink, RunInfo, RunSink
+from crowdwalk.sinks import BackgroundSink, OverlapMonitor, RunInfo, RunSink
 from crowdwalk.style import summary_by_style
-from crowdwalk.workers import WorkerError, Workers, sinks_apart, worker_count
+from crowdwalk.workers import WorkerError, Workers, worker_count
 
 __all__ = ["RunOverrides", "check_overrides", "run_scenario", "prepare", "summarise"]
 
@@ -199,36 +199,27 @@ def run_scenario(
         wall0 = time.perf_counter()
         sc, world, sim, pose_note, text = prepare(scenario, overrides, params=params,
                                                   parallel=True)
-        # a run without poses writes in a worker process of its own (poses: in a thread,
-        # beside the worker that poses)
-        apart = Workers(1) if sinks_apart(len(sim.pop), overrides.workers,
-                                          poses=sim.gait is not None) else None
         try:
             return _run(sc, world, sim, pose_note, text, out=out, wall0=wall0,
-                        progress=progress, sinks=sinks, apart=apart)
+                        progress=progress, sinks=sinks)
         finally:
-            for workers in (sim.workers, apart):
-                if workers is not None:
-                    workers.close()
+            if sim.workers is not None:
+                sim.workers.close()
 
 
-def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks, apart) -> dict:
-    """The body of :func:`run_scenario`, within deferred interrupts; ``apart`` (Workers
-    or None) writes and checks there."""
+def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks) -> dict:
+    """The body of :func:`run_scenario`, within deferred interrupts."""
     from crowdwalk.record import RunWriter
 
     skeleton = sim.gait.skeleton if sim.gait is not None else None
-    # the run folder is written beside the simulation (in a worker process, or in a
-    # thread of its own), and the outlines are checked there too (cKDTree and numpy
-    # release the GIL): the check's result is read once, for the summary
-    write = partial(RunWriter, out, scenario_text=text, fps=sim.fps,
-                    walkable_wkt=world.routes.walkable_area.wkt, skeleton=skeleton)
-    if apart is not None:
-        writer = RemoteSink(write, apart, key="writer")
-        checker = RemoteSink(OverlapMonitor, apart, key="overlap")
-    else:
-        writer = BackgroundSink(write)
-        checker = BackgroundSink(OverlapMonitor, name="crowdwalk-overlap")
+    # the run folder is written in a thread of its own, beside the simulation
+    writer = BackgroundSink(partial(RunWriter, out, scenario_text=text, fps=sim.fps,
+                                    walkable_wkt=world.routes.walkable_area.wkt,
+                                    skeleton=skeleton))
+    # and the outlines are checked in another (cKDTree and numpy release the GIL): the
+    # check's result is read once, for the summary
+    overlap = OverlapMonitor()
+    checker = BackgroundSink(lambda: overlap, name="crowdwalk-overlap")
     everyone: list[RunSink] = [writer, checker, *sinks]
     pop = sim.pop
     info = RunInfo(fps=sim.fps, body_height=pop.body_height, shape=sim.shape,
@@ -290,7 +281,8 @@ def _run(sc, world, sim, pose_note, text, *, out, wall0, progress, sinks, apart)
         wall = time.perf_counter() - wall0
         timing.update(wall_s=wall, planning_s=sim.wall_planning, steering_s=sim.wall_steering,
                       step_commands_s=sim.wall_commands)
-        summary = summarise(sim, sc, timing=timing, max_overlap=checker.read("max_overlap"),
+        checker.wait()
+        summary = summarise(sim, sc, timing=timing, max_overlap=overlap.max_overlap,
                             interrupted=interrupted, poses=pose_note)
         for sink in everyone:
             sink.end(summary)
