@@ -191,7 +191,7 @@ def _find_init(L, a, order, config, found, expanded, checks):
         if legal:
             config[:] = q
             found[a] = True
-            return
+            break  # one exit (see the note at lattice_kernel.inline)
         expanded[a] += 1
 
 
@@ -261,6 +261,7 @@ def _efficiency(L, a, q, sd, rs, wd, wo, co, pr, so, wf, ws, J):
     """:func:`~planners.lattice_kernel.config_efficiency` from the arrays of ``L``
     (taken once per search), evaluating through ``L`` only what is missing."""
     legal, e = probe_efficiency(sd, rs, wd, wo, co, pr, so, wf, ws, J, a, q)
-    if legal >= 0:
-        return legal == 1, e
-    return config_efficiency(L, a, q)
+    ok = legal == 1
+    if legal < 0:
+        ok, e = config_efficiency(L, a, q)
+    return ok, e

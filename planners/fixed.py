@@ -6,7 +6,7 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables, run_parts
-from planners.lattice_kernel import step_legal, swing_legal
+from planners.lattice_kernel import eval_step, eval_swing
 from planners.search import SearchResult
 
 __all__ = ["fixed"]
@@ -55,16 +55,26 @@ def _fixed(L, order, configs, found, checks, part, parts):
     """The step-by-step pass of every agent, its steps and swings read up to the first
     depth without a legal step (:func:`fixed`'s dead ends are handled there)."""
     J = L.flat_Ej.shape[1]
+    # what is evaluated is read from the arrays; L is passed only to evaluate (see the
+    # note at lattice_kernel.inline)
+    step_done, reason, swing_done, swing_ok = L.step_done, L.reason, L.swing_done, L.swing_ok
+    step_offset, swing_offset, swing_strides = L.step_offset, L.swing_offset, L.swing_strides
     for a in range(part, configs.shape[0], parts):
         m_prev, m_prev2, j_prev = 0, 0, 0
         for k in range(configs.shape[1]):
             pick = -1
             for i in range(J):
                 j = order[a, i]
-                step = L.step_offset[k] + m_prev * J + j
-                swing = L.swing_offset[k] + m_prev2 * L.swing_strides[k] + j + (
+                step = step_offset[k] + m_prev * J + j
+                swing = swing_offset[k] + m_prev2 * swing_strides[k] + j + (
                     j_prev if k > 0 else 0)
-                if step_legal(L, a, step) and swing_legal(L, a, swing):
+                if not step_done[a, step]:
+                    eval_step(L, a, step)
+                if reason[a, step] != 0:
+                    continue
+                if not swing_done[a, swing]:
+                    eval_swing(L, a, swing)
+                if swing_ok[a, swing]:
                     pick = j
                     checks[a] += i + 1
                     break

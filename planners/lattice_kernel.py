@@ -39,6 +39,11 @@ _jit = nb.njit(cache=True, nogil=True)
 #: of the tuple, several microseconds).
 inline = nb.njit(cache=True, nogil=True, inline="always")
 _inline = inline
+# One exit: the functions that take the Lattice have no early ``return``. Numba keeps a
+# reference to each of the Lattice's 65 arrays for a function taking it; where that
+# function (inlined or not) has several exits, every call takes and releases all 65
+# references (measured 0.3-4 us per call of an evaluation that found its entry done,
+# against ~1 ns with one exit), and a search reads entries thousands of times.
 
 
 @_jit
@@ -428,128 +433,164 @@ def prepare(L, a):
 def eval_step(L, a, t):
     """Legality and energy of step ``t`` of agent ``a`` (once; the agent must be
     ready)."""
-    if L.step_done[a, t]:
-        return
-    L.step_done[a, t] = True
-    fparams = L.fparams
-    max_rise = fparams[0]
-    lift = 0.75 * fparams[4]
-    n = L.step_offset.size
-    b, e_ = L.bounds[a], L.bounds[a + 1]
-    s, z, slope = L.prof_s[b:e_], L.prof_z[b:e_], L.slope[b:e_]
-    b0 = L.base[a]
-    leg = L.legs[a]
-    ankle = leg[5]
-    st_v, fr_v = L.step_stance[t], L.step_front[t]
-    ss, fs = L.node_s[a, st_v], L.node_s[a, fr_v]
-    zs, zf = L.node_z[a, st_v], L.node_z[a, fr_v]
-    r = zf - zs
-    length = fs - ss
-    L.length[a, t], L.rise[a, t] = length, r
-    final = L.iparams[1] > 0 and L.step_depth[t] == n
-    L.progress[a, t] = L.far[a] - ss if final else length
-    j = L.step_j[t]
-    ej = L.flat_Ej[a, j]
-    highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
-    nominal = L.lo[a] + L.delta[a] * j
-    level = r == 0 and highest == zs and abs(length - nominal) <= 1e-12
-    support = L.support[a, fr_v]
-    hopeless = support != 0 or abs(r) > max_rise
-    reachable = L.flat_reach[a, j]
-    if not level and not hopeless:
-        c = L.consts[a]
-        constants = (c[0], c[1], c[2], c[3], c[4], c[5], c[6])
-        th, ca, reachable = key_frame(ss, zs, fs, zf, ss, highest + ankle + lift, leg[0],
-                                      leg[1], leg[4], ankle, ankle + lift, constants)
-        ej = L.weights[6] * th + L.weights[7] * ca
-        L.work[a, 0] += 1
-    en, ev, et = _energy(length, r, ej, L.speeds[a], L.normal[a], L.weights)
-    if hopeless and not level:
-        et = np.inf
-    L.En[a, t], L.Ev[a, t], L.Ej[a, t], L.E[a, t] = en, ev, ej, et
-    flags = support
-    if abs(r) > max_rise:
-        flags |= _STEP_HEIGHT
-    if not reachable:
-        flags |= _KNEE_REACH
-    L.reason[a, t] = flags
-    L.cost[a, t] = et + L.terminal[a, fr_v] if final else et
-    L.work[a, 4] += 1
+    _eval_step_arrays(a, t, L.E, L.Ej, L.En, L.Ev, L.base, L.bounds, L.consts, L.cost, L.delta,
+                      L.far, L.flat_Ej, L.flat_reach, L.fparams, L.iparams, L.legs,
+                      L.length, L.lo, L.node_s, L.node_z, L.normal, L.prof_s, L.prof_z,
+                      L.progress, L.reason, L.rise, L.slope, L.speeds, L.step_depth,
+                      L.step_done, L.step_front, L.step_j, L.step_offset, L.step_stance,
+                      L.support, L.terminal, L.weights, L.work)
+
+
+@_jit
+def _eval_step_arrays(a, t, L_E, L_Ej, L_En, L_Ev, L_base, L_bounds, L_consts, L_cost, L_delta,
+                      L_far, L_flat_Ej, L_flat_reach, L_fparams, L_iparams, L_legs, L_length,
+                      L_lo, L_node_s, L_node_z, L_normal, L_prof_s, L_prof_z, L_progress,
+                      L_reason, L_rise, L_slope, L_speeds, L_step_depth, L_step_done,
+                      L_step_front, L_step_j, L_step_offset, L_step_stance, L_support,
+                      L_terminal, L_weights, L_work):
+    """:func:`eval_step` on the Lattice's arrays (``L_<field>``: see the note at
+    :data:`inline`)."""
+    if not L_step_done[a, t]:  # one exit (see the note at inline)
+        L_step_done[a, t] = True
+        fparams = L_fparams
+        max_rise = fparams[0]
+        lift = 0.75 * fparams[4]
+        n = L_step_offset.size
+        b, e_ = L_bounds[a], L_bounds[a + 1]
+        s, z, slope = L_prof_s[b:e_], L_prof_z[b:e_], L_slope[b:e_]
+        b0 = L_base[a]
+        leg = L_legs[a]
+        ankle = leg[5]
+        st_v, fr_v = L_step_stance[t], L_step_front[t]
+        ss, fs = L_node_s[a, st_v], L_node_s[a, fr_v]
+        zs, zf = L_node_z[a, st_v], L_node_z[a, fr_v]
+        r = zf - zs
+        length = fs - ss
+        L_length[a, t], L_rise[a, t] = length, r
+        final = L_iparams[1] > 0 and L_step_depth[t] == n
+        L_progress[a, t] = L_far[a] - ss if final else length
+        j = L_step_j[t]
+        ej = L_flat_Ej[a, j]
+        highest = _span(s, z, slope, b0 + ss, b0 + fs)[0]
+        nominal = L_lo[a] + L_delta[a] * j
+        level = r == 0 and highest == zs and abs(length - nominal) <= 1e-12
+        support = L_support[a, fr_v]
+        hopeless = support != 0 or abs(r) > max_rise
+        reachable = L_flat_reach[a, j]
+        if not level and not hopeless:
+            c = L_consts[a]
+            constants = (c[0], c[1], c[2], c[3], c[4], c[5], c[6])
+            th, ca, reachable = key_frame(ss, zs, fs, zf, ss, highest + ankle + lift, leg[0],
+                                          leg[1], leg[4], ankle, ankle + lift, constants)
+            ej = L_weights[6] * th + L_weights[7] * ca
+            L_work[a, 0] += 1
+        en, ev, et = _energy(length, r, ej, L_speeds[a], L_normal[a], L_weights)
+        if hopeless and not level:
+            et = np.inf
+        L_En[a, t], L_Ev[a, t], L_Ej[a, t], L_E[a, t] = en, ev, ej, et
+        flags = support
+        if abs(r) > max_rise:
+            flags |= _STEP_HEIGHT
+        if not reachable:
+            flags |= _KNEE_REACH
+        L_reason[a, t] = flags
+        L_cost[a, t] = et + L_terminal[a, fr_v] if final else et
+        L_work[a, 4] += 1
 
 
 @_inline
 def eval_swing(L, a, q):
     """Swing curve ``q`` of agent ``a``: taken from the flat-ground cache where it
     applies, else built by the §5.2 adjustment (once; the agent is prepared)."""
-    if L.swing_done[a, q]:
-        return
-    L.swing_done[a, q] = True
-    fparams = L.fparams
-    max_slope, cell = fparams[1], fparams[12]
-    b, e_ = L.bounds[a], L.bounds[a + 1]
-    s, z, slope = L.prof_s[b:e_], L.prof_z[b:e_], L.slope[b:e_]
-    b0 = L.base[a]
-    leg = L.legs[a]
-    heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
-    lo_a, delta_a = L.lo[a], L.delta[a]
-    bk, fr = L.swing_back[q], L.swing_front[q]
-    start, end = b0 + L.node_s[a, bk], b0 + L.node_s[a, fr]
-    z0, z1 = L.node_z[a, bk], L.node_z[a, fr]
-    stride = L.swing_stride[q]
-    if stride < 0:
-        behind = (-L.trailing[a] - lo_a) / delta_a
-        if (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
-                and behind < fparams[9] + 0.5):
-            stride = np.int64(np.rint(behind)) + L.node_m[fr]
-    vertices = _left(s, end + toe_off) - _right(s, start - heel_off)
-    grade = (z1 - z0) / (end - start)
-    nominal = 2 * lo_a + max(stride, 0) * delta_a
-    if (stride >= 0 and vertices == 0 and abs(grade) <= max_slope
-            and abs(end - start - nominal) <= 1e-9):
-        c = 0 if grade == 0 else 1
-        if L.flat_ok[a, c, stride] and (abs(grade) * max(heel_off, toe_off)
-                                        <= L.flat_slack[a, c, stride]):
+    _eval_swing_arrays(a, q, L.base, L.basis, L.bounds, L.controls, L.delta, L.flat_ctrl,
+                       L.flat_ok, L.flat_slack, L.fparams, L.influence, L.iparams, L.legs,
+                       L.lo, L.node_m, L.node_s, L.node_z, L.prof_s, L.prof_z, L.r_built,
+                       L.r_count, L.r_levels, L.r_start, L.r_table, L.r_vcum, L.rounds,
+                       L.slope, L.swing_back, L.swing_done, L.swing_front, L.swing_ok,
+                       L.swing_stride, L.trailing, L.work)
+
+
+@_jit
+def _eval_swing_arrays(a, q, L_base, L_basis, L_bounds, L_controls, L_delta, L_flat_ctrl,
+                       L_flat_ok, L_flat_slack, L_fparams, L_influence, L_iparams, L_legs, L_lo,
+                       L_node_m, L_node_s, L_node_z, L_prof_s, L_prof_z, L_r_built, L_r_count,
+                       L_r_levels, L_r_start, L_r_table, L_r_vcum, L_rounds, L_slope,
+                       L_swing_back, L_swing_done, L_swing_front, L_swing_ok, L_swing_stride,
+                       L_trailing, L_work):
+    """:func:`eval_swing` on the Lattice's arrays (``L_<field>``: see the note at
+    :data:`inline`)."""
+    if not L_swing_done[a, q]:  # one exit (see the note at inline)
+        L_swing_done[a, q] = True
+        fparams = L_fparams
+        max_slope, cell = fparams[1], fparams[12]
+        b, e_ = L_bounds[a], L_bounds[a + 1]
+        s, z, slope = L_prof_s[b:e_], L_prof_z[b:e_], L_slope[b:e_]
+        b0 = L_base[a]
+        leg = L_legs[a]
+        heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
+        lo_a, delta_a = L_lo[a], L_delta[a]
+        bk, fr = L_swing_back[q], L_swing_front[q]
+        start, end = b0 + L_node_s[a, bk], b0 + L_node_s[a, fr]
+        z0, z1 = L_node_z[a, bk], L_node_z[a, fr]
+        stride = L_swing_stride[q]
+        if stride < 0:
+            behind = (-L_trailing[a] - lo_a) / delta_a
+            if (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
+                    and behind < fparams[9] + 0.5):
+                stride = np.int64(np.rint(behind)) + L_node_m[fr]
+        vertices = _left(s, end + toe_off) - _right(s, start - heel_off)
+        grade = (z1 - z0) / (end - start)
+        nominal = 2 * lo_a + max(stride, 0) * delta_a
+        reused = False
+        if (stride >= 0 and vertices == 0 and abs(grade) <= max_slope
+                and abs(end - start - nominal) <= 1e-9):
+            c = 0 if grade == 0 else 1
+            if L_flat_ok[a, c, stride] and (abs(grade) * max(heel_off, toe_off)
+                                            <= L_flat_slack[a, c, stride]):
+                for i in range(4):
+                    c0 = L_flat_ctrl[a, c, stride, i, 0]
+                    L_controls[a, q, i, 1] = L_flat_ctrl[a, c, stride, i, 1] + (z0 + grade * c0)
+                    L_controls[a, q, i, 0] = c0 + L_node_s[a, bk]
+                L_rounds[a, q] = 0
+                L_swing_ok[a, q] = True
+                L_work[a, 2] += 1
+                reused = True
+        if not reused:
+            count, levels = L_r_count[a], L_r_levels[a]
+            table = L_r_table[a, :levels * count].reshape((levels, count))
+            vertex_cum = L_r_vcum[a, :count + 1]
+            if not L_r_built[a]:
+                _raster(s, z, slope, L_r_start[a], cell, count, levels, table, vertex_cum)
+                L_r_built[a] = True
+            T = L_basis.shape[1]
+            scratch = np.empty((3, T))
+            summit = np.empty(2)
+            ctrl = L_controls[a, q]
+            ok, used = adjust_one(start, z0, end, z1, heel_off, toe_off, ankle, leg[2],
+                                  L_r_start[a], cell, table, vertex_cum, L_basis,
+                                  L_influence, fparams[10], fparams[4], fparams[11],
+                                  max_slope, L_iparams[3], ctrl, summit, scratch)
             for i in range(4):
-                c0 = L.flat_ctrl[a, c, stride, i, 0]
-                L.controls[a, q, i, 1] = L.flat_ctrl[a, c, stride, i, 1] + (z0 + grade * c0)
-                L.controls[a, q, i, 0] = c0 + L.node_s[a, bk]
-            L.rounds[a, q] = 0
-            L.swing_ok[a, q] = True
-            L.work[a, 2] += 1
-            return
-    count, levels = L.r_count[a], L.r_levels[a]
-    table = L.r_table[a, :levels * count].reshape((levels, count))
-    vertex_cum = L.r_vcum[a, :count + 1]
-    if not L.r_built[a]:
-        _raster(s, z, slope, L.r_start[a], cell, count, levels, table, vertex_cum)
-        L.r_built[a] = True
-    T = L.basis.shape[1]
-    scratch = np.empty((3, T))
-    summit = np.empty(2)
-    ctrl = L.controls[a, q]
-    ok, used = adjust_one(start, z0, end, z1, heel_off, toe_off, ankle, leg[2], L.r_start[a],
-                          cell, table, vertex_cum, L.basis, L.influence, fparams[10],
-                          fparams[4], fparams[11], max_slope, L.iparams[3], ctrl, summit,
-                          scratch)
-    for i in range(4):
-        ctrl[i, 0] -= b0
-    L.swing_ok[a, q] = ok
-    L.rounds[a, q] = used
-    L.work[a, 1] += 1
-    L.work[a, 3] += used
+                ctrl[i, 0] -= b0
+            L_swing_ok[a, q] = ok
+            L_rounds[a, q] = used
+            L_work[a, 1] += 1
+            L_work[a, 3] += used
 
 
 @_inline
 def step_legal(L, a, t):
     """Whether step ``t`` of agent ``a`` is legal (evaluated on first read)."""
-    eval_step(L, a, t)
+    if not L.step_done[a, t]:
+        eval_step(L, a, t)
     return L.reason[a, t] == 0
 
 
 @_inline
 def swing_legal(L, a, q):
     """Whether swing ``q`` of agent ``a`` clears the ground (built on first read)."""
-    eval_swing(L, a, q)
+    if not L.swing_done[a, q]:
+        eval_swing(L, a, q)
     return L.swing_ok[a, q]
 
 
@@ -654,22 +695,25 @@ def config_legal(L, a, q):
     m_prev = 0
     m_prev2 = 0
     j_prev = 0
+    legal = True
     for k in range(q.size):
         step = step_off[k] + m_prev * J + q[k]
         if not step_done[a, step]:
             eval_step(L, a, step)
         if reason[a, step] != 0:
-            return False
+            legal = False
+            break
         swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
         if not swing_done[a, swing]:
             eval_swing(L, a, swing)
         if not swing_ok[a, swing]:
-            return False
+            legal = False
+            break
         if k > 0:
             m_prev2 += j_prev
         m_prev += q[k]
         j_prev = q[k]
-    return True
+    return legal
 
 
 @_inline
@@ -682,14 +726,14 @@ def config_efficiency(L, a, q):
     legal, eff = probe_efficiency(L.step_done, L.reason, L.swing_done, L.swing_ok, L.cost,
                                   L.progress, L.step_offset, L.swing_offset,
                                   L.swing_strides, J, a, q)
-    if legal >= 0:
-        return legal == 1, eff
-    if not config_legal(L, a, q):
-        return False, 0.0
-    legal, eff = probe_efficiency(L.step_done, L.reason, L.swing_done, L.swing_ok, L.cost,
-                                  L.progress, L.step_offset, L.swing_offset,
-                                  L.swing_strides, J, a, q)
-    return True, eff
+    if legal < 0:
+        if config_legal(L, a, q):
+            legal, eff = probe_efficiency(L.step_done, L.reason, L.swing_done, L.swing_ok,
+                                          L.cost, L.progress, L.step_offset, L.swing_offset,
+                                          L.swing_strides, J, a, q)
+        else:
+            legal, eff = 0, 0.0
+    return legal == 1, eff
 
 
 # The tables evaluated up front in one pass per agent (agents on every core): the searches
