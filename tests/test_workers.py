@@ -167,3 +167,14 @@ def test_a_negative_worker_count_is_bad_input():
 
     with pytest.raises(InputError, match="workers must be an integer >= 0"):
         check_overrides(RunOverrides(workers=-1))
+
+
+def test_workers_collect_garbage_less_often_than_python_by_default():
+    """A worker (where the gait engine poses) raises the first-generation threshold of
+    the garbage collector to WORKER_GC_THRESHOLD; this process keeps its own."""
+    import gc
+
+    with W.Workers(1) as workers:
+        inside = workers.call(0, None, gc.get_threshold)()
+    assert inside[0] == W.WORKER_GC_THRESHOLD > gc.get_threshold()[0]
+    assert inside[1:] == gc.get_threshold()[1:]

@@ -357,6 +357,25 @@ class _Landed:
     root_velocity: np.ndarray
 
 
+@dataclass(eq=False)
+class _TrailMemo:
+    """The :meth:`Animator._trailing_root` offsets (n, 3) [m] already found in the frame
+    being posed, at the stance phases (n,) [1] they were found for (``has`` (n,) bool).
+
+    Within one :meth:`Animator.pose` nothing they depend on changes (the warm starts are
+    stored after the last walk), and each agent's walk is its own (row-independent
+    kernels), so the re-walks (yaw fixes, lifts) take them instead of posing the free
+    walker again: the same values."""
+
+    has: np.ndarray
+    phase: np.ndarray
+    shift: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int) -> _TrailMemo:
+        return cls(np.zeros(n, bool), np.zeros(n), np.zeros((n, 3)))
+
+
 class Animator:
     """Full-body poses for n agents from step commands (Sun & Metaxas 2001).
 
@@ -396,6 +415,7 @@ class Animator:
         self._swing = _SwingState.zeros(n)
         self._warm = _SolverWarmth.zeros(n)
         self._last = _LastPose.zeros(n, nj)
+        self._trail_memo: _TrailMemo | None = None  # set while a frame is posed
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
                       "lifted": 0, "lift_steps": 0, "yaw_fixes": 0}  # fmt: skip
 
@@ -748,20 +768,11 @@ class Animator:
         if not np.isfinite(t):
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
-        walked = self._walk(a, phase, corrected=True)
-        toe_fix = np.zeros(a.size)
-        for _ in range(_YAW_ROUNDS):
-            more = self._swing_yaw_fix(a, phase, walked)
-            fix = np.flatnonzero(np.abs(more) > np.radians(0.5))
-            if fix.size == 0:
-                break
-            toe_fix[fix] += more[fix]
-            self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
-                                                toe_fix=toe_fix[fix]))
-            self.stats["yaw_fixes"] += fix.size
-        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix)
-        self.stats["lifted"] += int(lifted)
-
+        self._trail_memo = _TrailMemo.empty(n)
+        try:
+            walked = self._posed(a, phase)
+        finally:
+            self._trail_memo = None
         ok = walked.converged
         warm = self._warm
         warm.ankle[a] = np.where(ok[:, None], walked.warm.ankle, warm.ankle[a])
@@ -808,6 +819,24 @@ class Animator:
             fallback=fallback,
             stance_left=self._step.stance_left[a].copy(),
         )
+
+    def _posed(self, a: np.ndarray, phase: np.ndarray):
+        """The corrected walk of agents a (k,) at stance phases (k,), the trailing
+        foot's yaw fixed and a swing sole below the ground lifted (:meth:`pose`)."""
+        walked = self._walk(a, phase, corrected=True)
+        toe_fix = np.zeros(a.size)
+        for _ in range(_YAW_ROUNDS):
+            more = self._swing_yaw_fix(a, phase, walked)
+            fix = np.flatnonzero(np.abs(more) > np.radians(0.5))
+            if fix.size == 0:
+                break
+            toe_fix[fix] += more[fix]
+            self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
+                                                toe_fix=toe_fix[fix]))
+            self.stats["yaw_fixes"] += fix.size
+        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix)
+        self.stats["lifted"] += int(lifted)
+        return walked
 
     def followed_angles(self, t: float, agents: np.ndarray):
         """The elevation angles the walker follows at time ``t`` [s] for ``agents`` (k,):
@@ -1039,6 +1068,22 @@ class Animator:
         )  # fmt: skip
 
     def _trailing_root(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
+        """:meth:`_trailing_solved`, taken from the frame's :class:`_TrailMemo` for the
+        agents (and phases) it has already been found for while a frame is posed."""
+        memo = self._trail_memo
+        if memo is None:
+            return self._trailing_solved(a, phase)
+        hit = memo.has[a] & (memo.phase[a] == phase)
+        out = np.empty((a.size, 3))
+        out[hit] = memo.shift[a[hit]]
+        miss = np.flatnonzero(~hit)
+        if miss.size:
+            am = a[miss]
+            out[miss] = self._trailing_solved(am, phase[miss])
+            memo.has[am], memo.phase[am], memo.shift[am] = True, phase[miss], out[miss]
+        return out
+
+    def _trailing_solved(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         """Root offset (k, 3) [m] along ψ of agents a at stance phases (k,) in the double
         support that opens a step (``GaitStyle.trailing_root``): (1 − w) times how far
         ahead of the new stance leg's root the trailing leg, pinned on its ball

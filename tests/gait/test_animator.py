@@ -469,3 +469,49 @@ def test_the_root_moves_on_at_the_heel_strike_as_the_trailing_leg_moved_it():
     25 fps frame). ``trailing_root`` hands the root over during double support."""
     assert np.all(_forward_velocity_jumps(GaitStyle()) < 0.15)
     assert np.all(_forward_velocity_jumps(GaitStyle(trailing_root=False)) > 0.3)
+
+
+def _turning_walk(animator, k=3, fps=50.0):
+    """Frames of k walkers taking a 15-degree turn (push-off yaw fixes, trailing root)."""
+    turn = np.radians(15.0)
+    d = np.array([np.cos(turn), np.sin(turn), 0.0])
+    n = np.array([-d[1], d[0], 0.0])
+    s0 = np.array([0.0, 0.045, 0.0])
+    s1 = np.array([0.65, -0.045, 0.0])
+    t1 = s1 + 0.65 * d + 0.09 * n
+    t2 = t1 + 0.65 * d - 0.09 * n
+    agents = np.arange(k)
+    lanes = np.column_stack([np.zeros(k), np.arange(k) * 1.0, np.zeros(k)])
+    frames = []
+    for s, (foot, a, b, heading) in enumerate([(1, s0, s1, 0.0), (0, s1, t1, turn),
+                                               (1, t1, t2, turn)]):  # fmt: skip
+        animator.command(_command(agents, 0.5 * s, foot, a + lanes, b + lanes, duration=0.5,
+                                  heading=heading))  # fmt: skip
+        frames += [animator.pose(0.5 * s + f / fps) for f in range(25)]
+    return frames
+
+
+def test_a_frames_rewalks_take_its_trailing_root_and_pose_the_same():
+    """The yaw fixes and lifts of a frame re-walk agents whose trailing-root offset the
+    frame's walk has found (:class:`_TrailMemo`): they take it, and every pose is what
+    finding it again gives."""
+    body = Body.from_heights([1.6, 1.75, 1.9])
+    memo, again = Animator(body, ground=_flat), Animator(body, ground=_flat)
+    solved = {"memo": 0, "again": 0}
+
+    def counting(animator, key):
+        inner = animator._trailing_solved
+
+        def solve(a, phase):
+            solved[key] += a.size
+            return inner(a, phase)
+        return solve
+
+    memo._trailing_solved = counting(memo, "memo")
+    again._trailing_solved = counting(again, "again")
+    again._trailing_root = again._trailing_solved  # no memo: found again in every re-walk
+    fa, fb = _turning_walk(memo), _turning_walk(again)
+    assert memo.stats["yaw_fixes"] > 0 and solved["memo"] < solved["again"]
+    for a, b in zip(fa, fb, strict=True):
+        for name in ("root_position", "joints", "positions", "contact", "fallback"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
