@@ -141,6 +141,14 @@ class CrowdParams:
         0.8 / 1.0 / 1.2 m (seed 4) 1.32 / 1.68 / 2.03 /s with it against 1.33 / 1.67 /
         2.18 without; it spreads walkers entering 0.8 m (|y| 0.08 against 0.05 m at
         mid-opening) but no zipper forms.
+    line_up : bool
+        Where a walker's lane runs into a wall (and ``lane_keep`` found no lane that
+        fits), aim at the route's centre-line point farthest ahead, up to 1.5 m, that is
+        reached in a straight line clear of the walls (tested at the line's quarters),
+        down to the walker's own projection on it, instead of the centre-line point
+        ``target_distance`` ahead (:func:`crowdwalk.crowd.routing.steering_targets`): a
+        walker beside a door lines up with it before entering. Opt-in, measured
+        (docs/architecture.md, "Lining up at doors").
     opening_ease : bool
         Scale the soft wall term (``SteeringParams.wall_weight``) by
         ``opening_wall_factor`` for walkers inside an opening zone
@@ -189,6 +197,7 @@ class CrowdParams:
     headway_steer: bool = False
     headway_free_margin: float | None = None
     lane_keep: bool = False
+    line_up: bool = False
     opening_ease: bool = False
     opening_width: float = 1.25
     opening_margin: float = 0.0

@@ -332,6 +332,22 @@ def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarr
             target[b[ok]] = cand[ok]
             found |= ok
         blind[b[found]] = False
+    b = np.flatnonzero(blind)
+    if b.size and params.line_up:
+        # lining up with the door: the centre-line point farthest ahead (up to 1.5 m,
+        # down to the walker's own projection, straight across) whose line from the walker
+        # clears the walls at its quarters too, instead of the point 2 m ahead, whose line
+        # grazes the jamb, so that a walker beside an opening moves across to it rather
+        # than along the wall into the door post's corner
+        found = np.zeros(b.size, bool)
+        for reach in (1.5, 1.0, 0.6, 0.3, 0.0):
+            cand = table.point_at(route[b], progress[b] + reach)
+            ok = ~found & (clearance(cand) >= radius[b])
+            for f in (0.25, 0.5, 0.75):
+                ok &= clearance(xy[b] + f * (cand - xy[b])) >= radius[b]
+            target[b[ok]] = cand[ok]
+            found |= ok
+        blind[b[found]] = False
     target[blind] = ahead[blind]
     direction = _unit(target - xy)
     still = np.linalg.norm(target - xy, axis=1) < 1e-9
