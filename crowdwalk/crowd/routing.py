@@ -301,6 +301,19 @@ def route_progress(table: RouteTable, *, route: np.ndarray, segment: np.ndarray,
     return RouteProgress(seg, s, gained, arrived)
 
 
+def _first_clear(target: np.ndarray, blind: np.ndarray, b: np.ndarray, candidates,
+                 clear) -> None:
+    """In place: rows ``b`` of ``target`` (k, 2) [m] become the first of the
+    ``candidates`` (each (len(b), 2) [m], in order of preference) that ``clear(cand)``
+    ((len(b),) bool) accepts, and those rows of ``blind`` (k,) False."""
+    found = np.zeros(b.size, bool)
+    for cand in candidates:
+        ok = ~found & clear(cand)
+        target[b[ok]] = cand[ok]
+        found |= ok
+    blind[b[found]] = False
+
+
 def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
                      xy: np.ndarray, heading: np.ndarray, radius: np.ndarray, clearance,
                      params) -> tuple[np.ndarray, np.ndarray]:
@@ -324,14 +337,11 @@ def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarr
         # & Daamen 2005 and Seyfried et al. 2009) instead of all funnelling into one
         u = target[b] - ahead[b]
         size = np.maximum(np.linalg.norm(u, axis=1), 1e-9)
-        found = np.zeros(b.size, bool)
-        for cap in (0.6, 0.45, 0.3, 0.2, 0.1):
-            cand = ahead[b] + u * np.minimum(1.0, cap / size)[:, None]
-            ok = ~found & (clearance(cand) >= radius[b]) & (
-                clearance(0.5 * (cand + xy[b])) >= radius[b])
-            target[b[ok]] = cand[ok]
-            found |= ok
-        blind[b[found]] = False
+        xb, rb = xy[b], radius[b]
+        _first_clear(target, blind, b, (
+            ahead[b] + u * np.minimum(1.0, cap / size)[:, None]
+            for cap in (0.6, 0.45, 0.3, 0.2, 0.1)),
+            lambda cand: (clearance(cand) >= rb) & (clearance(0.5 * (cand + xb)) >= rb))
     b = np.flatnonzero(blind)
     if b.size and params.line_up:
         # lining up with the door: the centre-line point farthest ahead (up to 1.5 m,
@@ -339,15 +349,16 @@ def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarr
         # clears the walls at its quarters too, instead of the point 2 m ahead, whose line
         # grazes the jamb, so that a walker beside an opening moves across to it rather
         # than along the wall into the door post's corner
-        found = np.zeros(b.size, bool)
-        for reach in (1.5, 1.0, 0.6, 0.3, 0.0):
-            cand = table.point_at(route[b], progress[b] + reach)
-            ok = ~found & (clearance(cand) >= radius[b])
+        xb, rb = xy[b], radius[b]
+
+        def clear(cand):
+            ok = clearance(cand) >= rb
             for f in (0.25, 0.5, 0.75):
-                ok &= clearance(xy[b] + f * (cand - xy[b])) >= radius[b]
-            target[b[ok]] = cand[ok]
-            found |= ok
-        blind[b[found]] = False
+                ok &= clearance(xb + f * (cand - xb)) >= rb
+            return ok
+
+        _first_clear(target, blind, b, (table.point_at(route[b], progress[b] + reach)
+                                        for reach in (1.5, 1.0, 0.6, 0.3, 0.0)), clear)
     target[blind] = ahead[blind]
     direction = _unit(target - xy)
     still = np.linalg.norm(target - xy, axis=1) < 1e-9
