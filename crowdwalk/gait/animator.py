@@ -86,6 +86,7 @@ _CHECK_SPAN = np.linspace(0.0, 1.0, 10)  # swing samples, fractions of toe-off �
 _PHASE_END = 0.5 - 1e-6
 _BEZIER_IN, _BEZIER_OUT = 0.5, 0.3  # the Bezier blends in / out over these fractions of swing
 _HIP_BLEND = 0.5  # fraction of the step over which the root joins the data again
+_HIP_BLEND_CLAMPED = 1.0  # ... after a step served clamped (GaitStyle.clamped_join)
 _C1_RISE = 0.05  # steps rising or falling this much [m] (stairs) join the root C¹ ...
 _VEL_PHASE = 0.02  # ... with velocities measured over this stance-phase interval [1]
 _TRAIL_CONTINUES = np.deg2rad(3.0)  # new data continue the trailing leg within [rad]
@@ -244,6 +245,7 @@ class _StepState:
 
     commanded: np.ndarray  # (n,) bool, has had a command
     angles: np.ndarray  # (n, S, 4) elevation-angle dataset of the step [rad]
+    prev_angles: np.ndarray  # (n, S, 4) ... of the step before (the crossfade's start) [rad]
     stance_fraction: np.ndarray  # (n,) of the dataset's cycle
     t0: np.ndarray  # (n,) step start [s]
     duration: np.ndarray  # (n,) [s]
@@ -256,7 +258,8 @@ class _StepState:
 
     @classmethod
     def zeros(cls, n: int, samples: int) -> _StepState:
-        return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.full(n, 0.6),
+        return cls(np.zeros(n, bool), np.zeros((n, samples, 4)), np.zeros((n, samples, 4)),
+                   np.full(n, 0.6),
                    np.zeros(n), np.ones(n), np.ones(n, bool), np.zeros(n), np.zeros(n),
                    np.ones(n), np.ones(n, bool), np.zeros(n))
 
@@ -300,6 +303,7 @@ class _SwingState:
     hip_fix: np.ndarray  # (n, 3) root continuity offset [m]
     hip_vel: np.ndarray  # (n, 3) root velocity jump the offset starts with [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
+    join_long: np.ndarray  # (n,) bool, hip_fix blends out over the whole step (clamped_join)
 
     @classmethod
     def zeros(cls, n: int) -> _SwingState:
@@ -307,7 +311,7 @@ class _SwingState:
                    np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool),
                    np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool))
 
 
 @dataclass(eq=False)
@@ -470,6 +474,7 @@ class Animator:
         # over level ground
         continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
         turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
+        self._swing.join_long[a] = had & ~served_before & self.style.clamped_join
         self._swing.served[a] = ~data.clamped
         self._swing.trail_root[a] = (had & self.style.trailing_root & flat_before & ~bumpy
                                      & served_before & ~data.clamped
@@ -550,7 +555,10 @@ class Animator:
         height = rel[:, 2]
         data = self.interp.request(body, length, height, speed=cmd.speed)
         step, st, sw = self._step, self._stance, self._swing
-        step.angles[a] = self._cleared(a, body, data, height)
+        cleared = self._cleared(a, body, data, height)
+        # the crossfade starts from the dataset the feet were just placed by (none: this one)
+        step.prev_angles[a] = np.where(had[:, None, None], step.angles[a], cleared)
+        step.angles[a] = cleared
         step.stance_fraction[a] = data.stance_fraction
         step.psi0[a] = psi0
         step.psi1[a] = cmd.heading
@@ -563,7 +571,7 @@ class Animator:
         # Spin turn (§6.1, MetaGait's): on the ball of the stance foot, once its heel is up
         st.spin[a] = 0.0 if cmd.spin is None else cmd.spin
         # (ψ before the spin is at most the hips' twist from the foot)
-        step.spin_start[a] = _spin_start(body, data.angles,
+        step.spin_start[a] = _spin_start(body, self._stance_curves(a),
                                          cmd.heading - st.spin[a] - stance.yaw, stance.slope)
         st.toe_out[a] = toe_out
         st.start[a], st.target[a] = cmd.start, cmd.target
@@ -668,7 +676,7 @@ class Animator:
         ankle_land = stance_foot_pose(body, land, land_pitch)[1]
         # Push-off: until toe-off the trailing foot (the previous stance foot) stays on
         # its ball, pitched by the data; then the ankle joins the data smoothly.
-        pin = self._pinned_ankle(a, toe_off_phase, sample(data.angles, toe_off_phase + 0.5))[0]
+        pin = self._pinned_ankle(a, toe_off_phase, self._legs(a, toe_off_phase)[1])[0]
         sw.d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
@@ -845,11 +853,38 @@ class Animator:
         a = np.atleast_1d(np.asarray(agents))
         step = self._step
         phase = np.clip(0.5 * (t - step.t0[a]) / step.duration[a], 0.0, _PHASE_END)
-        angles = step.angles[a]
-        return (sample(angles, phase), sample(angles, phase + 0.5), step.stance_left[a].copy(),
-                phase)  # fmt: skip
+        return (*self._legs(a, phase), step.stance_left[a].copy(), phase)
 
     # -- internals --------------------------------------------------------------------
+    def _legs(self, a: np.ndarray, phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The elevation angles agents a (k,) follow at stance phases (k,): stance leg at
+        t and swing leg at t + 0.5, (k, 4) each [rad]. With ``GaitStyle.step_crossfade``
+        the step's dataset is faded in over the step (smoothstep in τ) from the previous
+        step's: at the heel strike that opens the step the legs are where the previous
+        dataset left them (its Eq. 10 step is the one the feet span), at the one that
+        ends it they follow the step's own dataset (whose Eq. 10 step is this one)."""
+        k = a.size
+        t = np.concatenate([phase, phase + 0.5])
+        rows = np.tile(a, 2)
+        legs = sample(self._step.angles, t, rows=rows)
+        if self.style.step_crossfade:
+            w = np.tile(_smoothstep(2.0 * phase), 2)[:, None]
+            before = sample(self._step.prev_angles, t, rows=rows)
+            legs = before + w * (legs - before)
+        return legs[:k], legs[k:]
+
+    def _stance_curves(self, a: np.ndarray) -> np.ndarray:
+        """(k, S, 4) [rad]: the step's dataset as the stance leg of agents a follows it
+        over t ∈ [0, 0.5] (the crossfade of :meth:`_legs` at τ = 2t; rows past 0.5 are
+        the step's own dataset) — for the stance-only measures (:func:`_spin_start`)."""
+        new = self._step.angles[a]
+        if not self.style.step_crossfade:
+            return new
+        before = self._step.prev_angles[a]
+        grid = np.arange(new.shape[1]) / new.shape[1]
+        w = _smoothstep(2.0 * grid)[None, :, None]
+        return before + w * (new - before)
+
     def _spin_progress(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """How much of its spin turn (k,) [0, 1] the stance foot of agents a has made at
         step phases tau (k,): none until the heel is up, all by the step's end."""
@@ -997,9 +1032,7 @@ class Animator:
         (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal, a correction
         ``toe_fix`` (k,) [rad] of the swing foot's toe-out)."""
         body = self.body.take(a)
-        k = a.size
-        legs = sample(self._step.angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
-        st, sw = legs[:k], legs[k:]  # stance leg at t, swing leg at t + 0.5
+        st, sw = self._legs(a, phase)  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
         tau = 2.0 * phase
         spin = self._stance.spin[a] * self._spin_progress(a, tau)
@@ -1042,7 +1075,10 @@ class Animator:
                 goal[:, 2] += lift
         hip_fix = None
         if corrected:
-            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / _HIP_BLEND))[:, None]
+            # after a clamped step (its landing pulled onto the target by IK) the offset
+            # is the landing's correction and is blended out over the whole step
+            over = np.where(self._swing.join_long[a], _HIP_BLEND_CLAMPED, _HIP_BLEND)
+            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / over))[:, None]
             # C¹ term: T b x (1 - x)² (x = τ / b) has the velocity jump as d/dt at t0
             x = np.clip(tau / _HIP_BLEND, 0.0, 1.0)
             hip_fix += self._swing.hip_vel[a] * (self._step.duration[a] * _HIP_BLEND
@@ -1092,8 +1128,7 @@ class Animator:
         the root moves on as the previous step's stance leg moved it."""
         body = self.body.take(a)
         k = a.size
-        legs = sample(self._step.angles, np.concatenate([phase, phase + 0.5]), rows=np.tile(a, 2))
-        st, sw = legs[:k], legs[k:]
+        st, sw = self._legs(a, phase)
         psi = self._heading(a, phase)
         tau = 2.0 * phase
         foot = StanceFoot(self._stance.ball[a], self._stance.yaw[a], self._stance.slope[a])

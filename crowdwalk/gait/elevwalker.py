@@ -130,6 +130,19 @@ class GaitStyle:
         data"); False: where the data's sole comes within 2 mm of the ground the ankle
         follows the planner's swing Bezier (Chen & Li §5.2: its control points 15 cm
         above the chord), which flexed the ascending swing knee to 110–115°.
+    step_crossfade : bool
+        The Animator plays each step as a crossfade from the previous step's dataset (at
+        the heel strike that opens it) to the step's own (at the heel strike that ends
+        it), so both legs follow data whose Eq. 10 step is the one the feet span at each
+        end, and the angles are C¹ across the swap (an extension: the paper does not say
+        how datasets join; docs/architecture.md "Step crossfade"); False: the step's
+        dataset from its heel strike on, the root joined by an offset blended out over
+        half the step.
+    clamped_join : bool
+        After a step ElevInterp served clamped (outside its legal region: the landing was
+        pulled onto the target by the swing IK, 10–30 cm on the park's short steps) the
+        root's join offset is blended out over the whole step instead of its first half
+        (an extension: docs/architecture.md "Step crossfade"); False: half the step.
     """
 
     step_width: float = 0.05
@@ -146,6 +159,8 @@ class GaitStyle:
     trunk_from_data: bool = True
     trailing_root: bool = True
     lift_swing: bool = True
+    step_crossfade: bool = True
+    clamped_join: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):

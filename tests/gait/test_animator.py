@@ -515,3 +515,55 @@ def test_a_frames_rewalks_take_its_trailing_root_and_pose_the_same():
     for a, b in zip(fa, fb, strict=True):
         for name in ("root_position", "joints", "positions", "contact", "fallback"):
             assert np.array_equal(getattr(a, name), getattr(b, name)), name
+
+
+def _varied_walk(style, lengths, duration=0.45, fps=25.0):
+    """A 1.75 m body's level walk of the given step lengths [m]: the largest change (k-1,)
+    [deg] of any followed elevation angle across each heel strike (the new stance leg
+    against the old swing leg and vice versa, ±0.1 ms) and each step's root positions at
+    ``fps`` (list of (f, 3) [m])."""
+    animator = Animator(Body.from_heights([1.75]), ground=_flat, style=style)
+    x, roots, jumps = 0.0, [], []
+    one = np.array([0])
+    for s, sl in enumerate(lengths):
+        y = 0.045 if s % 2 == 0 else -0.045
+        t0 = s * duration
+        if s:
+            st0, sw0, _, _ = animator.followed_angles(t0 - 1e-4, one)
+        animator.command(_command([0], t0, 1 if s % 2 == 0 else 0, [[x, y, 0.0]],
+                                  [[x + sl, -y, 0.0]], duration=duration))
+        if s:
+            st1, sw1, _, _ = animator.followed_angles(t0 + 1e-4, one)
+            jumps.append(max(np.abs(st1 - sw0).max(), np.abs(sw1 - st0).max()))
+        x += sl
+        roots.append(np.array([animator.pose(t0 + f / fps).root_position[0]
+                               for f in range(int(round(duration * fps)))]))
+    return np.degrees(jumps), roots
+
+
+def test_the_legs_cross_a_change_of_step_length_without_a_jump():
+    """Each step's dataset has its own geometry at the heel strike that opens it (Eq. 10
+    of its own length); the feet span the previous step's. ``step_crossfade`` fades the
+    new dataset in over the step, so the followed angles are continuous at the swap
+    (without it they jump by 18-24° between 0.55 and 0.75 m steps, and the root's join
+    offset absorbs the rest)."""
+    lengths = [0.7, 0.7, 0.55, 0.75, 0.55, 0.75, 0.7]
+    jumps, _ = _varied_walk(GaitStyle(), lengths)
+    assert jumps.max() < 0.5
+    old, _ = _varied_walk(GaitStyle(step_crossfade=False), lengths)
+    assert old[1:-1].min() > 5.0
+
+
+def test_the_root_rejoins_the_data_smoothly_after_a_clamped_step():
+    """A 0.25 m step is below what the data serve (clamped): the swing IK pulls its landing
+    onto the target and the next step's root starts off the data by the difference
+    (17 cm). ``clamped_join`` blends that out over the whole next step, not its first
+    half: the root's second differences through that step are lower."""
+    lengths = [0.7, 0.7, 0.7, 0.25, 0.7, 0.7]
+
+    def worst_after_clamped(style):
+        root = _varied_walk(style, lengths)[1][4]
+        return np.linalg.norm(root[2:] - 2 * root[1:-1] + root[:-2], axis=1).max()
+
+    assert worst_after_clamped(GaitStyle()) < 0.8 * worst_after_clamped(
+        GaitStyle(clamped_join=False))
