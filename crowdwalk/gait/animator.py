@@ -39,9 +39,12 @@ Around the walker the Animator adds what a crowd needs:
   is shortened by the swing hip's lead at heel strike under the style's pelvic
   rotation (Eq. 10's pelvis term), and over level ground the swing knee flexes until the
   sole clears the floor by ``GaitStyle.toe_clearance`` mid-swing.
-- **Continuous root.** Consecutive datasets rarely agree exactly at the heel strike, so
-  the stance hip starts where the previous step left the root and rejoins the data over
-  the first half of the step (sagittal two-link IK of the stance leg).
+- **Continuous root.** Each step crossfades from the previous step's dataset to its own
+  (``GaitStyle.step_crossfade``: the legs start where the last dataset left them); what
+  still differs at the heel strike (landing corrections) is taken up by the stance hip,
+  which starts where the previous step left the root and rejoins the data over the first
+  half of the step, or over the whole step after a clamped one
+  (``GaitStyle.clamped_join``; sagittal two-link IK of the stance leg).
 - **Step-downs beyond the data.** When the landing foothold is out of the swing leg's
   reach, the stance leg bends and lowers the pelvis toward it over the second half of
   the step.
