@@ -633,7 +633,8 @@ class Animator:
         """Root continuity: the stance hip starts where the previous step left the root
         and blends to the data over the first half of the step. On stair steps (``c1``)
         the join is C¹: the offset also starts with the root velocity the data lack at the
-        heel strike and loses it over the same blend (docs/architecture.md, deviations)."""
+        heel strike and loses it over the same blend (docs/architecture.md, "C¹ root join
+        on stair steps")."""
         if had.any():
             start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
             self._swing.hip_fix[a[had]] = landed.root[had] - start_pose.root_position
