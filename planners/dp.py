@@ -15,6 +15,7 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables, Structure, run_parts
+from planners.lattice_kernel import swing_at
 
 __all__ = ["DPWork", "cheapest", "dp_one", "dp_scratch"]
 
@@ -80,14 +81,14 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     found = np.zeros(B, dtype=np.bool_)
     states = np.zeros(B, dtype=np.int64)
     transitions = np.zeros(B, dtype=np.int64)
-    run_parts(_cheapest, B, tables.step_legal, tables.swing_ok, step_cost,
+    run_parts(_cheapest, B, tables.step_legal, tables.swings, step_cost,
               agents.astype(np.int64), J, st._step_offsets, st._swing_offsets,
               st._swing_strides, configs, found, states, transitions)
     return configs, found, DPWork(states, transitions)
 
 
 @nb.njit(cache=True, nogil=True)
-def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
+def _cheapest(step_legal, sw, step_cost, agents, J, step_off, swing_off, strides,
               configs, found, states, transitions, part, parts):
     """The DP of :func:`cheapest` (:func:`dp_one`) for every ``parts``-th agent from
     ``part`` (:func:`planners.lattice.run_parts`)."""
@@ -95,7 +96,7 @@ def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, s
     value, new, choice = dp_scratch(J, n)
     for b in range(part, B, parts):
         found[b], states[b], transitions[b] = dp_one(
-            step_legal, swing_ok, step_cost[b], agents[b], J, step_off, swing_off, strides,
+            step_legal, sw, step_cost[b], agents[b], J, step_off, swing_off, strides,
             value, new, choice, configs[b])
 
 
@@ -108,14 +109,18 @@ def dp_scratch(J, n):
 
 
 @nb.njit(cache=True, nogil=True)
-def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, value, new,
+def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value, new,
            choice, config):
     """The DP of :func:`cheapest` for table row ``a`` and its step costs ``step_cost``
     (Ns,): per depth k, the value of each state (m_{k-1}, j_{k-1}) plus each step j_k, the
-    least over j_{k-1} (the first on ties), then the way back from the least final state
-    into ``config`` (n,). States of infinite value (no legal way to them) are skipped:
-    they cannot lower any value. ``value``, ``new``, ``choice``: :func:`dp_scratch`.
-    Returns (found, states, transitions)."""
+    least over j_{k-1} of a legal swing (the first on ties), then the way back from the
+    least final state into ``config`` (n,). States of infinite value (no legal way to
+    them) are skipped: they cannot lower any value. The predecessors of a step are tried
+    in order of value (then of j_{k-1}) up to the first whose swing is legal, which is
+    the least: only their swings are read (``sw``:
+    :func:`~planners.lattice_kernel.swing_at`, which builds a deferred curve on first
+    read). ``value``, ``new``, ``choice``: :func:`dp_scratch`. Returns (found, states,
+    transitions)."""
     n = config.size
     M_last = (J - 1) * n + 1
     states = 0
@@ -134,28 +139,40 @@ def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, 
             states += reachable
             if reachable == 0:
                 continue  # new[m + j, j] stays +inf
+            # the predecessors j_{k-1} whose f_{k-2} = m - j_{k-1} lies in its depth
+            lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)
+            hi = 1 if k == 1 else min(P, m + 1)
             for j in range(J):
                 transitions += reachable
                 step = step_off[k - 1] + m * J + j
                 if not step_legal[a, step]:
                     continue
                 cost = step_cost[step]
+                swing0 = swing_off[0] + j if k == 1 else swing_off[k - 1] + j
                 best = np.inf
                 arg = 0
-                for jp in range(P):
-                    v = value[m, jp]
-                    if not v < np.inf:
-                        continue
-                    if k == 1:
-                        ok = swing_ok[a, swing_off[0] + j]
-                    else:
-                        m2 = m - jp
-                        ok = (0 <= m2 <= (J - 1) * (k - 2)
-                              and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
-                                           + jp + j])
-                    if ok and v + cost < best:
-                        best = v + cost
-                        arg = jp
+                last_t, last_jp = -np.inf, -1  # the last predecessor tried
+                while True:  # the least total not tried yet (the first on ties)
+                    pick = -1
+                    low = np.inf
+                    for jp in range(lo, hi):
+                        v = value[m, jp]
+                        if not v < np.inf:
+                            continue
+                        t = v + cost
+                        if t < last_t or (t == last_t and jp <= last_jp):
+                            continue  # tried
+                        if t < low:
+                            low = t
+                            pick = jp
+                    if pick < 0:
+                        break
+                    swing = swing0 if k == 1 else swing0 + (m - pick) * strides[k - 1] + pick
+                    if swing_at(sw, a, swing):
+                        best = low
+                        arg = pick
+                        break
+                    last_t, last_jp = low, pick
                 new[m + j, j] = best
                 choice[k - 1, m + j, j] = arg
         M_next = M + J - 1

@@ -8,6 +8,7 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
+from planners.lattice_kernel import swing_at
 
 __all__ = ["SearchResult", "all_configs_evaluated", "evaluate_one", "neighbour_deltas"]
 
@@ -79,10 +80,11 @@ def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
 
 
 @nb.njit(cache=True, nogil=True)
-def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
+def evaluate_one(a, q, step_legal, sw, cost, progress, J, step_off, swing_off, strides):
     """Legality and efficiency of configuration ``q`` (n,) for table row ``a``, rounded
     to 1e-12 as :meth:`~planners.lattice.StepTables.evaluate` (compiled, for the
-    searches' kernels)."""
+    searches' kernels; swings read through ``sw``,
+    :func:`~planners.lattice_kernel.swing_at`, up to the first illegal step or swing)."""
     n = q.size
     m_prev = 0  # lattice index of the stance foothold f_{k-1}
     m_prev2 = 0  # of the lift-off foothold f_{k-2}
@@ -94,7 +96,7 @@ def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_
         step = step_off[k] + m_prev * J + q[k]
         stride = q[k] + (j_prev if k > 0 else 0)
         swing = swing_off[k] + m_prev2 * strides[k] + stride
-        if not (step_legal[a, step] and swing_ok[a, swing]):
+        if legal and not (step_legal[a, step] and swing_at(sw, a, swing)):
             legal = False
         energy += cost[a, step]
         length += progress[a, step]
