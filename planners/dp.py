@@ -108,18 +108,44 @@ def dp_scratch(J, n):
             np.zeros((n, M_last, J), dtype=np.int64))
 
 
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _least_after(value, m, cost, lo, hi, last_t, last_jp):
+    """The predecessor j_{k-1} in ``lo..hi-1`` of least total ``value[m, j_{k-1}] + cost``
+    after (``last_t``, ``last_jp``) in the order (total, j_{k-1}): (total, j_{k-1}), or
+    (+inf, -1) where none is left (infinite and NaN totals are never taken). Compiled
+    without numba's runtime (no reference counting per call)."""
+    pick = -1
+    low = np.inf
+    for jp in range(lo, hi):
+        v = value[m, jp]
+        if not v < np.inf:
+            continue
+        t = v + cost
+        if t < last_t or (t == last_t and jp <= last_jp):
+            continue  # tried
+        if t < low:
+            low = t
+            pick = jp
+    return low, pick
+
+
 @nb.njit(cache=True, nogil=True)
 def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value, new,
            choice, config):
     """The DP of :func:`cheapest` for table row ``a`` and its step costs ``step_cost``
     (Ns,): per depth k, the value of each state (m_{k-1}, j_{k-1}) plus each step j_k, the
     least over j_{k-1} of a legal swing (the first on ties), then the way back from the
-    least final state into ``config`` (n,). States of infinite value (no legal way to
-    them) are skipped: they cannot lower any value. The predecessors of a step are tried
-    in order of value (then of j_{k-1}) up to the first whose swing is legal, which is
-    the least: only their swings are read (``sw``:
+    least final state (the first in (m, j) order) into ``config`` (n,). States of
+    infinite value (no legal way to them) are skipped: they cannot lower any value.
+
+    Only the swings that decide the result are read (``sw``:
     :func:`~planners.lattice_kernel.swing_at`, which builds a deferred curve on first
-    read). ``value``, ``new``, ``choice``: :func:`dp_scratch`. Returns (found, states,
+    read): below the last depth, a step's predecessors in order of total (then of
+    j_{k-1}) up to the first whose swing is legal, which is the least; at the last depth,
+    where only the least final state is used, the candidates (total, m, j, j_{k-1}) of
+    every final state in that order up to the first legal one. That is the least final
+    state and its least legal predecessor, the first on ties, as reading every swing
+    gives. ``value``, ``new``, ``choice``: :func:`dp_scratch`. Returns (found, states,
     transitions)."""
     n = config.size
     M_last = (J - 1) * n + 1
@@ -129,6 +155,7 @@ def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value,
     for k in range(1, n + 1):
         M = (J - 1) * (k - 1) + 1
         P = 1 if k == 1 else J
+        last = k == n
         new[:M + J - 1, :] = np.inf
         choice[k - 1, :M + J - 1, :] = 0
         for m in range(M):
@@ -149,41 +176,48 @@ def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value,
                     continue
                 cost = step_cost[step]
                 swing0 = swing_off[0] + j if k == 1 else swing_off[k - 1] + j
-                best = np.inf
-                arg = 0
                 last_t, last_jp = -np.inf, -1  # the last predecessor tried
                 while True:  # the least total not tried yet (the first on ties)
-                    pick = -1
-                    low = np.inf
-                    for jp in range(lo, hi):
-                        v = value[m, jp]
-                        if not v < np.inf:
-                            continue
-                        t = v + cost
-                        if t < last_t or (t == last_t and jp <= last_jp):
-                            continue  # tried
-                        if t < low:
-                            low = t
-                            pick = jp
-                    if pick < 0:
+                    low, pick = _least_after(value, m, cost, lo, hi, last_t, last_jp)
+                    if pick < 0 or last:  # (last depth: the least, its swing unread)
                         break
                     swing = swing0 if k == 1 else swing0 + (m - pick) * strides[k - 1] + pick
                     if swing_at(sw, a, swing):
-                        best = low
-                        arg = pick
                         break
                     last_t, last_jp = low, pick
-                new[m + j, j] = best
-                choice[k - 1, m + j, j] = arg
-        M_next = M + J - 1
-        value[:M_next, :] = new[:M_next, :]
-    best = np.inf
-    last_m, last_j = 0, 0
-    for m in range(M_last):
-        for j in range(J):
-            if value[m, j] < best:
-                best = value[m, j]
-                last_m, last_j = m, j
+                new[m + j, j] = low
+                choice[k - 1, m + j, j] = max(pick, 0)
+        if not last:
+            M_next = M + J - 1
+            value[:M_next, :] = new[:M_next, :]
+    # the least final candidate (total, m, j, then j_{n-1}) whose swing is legal
+    k = n
+    M = (J - 1) * (k - 1) + 1
+    while True:
+        best = np.inf
+        last_m, last_j = 0, 0
+        for m in range(M_last):
+            for j in range(J):
+                if new[m, j] < best:
+                    best = new[m, j]
+                    last_m, last_j = m, j
+        if not best < np.inf:
+            break
+        m, j = last_m - last_j, last_j
+        jp = choice[k - 1, last_m, last_j]
+        swing = (swing_off[0] + j if k == 1
+                 else swing_off[k - 1] + j + (m - jp) * strides[k - 1] + jp)
+        if swing_at(sw, a, swing):
+            break
+        # this state's next predecessor (the state keeps its place in (m, j) order)
+        lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)
+        hi = 1 if k == 1 else min(J, m + 1)
+        low, pick = _least_after(value, m, step_cost[step_off[k - 1] + m * J + j], lo, hi,
+                                 best, jp)
+        new[last_m, last_j] = low
+        choice[k - 1, last_m, last_j] = max(pick, 0)
+    if not best < np.inf:
+        last_m, last_j = 0, 0
     m_cur, j_cur = last_m, last_j
     for k in range(n, 0, -1):
         config[k - 1] = j_cur
