@@ -16,7 +16,7 @@ import numpy as np
 from planners.dp import cheapest, dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
 from planners.lattice_kernel import swing_at
-from planners.search import SearchResult, evaluate_one, neighbour_deltas
+from planners.search import SearchResult, efficiency_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
 
@@ -153,16 +153,18 @@ def _climb_one(step_legal, sw, cost, progress, J, step_off, swing_off, strides, 
                a, q, r):
     """One climb of :func:`hill_climb` from the legal ``q`` (n,) of table row ``a``, in
     place (``r``: scratch (n,)); efficiencies rounded to 1e-12 as
-    :meth:`~planners.lattice.StepTables.evaluate`. Returns (efficiency, expansions,
-    checks)."""
+    :meth:`~planners.lattice.StepTables.evaluate`. A neighbour's legality is read only
+    where its efficiency could make it the move (above the best legal neighbour so far
+    and the current configuration's threshold): the others cannot be chosen, so their
+    swings need not be read. Returns (efficiency, expansions, checks)."""
     n = q.size
     expanded = 0
     checks = 0
-    _, cur = evaluate_one(a, q, step_legal, sw, cost, progress, J, step_off,
-                          swing_off, strides)
+    cur = efficiency_one(a, q, cost, progress, J, step_off)
     while True:
         expanded += 1
         best_eff, best_d = -np.inf, 0
+        threshold = cur * (1 + 1e-12)
         for d in range(deltas.shape[0]):
             inside = True
             for k in range(n):
@@ -172,11 +174,11 @@ def _climb_one(step_legal, sw, cost, progress, J, step_off, swing_off, strides, 
             if not inside:
                 continue
             checks += 1
-            legal, e = evaluate_one(a, r, step_legal, sw, cost, progress, J,
-                                    step_off, swing_off, strides)
-            if legal and e > best_eff:
+            e = efficiency_one(a, r, cost, progress, J, step_off)
+            if (e > best_eff and e > threshold
+                    and _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, r)):
                 best_eff, best_d = e, d
-        if not best_eff > cur * (1 + 1e-12):
+        if not best_eff > threshold:
             break
         for k in range(n):
             q[k] += deltas[best_d, k]
@@ -221,13 +223,16 @@ def _greedy_one(step_legal, sw, length, E, J, step_off, swing_off, strides, a, c
         for j in range(J):
             step = step_off[k] + m_prev * J + j
             swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-            score = (length[a, step] / E[a, step]
-                     if step_legal[a, step] and swing_at(sw, a, swing) else -np.inf)
+            if not step_legal[a, step]:
+                continue
+            score = length[a, step] / E[a, step]
+            # the swing is read only where the step would be taken
+            if not (np.isnan(score) or score > best) or not swing_at(sw, a, swing):
+                continue
             if np.isnan(score):
                 best_j, nan = j, True
                 break
-            if score > best:
-                best, best_j = score, j
+            best, best_j = score, j
         if nan or not np.isfinite(best):
             found = False
         config[k] = best_j

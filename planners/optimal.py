@@ -8,7 +8,7 @@ import numpy as np
 from planners.dp import dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
 from planners.multistart import _nearest_one, nearest_legal
-from planners.search import SearchResult, evaluate_one
+from planners.search import SearchResult, efficiency_one
 
 __all__ = ["optimal"]
 
@@ -89,7 +89,7 @@ def _dinkelbach(step_legal, sw, cost, progress, J, step_off, swing_off, strides,
     ``parts``-th agent ``a`` in ``agents`` from ``part``
     (:func:`planners.lattice.run_parts`), each until a DP pass no longer improves the
     efficiency or ``iterations`` passes. The arithmetic of the vectorised iteration it
-    replaced: efficiencies rounded to 1e-12 (:func:`~planners.search.evaluate_one`, as
+    replaced: efficiencies rounded to 1e-12 (:func:`~planners.search.efficiency_one`, as
     :meth:`~planners.lattice.StepTables.evaluate`), step costs ``E - lam * L`` rounded to
     1e-10 (as :func:`~planners.dp.cheapest`)."""
     n = configs.shape[1]
@@ -109,8 +109,7 @@ def _iterate(step_legal, sw, cost, progress, J, step_off, swing_off, strides, a,
     (n,), in place (``value``, ``new``, ``choice``: :func:`~planners.dp.dp_scratch`;
     ``row`` (Ns,), ``best`` (n,): scratch)."""
     Ns = cost.shape[1]
-    _, eff = evaluate_one(a, config, step_legal, sw, cost, progress, J, step_off,
-                          swing_off, strides)
+    eff = efficiency_one(a, config, cost, progress, J, step_off)
     for _ in range(iterations):
         lam = 1.0 / eff
         for t in range(Ns):
@@ -119,8 +118,7 @@ def _iterate(step_legal, sw, cost, progress, J, step_off, swing_off, strides, a,
                                          swing_off, strides, value, new, choice, best)
         expanded[a] += states
         checks[a] += transitions
-        _, moved = evaluate_one(a, best, step_legal, sw, cost, progress, J,
-                                step_off, swing_off, strides)
+        moved = efficiency_one(a, best, cost, progress, J, step_off)
         if not (ok and moved > eff * (1 + 1e-12)):
             break
         config[:] = best

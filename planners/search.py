@@ -10,7 +10,8 @@ import numpy as np
 from planners.lattice import StepTables
 from planners.lattice_kernel import swing_at
 
-__all__ = ["SearchResult", "all_configs_evaluated", "evaluate_one", "neighbour_deltas"]
+__all__ = ["SearchResult", "all_configs_evaluated", "efficiency_one", "evaluate_one",
+           "neighbour_deltas"]
 
 #: Largest number of (agent, configuration, step) entries evaluated in one gather.
 GATHER_BUDGET = 1 << 22
@@ -105,3 +106,18 @@ def evaluate_one(a, q, step_legal, sw, cost, progress, J, step_off, swing_off, s
         m_prev += q[k]
         j_prev = q[k]
     return legal, np.rint(length / energy * 1e12) / 1e12
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def efficiency_one(a, q, cost, progress, J, step_off):
+    """The efficiency of :func:`evaluate_one` alone (it does not depend on the swings, so
+    none is read): ``q`` (n,) for table row ``a``, rounded to 1e-12."""
+    m_prev = 0
+    energy = 0.0
+    length = 0.0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        energy += cost[a, step]
+        length += progress[a, step]
+        m_prev += q[k]
+    return np.rint(length / energy * 1e12) / 1e12

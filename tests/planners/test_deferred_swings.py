@@ -165,3 +165,73 @@ def test_plans_with_deferred_swings_are_the_plans_built_in_full(planner, monkeyp
         assert p.stats["swing_curves"] <= q.stats["swing_curves"]
         fewer += p.stats["swing_curves"] < q.stats["swing_curves"]
     assert fewer > 0  # random terrain: some curves are never read
+
+
+def _climb_reading_every_neighbour(tables, a, q):
+    """hill_climb as written before the swings were deferred: every in-grid neighbour's
+    legality and efficiency read (StepTables.evaluate), the most efficient legal one
+    taken (the first among equals) while it beats the current one by 1e-12."""
+    from planners.multistart import _deltas
+
+    J, n = tables.struct.J, tables.struct.n
+    q = np.array(q)
+    _, cur = tables.evaluate(np.array([a]), q[None])
+    cur = float(cur[0])
+    expanded = checks = 0
+    while True:
+        expanded += 1
+        best_eff, best_d = -np.inf, None
+        for d in _deltas(n):
+            r = q + d
+            if (r < 0).any() or (r >= J).any():
+                continue
+            checks += 1
+            legal, e = tables.evaluate(np.array([a]), r[None])
+            if legal[0] and e[0] > best_eff:
+                best_eff, best_d = float(e[0]), d
+        if not best_eff > cur * (1 + 1e-12):
+            return q, cur, expanded, checks
+        q, cur = q + best_d, best_eff
+
+
+def _greedy_reading_every_step(tables, a):
+    """greedy as written before: each step's legality and swing read, the first j of
+    highest length / E (a NaN wins)."""
+    st = tables.struct
+    J = st.J
+    config, found = [], True
+    for k in range(st.n):
+        scores = []
+        for j in range(J):
+            steps, swings = st.indices(np.array(config + [j] + [0] * (st.n - k - 1)))
+            step, swing = steps[k], swings[k]
+            legal = tables.step_legal[a, step] and tables.swing_ok[a, swing]
+            scores.append(tables.length[a, step] / tables.E[a, step] if legal else -np.inf)
+        best = int(np.argmax(scores))
+        if not np.isfinite(scores[best]) and not np.isnan(scores[best]):
+            found = False
+        config.append(best)
+    return config, found
+
+
+def test_climbs_and_greedy_reading_swings_where_they_decide_find_the_same(leg):
+    from planners.multistart import greedy, hill_climb, nearest_legal
+
+    rng = np.random.default_rng(11)
+    config = PlannerConfig()
+    for profile in [_random_terrain()(rng) for _ in range(4)]:
+        eager = _tables(profile, leg, config, False)
+        deferred = _tables(profile, leg, config, True)
+        starts = nearest_legal(eager)
+        agents = np.flatnonzero(starts.found)
+        local, eff, exp, chk = hill_climb(deferred, agents, starts.configs[agents])
+        for i, a in enumerate(agents):
+            q, cur, e, c = _climb_reading_every_neighbour(eager, a, starts.configs[a])
+            assert local[i].tolist() == q.tolist()
+            assert eff[i] == cur and exp[i] == e and chk[i] == c
+        g = greedy(deferred)
+        for a in range(eager.neutral.size):
+            want, found = _greedy_reading_every_step(eager, a)
+            assert bool(g.found[a]) == found
+            if found:
+                assert g.configs[a].tolist() == want
