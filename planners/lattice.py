@@ -357,7 +357,10 @@ class StepTables:
     def swings(self) -> tuple:
         """What the searches' kernels read swings through
         (:func:`~planners.lattice_kernel.swing_at`; the arrays of
-        :data:`~planners.lattice_kernel.SWING_CONTEXT`)."""
+        :data:`~planners.lattice_kernel.SWING_CONTEXT`). A read may build a pending
+        curve of its agent, so the kernels give each agent to one thread at a time
+        (:func:`run_parts` splits the agents; a search over repeated rows of one agent,
+        as the vectorised compositions make, should not run on deferred tables)."""
         L = self.lattice
         T = L.basis.shape[1]
         A = self.neutral.size
