@@ -15,6 +15,7 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables, Structure, run_parts
+from planners.lattice_kernel import swing_at
 
 __all__ = ["DPWork", "cheapest", "dp_one", "dp_scratch"]
 
@@ -80,14 +81,14 @@ def cheapest(tables: StepTables, step_cost: np.ndarray, agents: np.ndarray | Non
     found = np.zeros(B, dtype=np.bool_)
     states = np.zeros(B, dtype=np.int64)
     transitions = np.zeros(B, dtype=np.int64)
-    run_parts(_cheapest, B, tables.step_legal, tables.swing_ok, step_cost,
+    run_parts(_cheapest, B, tables.step_legal, tables.swings, step_cost,
               agents.astype(np.int64), J, st._step_offsets, st._swing_offsets,
               st._swing_strides, configs, found, states, transitions)
     return configs, found, DPWork(states, transitions)
 
 
 @nb.njit(cache=True, nogil=True)
-def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, strides,
+def _cheapest(step_legal, sw, step_cost, agents, J, step_off, swing_off, strides,
               configs, found, states, transitions, part, parts):
     """The DP of :func:`cheapest` (:func:`dp_one`) for every ``parts``-th agent from
     ``part`` (:func:`planners.lattice.run_parts`)."""
@@ -95,7 +96,7 @@ def _cheapest(step_legal, swing_ok, step_cost, agents, J, step_off, swing_off, s
     value, new, choice = dp_scratch(J, n)
     for b in range(part, B, parts):
         found[b], states[b], transitions[b] = dp_one(
-            step_legal, swing_ok, step_cost[b], agents[b], J, step_off, swing_off, strides,
+            step_legal, sw, step_cost[b], agents[b], J, step_off, swing_off, strides,
             value, new, choice, configs[b])
 
 
@@ -107,15 +108,45 @@ def dp_scratch(J, n):
             np.zeros((n, M_last, J), dtype=np.int64))
 
 
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _least_after(value, m, cost, lo, hi, last_t, last_jp):
+    """The predecessor j_{k-1} in ``lo..hi-1`` of least total ``value[m, j_{k-1}] + cost``
+    after (``last_t``, ``last_jp``) in the order (total, j_{k-1}): (total, j_{k-1}), or
+    (+inf, -1) where none is left (infinite and NaN totals are never taken). Compiled
+    without numba's runtime (no reference counting per call)."""
+    pick = -1
+    low = np.inf
+    for jp in range(lo, hi):
+        v = value[m, jp]
+        if not v < np.inf:
+            continue
+        t = v + cost
+        if t < last_t or (t == last_t and jp <= last_jp):
+            continue  # tried
+        if t < low:
+            low = t
+            pick = jp
+    return low, pick
+
+
 @nb.njit(cache=True, nogil=True)
-def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, value, new,
+def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value, new,
            choice, config):
     """The DP of :func:`cheapest` for table row ``a`` and its step costs ``step_cost``
     (Ns,): per depth k, the value of each state (m_{k-1}, j_{k-1}) plus each step j_k, the
-    least over j_{k-1} (the first on ties), then the way back from the least final state
-    into ``config`` (n,). States of infinite value (no legal way to them) are skipped:
-    they cannot lower any value. ``value``, ``new``, ``choice``: :func:`dp_scratch`.
-    Returns (found, states, transitions)."""
+    least over j_{k-1} of a legal swing (the first on ties), then the way back from the
+    least final state (the first in (m, j) order) into ``config`` (n,). States of
+    infinite value (no legal way to them) are skipped: they cannot lower any value.
+
+    Only the swings that decide the result are read (``sw``:
+    :func:`~planners.lattice_kernel.swing_at`, which builds a deferred curve on first
+    read): below the last depth, a step's predecessors in order of total (then of
+    j_{k-1}) up to the first whose swing is legal, which is the least; at the last depth,
+    where only the least final state is used, the candidates (total, m, j, j_{k-1}) of
+    every final state in that order up to the first legal one. That is the least final
+    state and its least legal predecessor, the first on ties, as reading every swing
+    gives. ``value``, ``new``, ``choice``: :func:`dp_scratch`. Returns (found, states,
+    transitions)."""
     n = config.size
     M_last = (J - 1) * n + 1
     states = 0
@@ -124,6 +155,7 @@ def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, 
     for k in range(1, n + 1):
         M = (J - 1) * (k - 1) + 1
         P = 1 if k == 1 else J
+        last = k == n
         new[:M + J - 1, :] = np.inf
         choice[k - 1, :M + J - 1, :] = 0
         for m in range(M):
@@ -134,39 +166,58 @@ def dp_one(step_legal, swing_ok, step_cost, a, J, step_off, swing_off, strides, 
             states += reachable
             if reachable == 0:
                 continue  # new[m + j, j] stays +inf
+            # the predecessors j_{k-1} whose f_{k-2} = m - j_{k-1} lies in its depth
+            lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)
+            hi = 1 if k == 1 else min(P, m + 1)
             for j in range(J):
                 transitions += reachable
                 step = step_off[k - 1] + m * J + j
                 if not step_legal[a, step]:
                     continue
                 cost = step_cost[step]
-                best = np.inf
-                arg = 0
-                for jp in range(P):
-                    v = value[m, jp]
-                    if not v < np.inf:
-                        continue
-                    if k == 1:
-                        ok = swing_ok[a, swing_off[0] + j]
-                    else:
-                        m2 = m - jp
-                        ok = (0 <= m2 <= (J - 1) * (k - 2)
-                              and swing_ok[a, swing_off[k - 1] + m2 * strides[k - 1]
-                                           + jp + j])
-                    if ok and v + cost < best:
-                        best = v + cost
-                        arg = jp
-                new[m + j, j] = best
-                choice[k - 1, m + j, j] = arg
-        M_next = M + J - 1
-        value[:M_next, :] = new[:M_next, :]
-    best = np.inf
-    last_m, last_j = 0, 0
-    for m in range(M_last):
-        for j in range(J):
-            if value[m, j] < best:
-                best = value[m, j]
-                last_m, last_j = m, j
+                swing0 = swing_off[0] + j if k == 1 else swing_off[k - 1] + j
+                last_t, last_jp = -np.inf, -1  # the last predecessor tried
+                while True:  # the least total not tried yet (the first on ties)
+                    low, pick = _least_after(value, m, cost, lo, hi, last_t, last_jp)
+                    if pick < 0 or last:  # (last depth: the least, its swing unread)
+                        break
+                    swing = swing0 if k == 1 else swing0 + (m - pick) * strides[k - 1] + pick
+                    if swing_at(sw, a, swing):
+                        break
+                    last_t, last_jp = low, pick
+                new[m + j, j] = low
+                choice[k - 1, m + j, j] = max(pick, 0)
+        if not last:
+            M_next = M + J - 1
+            value[:M_next, :] = new[:M_next, :]
+    # the least final candidate (total, m, j, then j_{n-1}) whose swing is legal
+    k = n
+    M = (J - 1) * (k - 1) + 1
+    while True:
+        best = np.inf
+        last_m, last_j = 0, 0
+        for m in range(M_last):
+            for j in range(J):
+                if new[m, j] < best:
+                    best = new[m, j]
+                    last_m, last_j = m, j
+        if not best < np.inf:
+            break
+        m, j = last_m - last_j, last_j
+        jp = choice[k - 1, last_m, last_j]
+        swing = (swing_off[0] + j if k == 1
+                 else swing_off[k - 1] + j + (m - jp) * strides[k - 1] + jp)
+        if swing_at(sw, a, swing):
+            break
+        # this state's next predecessor (the state keeps its place in (m, j) order)
+        lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)
+        hi = 1 if k == 1 else min(J, m + 1)
+        low, pick = _least_after(value, m, step_cost[step_off[k - 1] + m * J + j], lo, hi,
+                                 best, jp)
+        new[last_m, last_j] = low
+        choice[k - 1, last_m, last_j] = max(pick, 0)
+    if not best < np.inf:
+        last_m, last_j = 0, 0
     m_cur, j_cur = last_m, last_j
     for k in range(n, 0, -1):
         config[k - 1] = j_cur

@@ -27,6 +27,7 @@ from planners.grids import leg_grids, swing_basis
 from planners.lattice_kernel import (
     Lattice,
     build_agents,
+    build_pending,
     complete_agents,
     prepare_agents,
 )
@@ -74,6 +75,13 @@ PRUNE = True
 #: is faster than entry by entry. Empty: every plan evaluates its tables up front (the
 #: plans are the same).
 LAZY = frozenset({"best_first", "fixed"})
+#: The planners whose tables, evaluated up front, leave the swing curves that need the
+#: §5.2 adjustment to be built where the search reads them (``build_tables(...,
+#: defer_swings=True)``; :func:`planners.lattice_kernel.swing_at`): their DP reads a
+#: step's predecessors in order of value up to the first legal swing, so about half of
+#: the curves the pruned tables hold are never read. Empty: every curve up front (the
+#: same plans).
+DEFER_SWINGS = frozenset({"optimal", "best_first_multistart"})
 
 
 @dataclass(frozen=True, eq=False)
@@ -307,6 +315,11 @@ class StepTables:
         Entries are evaluated where a search reads them; an entry not evaluated
         (``evaluated`` False) is illegal, E = +inf, ``Reason.UNREACHED``, its other
         values undefined. :meth:`complete` evaluates what a search may read.
+    pending : ndarray of bool, shape (A, Np)
+        Swing curves not built yet, built where a search's kernel reads them through
+        :attr:`swings` (deferred swings, ``build_tables(..., defer_swings=True)``; all
+        False otherwise). ``swing_ok``, ``controls`` and ``rounds`` hold the curves built
+        so far; :meth:`complete` builds the rest.
     """
 
     struct: Structure
@@ -333,6 +346,35 @@ class StepTables:
     reach: np.ndarray
     lattice: Lattice
     lazy: bool
+    pending: np.ndarray
+
+    @property
+    def deferred(self) -> bool:
+        """Whether some swing curves are still to be built where a search reads them."""
+        return bool(self.pending.any())
+
+    @cached_property
+    def swings(self) -> tuple:
+        """What the searches' kernels read swings through
+        (:func:`~planners.lattice_kernel.swing_at`; the arrays of
+        :data:`~planners.lattice_kernel.SWING_CONTEXT`). A read may build a pending
+        curve of its agent, so the kernels give each agent to one thread at a time
+        (:func:`run_parts` splits the agents; a search over repeated rows of one agent,
+        as the vectorised compositions make, should not run on deferred tables)."""
+        L = self.lattice
+        T = L.basis.shape[1]
+        A = self.neutral.size
+        return (self.pending, L.swing_ok, L.swing_done, L.swing_back, L.swing_front,
+                L.node_s, L.node_z, L.base, L.legs, L.r_start, L.r_count, L.r_levels,
+                L.r_table, L.r_vcum, L.basis, L.influence, L.fparams, L.iparams,
+                L.controls, L.rounds, L.work, np.empty((A, 3, T)), np.empty((A, 2)))
+
+    def build_pending(self, agents: np.ndarray | None = None) -> None:
+        """Build the pending swing curves of ``agents`` (default all)."""
+        agents = (np.flatnonzero(self.pending.any(axis=1)) if agents is None
+                  else np.asarray(agents, dtype=np.int64))
+        if agents.size:
+            run_parts(build_pending, agents.size, self.swings, agents)
 
     @property
     def work(self) -> TableWork:
@@ -363,9 +405,11 @@ class StepTables:
         (default all); what a lazy search evaluated already is kept."""
         agents = (np.arange(self.neutral.size) if agents is None
                   else np.asarray(agents, dtype=np.int64))
-        if agents.size:
+        if agents.size and self.lazy:
             self.prepare()
             run_parts(complete_agents, agents.size, self.lattice, agents)
+        elif agents.size:
+            self.build_pending(agents)
 
     def evaluate(self, agents: np.ndarray, configs: np.ndarray):
         """Legality and efficiency of configurations.
@@ -429,7 +473,8 @@ def _constants(config: PlannerConfig, st: Structure) -> tuple:
 
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
-                 origins: np.ndarray, config: PlannerConfig, lazy: bool = False) -> StepTables:
+                 origins: np.ndarray, config: PlannerConfig, lazy: bool = False,
+                 defer_swings: bool = False) -> StepTables:
     """Step tables of every agent: evaluated up front, or (``lazy``) left for the
     searches to evaluate where they read them.
 
@@ -449,6 +494,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         Evaluate only the nodes (footholds, support, terminal energies) and leave every
         step and swing to the searches (else every entry :data:`PRUNE` allows, in one
         compiled pass per agent, agents in parallel).
+    defer_swings : bool
+        With the tables up front (not ``lazy``): leave the swing curves that need the
+        §5.2 adjustment unbuilt (``pending``) for the searches to build where they read
+        them (:data:`DEFER_SWINGS`); the values read are those built up front.
 
     Notes
     -----
@@ -502,7 +551,7 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     tables = StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, L.node_s, L.node_z,
                         L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,
                         L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
-                        lattice, lazy)
+                        lattice, lazy, zeros((A, Np), dtype=np.bool_))
     t0 = stages.add("arrays", t0)
     if lazy:
         tables.prepare()
@@ -515,7 +564,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                   L.step_offset, st.swing_back, st.swing_front, st.swing_stride, first,
                   second, valid, basis, influence, fparams, iparams, weights, L.node_s,
                   L.node_z, L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.cost,
-                  L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work)
+                  L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work,
+                  bool(defer_swings), tables.pending, L.r_start, L.r_count, L.r_levels,
+                  L.r_table, L.r_vcum)
         np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
         np.greater_equal(L.rounds, 0, out=L.swing_done)
     stages.add("kernel", t0)

@@ -26,15 +26,20 @@ from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, key_frame_from, leg_constants, next_swing_leg, stance_leg
 from planners.swing import _cell, adjust_one
 
-__all__ = ["Lattice", "build_agents", "complete", "complete_agents",
+__all__ = ["Lattice", "SWING_CONTEXT", "build_agents", "build_pending", "build_swing",
+           "complete", "complete_agents",
            "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
-           "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_legal"]
+           "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_at",
+           "swing_legal"]
 
 _EV_PEAK = -0.18 * EV_PEAK_CM**2 + 7.14 * EV_PEAK_CM
 _VERTICAL = 1e-12
 # Reason flags (planners.legality.Reason)
 _EDGE, _SLOPE, _STEP_HEIGHT, _KNEE_REACH, _UNREACHED = 1, 2, 4, 8, 32
 _jit = nb.njit(cache=True, nogil=True)
+#: Kernels that allocate nothing: compiled without numba's runtime (their array
+#: arguments are not reference-counted at every call).
+_leaf = nb.njit(cache=True, nogil=True, _nrt=False)
 #: Functions that take the Lattice: inlined into the kernels (a call passes every array
 #: of the tuple, several microseconds).
 inline = nb.njit(cache=True, nogil=True, inline="always")
@@ -46,7 +51,7 @@ _inline = inline
 # against ~1 ns with one exit), and a search reads entries thousands of times.
 
 
-@_jit
+@_leaf
 def _right(s, x):
     """``np.searchsorted(s, x, side="right")`` of a float."""
     lo, hi = 0, s.size
@@ -59,7 +64,7 @@ def _right(s, x):
     return lo
 
 
-@_jit
+@_leaf
 def _left(s, x):
     """``np.searchsorted(s, x, side="left")`` of a float."""
     lo, hi = 0, s.size
@@ -72,7 +77,7 @@ def _left(s, x):
     return lo
 
 
-@_jit
+@_leaf
 def _height(s, z, slope, x):
     """GroundProfile.height at ``x`` [m]."""
     q = max(x, s[0])
@@ -80,7 +85,7 @@ def _height(s, z, slope, x):
     return z[i] + slope[i] * (q - s[i])
 
 
-@_jit
+@_leaf
 def _span(s, z, slope, a, b):
     """GroundProfile.span_heights over [a, b]: (highest, height(a), height(b)) [m]."""
     qa = max(a, s[0])
@@ -98,7 +103,7 @@ def _span(s, z, slope, a, b):
     return best, ha, hb
 
 
-@_jit
+@_leaf
 def _span_from(s, z, slope, a, ia, lo, b, ib):
     """:func:`_span` given ``ia = _right(s, max(a, s[0])) - 1``, ``lo = _left(s, a)``
     and ``ib = _right(s, max(b, s[0])) - 1`` (look-ups shared by the steps of a node)."""
@@ -114,7 +119,7 @@ def _span_from(s, z, slope, a, ia, lo, b, ib):
     return best, ha, hb
 
 
-@_jit
+@_leaf
 def _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
     """foot_support of an ankle at ``x`` [m]: 0 or EDGE | SLOPE flags."""
     heel = x - heel_off
@@ -129,7 +134,7 @@ def _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_sl
     return reason
 
 
-@_jit
+@_leaf
 def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
     """snap_to_support of one foothold [m] (3 edges on each side)."""
     E = edges.size
@@ -151,7 +156,7 @@ def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, m
     return best
 
 
-@_jit
+@_leaf
 def _energy(length, rise, Ej, speed, normal, p):
     """Eqs. 1, 2 and 4 of one step (+ the step-frequency term where ``normal`` > 0):
     (En, Ev, E). ``p``: alpha, beta, gamma, down_ratio, linear (1/0), frequency*alpha."""
@@ -259,7 +264,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
     return
 
 
-@_jit
+@_leaf
 def _cumulative(s, ds, cost, cum, x):
     """terminal_energy's F: the cost from the first vertex to ``x`` [J/kg]."""
     k = min(max(_right(s, x) - 1, 0), s.size - 1)
@@ -748,7 +753,8 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
                  step_depth, step_offset, swing_back, swing_front, swing_stride,
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-                 progress, terminal, far, swing_ok, controls, rounds, work, part, parts):
+                 progress, terminal, far, swing_ok, controls, rounds, work, defer, pending,
+                 r_start, r_count, r_levels, r_table, r_vcum, part, parts):
     """Fill every table of every ``parts``-th agent from ``part`` (see
     :func:`planners.lattice.build_tables`, which runs it on every core through
     :func:`planners.lattice.run_parts`).
@@ -764,7 +770,11 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
     ``iparams``: snap, terminal_cost, prune, max_adjustments, table levels.
     ``weights``: alpha, beta, gamma, down_ratio, linear, frequency*alpha, c_thigh,
     c_calf. ``work`` (A, 5): key-frame solves, curves built, reused, adjustment rounds,
-    steps evaluated.
+    steps evaluated. With ``defer`` (deferred swings) the curves that need the §5.2
+    adjustment are left unbuilt and marked in ``pending`` (A, Np), and the agent's raster
+    is stored (``r_start``, ``r_count``, ``r_levels`` (A,), ``r_table`` (A, levels *
+    cells), ``r_vcum`` (A, cells + 1)) for :func:`build_swing` to build them where a
+    search reads them (:func:`swing_at`).
     """
     for a in range(part, base.size, parts):
         _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal, per_metre,
@@ -772,7 +782,8 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
                node_m, step_stance, step_front, step_j, step_depth, step_offset, swing_back,
                swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
                fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-               progress, terminal, far, swing_ok, controls, rounds, work)
+               progress, terminal, far, swing_ok, controls, rounds, work, defer, pending,
+               r_start, r_count, r_levels, r_table, r_vcum)
 
 
 @_jit
@@ -782,7 +793,8 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
                  step_depth, step_offset, swing_back, swing_front, swing_stride,
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
-                 progress, terminal, far, swing_ok, controls, rounds, work):
+                 progress, terminal, far, swing_ok, controls, rounds, work, defer, pending,
+                 r_start_out, r_count_out, r_levels_out, r_table_out, r_vcum_out):
     """Every table of agent ``a`` (see :func:`build_agents`)."""
     Nn = node_depth.size
     Ns = step_stance.size
@@ -979,9 +991,20 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
         r_start = np.floor((rest_lo - span) / cell) * cell
         count = max(1, int(np.ceil((rest_hi + span - r_start) / cell)))
         levels_a = min(levels, _bit_length(count))
-        table = np.empty((levels_a, count))
-        vertex_cum = np.empty(count + 1, dtype=np.int64)
+        deferred = defer and count < r_vcum_out.shape[1] and (
+            levels_a * count <= r_table_out.shape[1])
+        if deferred:  # the raster kept for build_swing, the curves left to the searches
+            table = r_table_out[a, :levels_a * count].reshape((levels_a, count))
+            vertex_cum = r_vcum_out[a, :count + 1]
+            r_start_out[a], r_count_out[a], r_levels_out[a] = r_start, count, levels_a
+        else:
+            table = np.empty((levels_a, count))
+            vertex_cum = np.empty(count + 1, dtype=np.int64)
         _raster(s, z, slope, r_start, cell, count, levels_a, table, vertex_cum)
+        if deferred:
+            for q in range(Np):
+                pending[a, q] = rest[q]
+            rest[:] = False
         scratch = np.empty((3, T))
         summit = np.empty(2)
         for q in range(Np):
@@ -1004,6 +1027,66 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     work[a, 1] = built
     work[a, 2] = reused
     work[a, 3] = adjustments
+
+
+# Deferred swings: the curves of the up-front tables that need the §5.2 adjustment, built
+# where a search first reads them. The searches' kernels read every swing through
+# swing_at and the context tuple of StepTables.swings (the arrays below, in this order);
+# both are compiled without numba's runtime, so a read passes its arrays without
+# reference counting (with it, each read would take and release every array: ~0.6 us).
+SWING_CONTEXT = ("pending", "swing_ok", "swing_done", "swing_back", "swing_front",
+                 "node_s", "node_z", "base", "legs", "r_start", "r_count", "r_levels",
+                 "r_table", "r_vcum", "basis", "influence", "fparams", "iparams",
+                 "controls", "rounds", "work", "scratch", "summit")
+
+
+@_leaf
+def swing_at(sw, a, q):
+    """Whether swing ``q`` of agent ``a`` clears the ground, from the context ``sw``
+    (:data:`SWING_CONTEXT`): ``swing_ok``, its curve built first where it is pending."""
+    if sw[0][a, q]:
+        build_swing(sw, a, q)
+    return sw[1][a, q]
+
+
+@_leaf
+def build_swing(sw, a, q):
+    """Build the pending swing curve ``q`` of agent ``a`` by the §5.2 adjustment, as
+    :func:`build_agents` builds it up front (the same raster and arguments), and count
+    it."""
+    (pending, swing_ok, swing_done, swing_back, swing_front, node_s, node_z, base, legs,
+     r_start, r_count, r_levels, r_table, r_vcum, basis, influence, fparams, iparams,
+     controls, rounds, work, scratch, summit) = sw
+    pending[a, q] = False
+    leg = legs[a]
+    b0 = base[a]
+    bk, fr = swing_back[q], swing_front[q]
+    count, levels = r_count[a], r_levels[a]
+    table = r_table[a, :levels * count].reshape((levels, count))
+    ctrl = controls[a, q]
+    ok, used = adjust_one(b0 + node_s[a, bk], node_z[a, bk], b0 + node_s[a, fr],
+                          node_z[a, fr], leg[3], leg[4], leg[5], leg[2], r_start[a],
+                          fparams[12], table, r_vcum[a, :count + 1], basis, influence,
+                          fparams[10], fparams[4], fparams[11], fparams[1], iparams[3], ctrl,
+                          summit[a], scratch[a])
+    for i in range(4):
+        ctrl[i, 0] -= b0
+    swing_ok[a, q] = ok
+    rounds[a, q] = used
+    swing_done[a, q] = True
+    work[a, 1] += 1
+    work[a, 3] += used
+
+
+@_jit
+def build_pending(sw, agents, part, parts):
+    """Every pending swing of every ``parts``-th agent in ``agents`` from ``part``
+    (:func:`planners.lattice.run_parts`)."""
+    for i in range(part, agents.size, parts):
+        a = agents[i]
+        for q in range(sw[0].shape[1]):
+            if sw[0][a, q]:
+                build_swing(sw, a, q)
 
 
 @_jit

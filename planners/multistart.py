@@ -15,7 +15,8 @@ import numpy as np
 
 from planners.dp import cheapest, dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
-from planners.search import SearchResult, evaluate_one, neighbour_deltas
+from planners.lattice_kernel import swing_at
+from planners.search import SearchResult, efficiency_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
 
@@ -54,7 +55,7 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
     A = agents.size
     configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
     legal = np.empty(A, dtype=np.bool_)
-    _legal_each(tables.step_legal, tables.swing_ok, st.J, st._step_offsets,
+    _legal_each(tables.step_legal, tables.swings, st.J, st._step_offsets,
                 st._swing_offsets, st._swing_strides, np.asarray(agents, dtype=np.int64),
                 configs, legal)
     found = legal.copy()
@@ -75,17 +76,17 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
 
 
 @nb.njit(cache=True, nogil=True)
-def _legal_each(step_legal, swing_ok, J, step_off, swing_off, strides, agents, configs,
+def _legal_each(step_legal, sw, J, step_off, swing_off, strides, agents, configs,
                 legal):
     """Whether each configuration ``configs[b]`` (B, n) is legal for table row
     ``agents[b]`` (compiled, as :meth:`~planners.lattice.StepTables.evaluate`)."""
     for b in range(configs.shape[0]):
-        legal[b] = _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides,
+        legal[b] = _legal_one(step_legal, sw, J, step_off, swing_off, strides,
                               agents[b], configs[b])
 
 
 @nb.njit(cache=True, nogil=True)
-def _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides, a, config):
+def _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, config):
     """Whether ``config`` (n,) is legal for table row ``a`` (every step and swing)."""
     m_prev, m_prev2, j_prev = 0, 0, 0
     ok = True
@@ -93,7 +94,7 @@ def _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides, a, config)
         j = config[k]
         step = step_off[k] + m_prev * J + j
         swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-        if not (step_legal[a, step] and swing_ok[a, swing]):
+        if ok and not (step_legal[a, step] and swing_at(sw, a, swing)):
             ok = False
         if k > 0:
             m_prev2 += j_prev
@@ -117,7 +118,7 @@ def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
     current = np.empty(B)
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
-    run_parts(_climb, B, tables.step_legal, tables.swing_ok,
+    run_parts(_climb, B, tables.step_legal, tables.swings,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress), st.J,
               st._step_offsets, st._swing_offsets, st._swing_strides, _deltas(st.n),
               np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
@@ -133,14 +134,14 @@ def _deltas(n: int) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True)
-def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
+def _climb(step_legal, sw, cost, progress, J, step_off, swing_off, strides, deltas,
            agents, configs, current, expanded, checks, part, parts):
     """The climbs of :func:`hill_climb`, every ``parts``-th from ``part``
     (:func:`planners.lattice.run_parts`; :func:`_climb_one`)."""
     B, n = configs.shape
     r = np.empty(n, dtype=np.int64)
     for b in range(part, B, parts):
-        current[b], exp, chk = _climb_one(step_legal, swing_ok, cost, progress, J, step_off,
+        current[b], exp, chk = _climb_one(step_legal, sw, cost, progress, J, step_off,
                                           swing_off, strides, deltas, agents[b], configs[b],
                                           r)
         expanded[b] += exp
@@ -148,20 +149,22 @@ def _climb(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides
 
 
 @nb.njit(cache=True, nogil=True)
-def _climb_one(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, deltas,
+def _climb_one(step_legal, sw, cost, progress, J, step_off, swing_off, strides, deltas,
                a, q, r):
     """One climb of :func:`hill_climb` from the legal ``q`` (n,) of table row ``a``, in
     place (``r``: scratch (n,)); efficiencies rounded to 1e-12 as
-    :meth:`~planners.lattice.StepTables.evaluate`. Returns (efficiency, expansions,
-    checks)."""
+    :meth:`~planners.lattice.StepTables.evaluate`. A neighbour's legality is read only
+    where its efficiency could make it the move (above the best legal neighbour so far
+    and the current configuration's threshold): the others cannot be chosen, so their
+    swings need not be read. Returns (efficiency, expansions, checks)."""
     n = q.size
     expanded = 0
     checks = 0
-    _, cur = evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off,
-                          swing_off, strides)
+    cur = efficiency_one(a, q, cost, progress, J, step_off)
     while True:
         expanded += 1
         best_eff, best_d = -np.inf, 0
+        threshold = cur * (1 + 1e-12)
         for d in range(deltas.shape[0]):
             inside = True
             for k in range(n):
@@ -171,11 +174,11 @@ def _climb_one(step_legal, swing_ok, cost, progress, J, step_off, swing_off, str
             if not inside:
                 continue
             checks += 1
-            legal, e = evaluate_one(a, r, step_legal, swing_ok, cost, progress, J,
-                                    step_off, swing_off, strides)
-            if legal and e > best_eff:
+            e = efficiency_one(a, r, cost, progress, J, step_off)
+            if (e > best_eff and e > threshold
+                    and _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, r)):
                 best_eff, best_d = e, d
-        if not best_eff > cur * (1 + 1e-12):
+        if not best_eff > threshold:
             break
         for k in range(n):
             q[k] += deltas[best_d, k]
@@ -189,25 +192,25 @@ def greedy(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, st.n, st.J
     configs = np.zeros((A, n), dtype=np.int64)
     found = np.ones(A, dtype=bool)
-    run_parts(_greedy, A, tables.step_legal, tables.swing_ok, tables.length, tables.E, J,
+    run_parts(_greedy, A, tables.step_legal, tables.swings, tables.length, tables.E, J,
               st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
     checks = np.full(A, n * J, dtype=np.int64)
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
 
 
 @nb.njit(cache=True, nogil=True)
-def _greedy(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, configs,
+def _greedy(step_legal, sw, length, E, J, step_off, swing_off, strides, configs,
             found, part, parts):
     """The steps of :func:`greedy` (:func:`_greedy_one`), compiled, for every
     ``parts``-th agent from ``part`` (:func:`planners.lattice.run_parts`)."""
     for a in range(part, configs.shape[0], parts):
-        if not _greedy_one(step_legal, swing_ok, length, E, J, step_off, swing_off, strides,
+        if not _greedy_one(step_legal, sw, length, E, J, step_off, swing_off, strides,
                            a, configs[a]):
             found[a] = False
 
 
 @nb.njit(cache=True, nogil=True)
-def _greedy_one(step_legal, swing_ok, length, E, J, step_off, swing_off, strides, a, config):
+def _greedy_one(step_legal, sw, length, E, J, step_off, swing_off, strides, a, config):
     """The steps of :func:`greedy` for table row ``a`` into ``config`` (n,): at step k
     the first j of highest ``length / E`` among the legal steps (of the swing from
     f_{k-2}), as ``np.argmax`` (a NaN score wins; where none is legal, j = 0 and not
@@ -220,13 +223,16 @@ def _greedy_one(step_legal, swing_ok, length, E, J, step_off, swing_off, strides
         for j in range(J):
             step = step_off[k] + m_prev * J + j
             swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-            score = (length[a, step] / E[a, step]
-                     if step_legal[a, step] and swing_ok[a, swing] else -np.inf)
+            if not step_legal[a, step]:
+                continue
+            score = length[a, step] / E[a, step]
+            # the swing is read only where the step would be taken
+            if not (np.isnan(score) or score > best) or not swing_at(sw, a, swing):
+                continue
             if np.isnan(score):
                 best_j, nan = j, True
                 break
-            if score > best:
-                best, best_j = score, j
+            best, best_j = score, j
         if nan or not np.isfinite(best):
             found = False
         config[k] = best_j
@@ -274,7 +280,7 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     st = tables.struct
     A = tables.neutral.size
     out = SearchResult.empty(A, st.n)
-    run_parts(_multistart, A, tables.step_legal, tables.swing_ok,
+    run_parts(_multistart, A, tables.step_legal, tables.swings,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               tables.length, tables.E, tables.neutral.astype(np.int64), tables.neutral_cost,
               st.step_j, st.J, st._step_offsets, st._swing_offsets, st._swing_strides,
@@ -320,19 +326,19 @@ def _composed(tables: StepTables, starts: int | None = None) -> SearchResult:
 
 
 @nb.njit(cache=True, nogil=True)
-def _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off, swing_off, strides, a,
+def _nearest_one(step_legal, sw, cost, step_j, J, step_off, swing_off, strides, a,
                  centre, row, value, new, choice, config):
     """:func:`nearest_legal` from ``(centre, ..., centre)`` for table row ``a`` into
     ``config`` (n,) (``row``: scratch (Ns,); ``value``, ``new``, ``choice``:
     :func:`~planners.dp.dp_scratch`). Returns (found, expanded, checks)."""
     n = config.size
     config[:] = centre
-    if _legal_one(step_legal, swing_ok, J, step_off, swing_off, strides, a, config):
+    if _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, config):
         return True, 0, 1
     for t in range(row.size):  # np.round(dist + 1e-7 * cost, 10), as cheapest
         row[t] = np.rint((abs(step_j[t] - centre) + 1e-7 * cost[a, t]) * 1e10) / 1e10
     best = np.empty(n, dtype=np.int64)
-    ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off, swing_off,
+    ok, states, transitions = dp_one(step_legal, sw, row, a, J, step_off, swing_off,
                                      strides, value, new, choice, best)
     if ok:
         config[:] = best
@@ -340,7 +346,7 @@ def _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off, swing_off, str
 
 
 @nb.njit(cache=True, nogil=True)
-def _multistart(step_legal, swing_ok, cost, progress, length, E, neutral, neutral_cost,
+def _multistart(step_legal, sw, cost, progress, length, E, neutral, neutral_cost,
                 step_j, J, step_off, swing_off, strides, deltas, extra, starts, configs,
                 found, expanded, checks, part, parts):
     """:func:`best_first_multistart` of every ``parts``-th agent from ``part``
@@ -361,7 +367,7 @@ def _multistart(step_legal, swing_ok, cost, progress, length, E, neutral, neutra
     r = np.empty(n, dtype=np.int64)
     for a in range(part, A, parts):
         exp_a, chk_a = 0, 0
-        ok, e_, c_ = _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off,
+        ok, e_, c_ = _nearest_one(step_legal, sw, cost, step_j, J, step_off,
                                   swing_off, strides, a, neutral[a], row, value, new,
                                   choice, seeds[0])
         seed_found[0] = ok
@@ -372,14 +378,14 @@ def _multistart(step_legal, swing_ok, cost, progress, length, E, neutral, neutra
             lam0 = neutral_cost[a]
             for t in range(Ns):
                 row[t] = np.rint((cost[a, t] - lam0 * progress[a, t]) * 1e10) / 1e10
-            ok, e_, c_ = dp_one(step_legal, swing_ok, row, a, J, step_off, swing_off,
+            ok, e_, c_ = dp_one(step_legal, sw, row, a, J, step_off, swing_off,
                                 strides, value, new, choice, seeds[1])
             seed_found[1] = ok
             exp_a += e_
             chk_a += c_
             count = 2
         if starts >= 3:
-            seed_found[2] = _greedy_one(step_legal, swing_ok, length, E, J, step_off,
+            seed_found[2] = _greedy_one(step_legal, sw, length, E, J, step_off,
                                         swing_off, strides, a, seeds[2])
             exp_a += n
             chk_a += n * J
@@ -393,7 +399,7 @@ def _multistart(step_legal, swing_ok, cost, progress, length, E, neutral, neutra
                 continue
             any_found = True
             q[:] = seeds[i]
-            e, x, c = _climb_one(step_legal, swing_ok, cost, progress, J, step_off,
+            e, x, c = _climb_one(step_legal, sw, cost, progress, J, step_off,
                                  swing_off, strides, deltas, a, q, r)
             exp_a += x
             chk_a += c
@@ -407,14 +413,14 @@ def _multistart(step_legal, swing_ok, cost, progress, length, E, neutral, neutra
         if any_found and extra.size and worst < best_eff * (1 - AGREE):
             win_eff = np.nan
             for i in range(extra.size):
-                ok, e_, c_ = _nearest_one(step_legal, swing_ok, cost, step_j, J, step_off,
+                ok, e_, c_ = _nearest_one(step_legal, sw, cost, step_j, J, step_off,
                                           swing_off, strides, a, extra[i], row, value, new,
                                           choice, q)
                 exp_a += e_
                 chk_a += c_
                 if not ok:
                     continue
-                e, x, c = _climb_one(step_legal, swing_ok, cost, progress, J, step_off,
+                e, x, c = _climb_one(step_legal, sw, cost, progress, J, step_off,
                                      swing_off, strides, deltas, a, q, r)
                 exp_a += x
                 chk_a += c

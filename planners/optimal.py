@@ -8,7 +8,7 @@ import numpy as np
 from planners.dp import dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
 from planners.multistart import _nearest_one, nearest_legal
-from planners.search import SearchResult, evaluate_one
+from planners.search import SearchResult, efficiency_one
 
 __all__ = ["optimal"]
 
@@ -35,7 +35,7 @@ def optimal(tables: StepTables) -> SearchResult:
     st = tables.struct
     A = tables.neutral.size
     out = SearchResult.empty(A, st.n)
-    run_parts(_optimal, A, tables.step_legal, tables.swing_ok,
+    run_parts(_optimal, A, tables.step_legal, tables.swings,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               tables.neutral.astype(np.int64), st.step_j, st.J, st._step_offsets,
               st._swing_offsets, st._swing_strides, out.configs, out.found, out.expanded,
@@ -52,7 +52,7 @@ def _composed(tables: StepTables) -> SearchResult:
     configs = init.configs.copy()
     expanded, checks = init.expanded.copy(), init.checks.copy()
     agents = np.flatnonzero(init.found)
-    run_parts(_dinkelbach, agents.size, tables.step_legal, tables.swing_ok,
+    run_parts(_dinkelbach, agents.size, tables.step_legal, tables.swings,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               st.J, st._step_offsets, st._swing_offsets, st._swing_strides, agents, configs,
               expanded, checks, MAX_ITERATIONS)
@@ -60,7 +60,7 @@ def _composed(tables: StepTables) -> SearchResult:
 
 
 @nb.njit(cache=True, nogil=True)
-def _optimal(step_legal, swing_ok, cost, progress, neutral, step_j, J, step_off, swing_off,
+def _optimal(step_legal, sw, cost, progress, neutral, step_j, J, step_off, swing_off,
              strides, configs, found, expanded, checks, iterations, part, parts):
     """:func:`optimal` of every ``parts``-th agent from ``part``
     (:func:`planners.lattice.run_parts`): the start
@@ -71,25 +71,25 @@ def _optimal(step_legal, swing_ok, cost, progress, neutral, step_j, J, step_off,
     row = np.empty(cost.shape[1])
     best = np.empty(n, dtype=np.int64)
     for a in range(part, A, parts):
-        ok, expanded[a], checks[a] = _nearest_one(step_legal, swing_ok, cost, step_j, J,
+        ok, expanded[a], checks[a] = _nearest_one(step_legal, sw, cost, step_j, J,
                                                   step_off, swing_off, strides, a,
                                                   neutral[a], row, value, new, choice,
                                                   configs[a])
         found[a] = ok
         if ok:
-            _iterate(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+            _iterate(step_legal, sw, cost, progress, J, step_off, swing_off, strides,
                      a, configs[a], expanded, checks, iterations, value, new, choice, row,
                      best)
 
 
 @nb.njit(cache=True, nogil=True)
-def _dinkelbach(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+def _dinkelbach(step_legal, sw, cost, progress, J, step_off, swing_off, strides,
                 agents, configs, expanded, checks, iterations, part, parts):
     """Dinkelbach's iterations of :func:`optimal` from the legal ``configs[a]`` of every
     ``parts``-th agent ``a`` in ``agents`` from ``part``
     (:func:`planners.lattice.run_parts`), each until a DP pass no longer improves the
     efficiency or ``iterations`` passes. The arithmetic of the vectorised iteration it
-    replaced: efficiencies rounded to 1e-12 (:func:`~planners.search.evaluate_one`, as
+    replaced: efficiencies rounded to 1e-12 (:func:`~planners.search.efficiency_one`, as
     :meth:`~planners.lattice.StepTables.evaluate`), step costs ``E - lam * L`` rounded to
     1e-10 (as :func:`~planners.dp.cheapest`)."""
     n = configs.shape[1]
@@ -97,30 +97,28 @@ def _dinkelbach(step_legal, swing_ok, cost, progress, J, step_off, swing_off, st
     row = np.empty(cost.shape[1])
     best = np.empty(n, dtype=np.int64)
     for i in range(part, agents.size, parts):
-        _iterate(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides,
+        _iterate(step_legal, sw, cost, progress, J, step_off, swing_off, strides,
                  agents[i], configs[agents[i]], expanded, checks, iterations, value, new,
                  choice, row, best)
 
 
 @nb.njit(cache=True, nogil=True)
-def _iterate(step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides, a,
+def _iterate(step_legal, sw, cost, progress, J, step_off, swing_off, strides, a,
              config, expanded, checks, iterations, value, new, choice, row, best):
     """:func:`_dinkelbach`'s iterations for table row ``a`` from its legal ``config``
     (n,), in place (``value``, ``new``, ``choice``: :func:`~planners.dp.dp_scratch`;
     ``row`` (Ns,), ``best`` (n,): scratch)."""
     Ns = cost.shape[1]
-    _, eff = evaluate_one(a, config, step_legal, swing_ok, cost, progress, J, step_off,
-                          swing_off, strides)
+    eff = efficiency_one(a, config, cost, progress, J, step_off)
     for _ in range(iterations):
         lam = 1.0 / eff
         for t in range(Ns):
             row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
-        ok, states, transitions = dp_one(step_legal, swing_ok, row, a, J, step_off,
+        ok, states, transitions = dp_one(step_legal, sw, row, a, J, step_off,
                                          swing_off, strides, value, new, choice, best)
         expanded[a] += states
         checks[a] += transitions
-        _, moved = evaluate_one(a, best, step_legal, swing_ok, cost, progress, J,
-                                step_off, swing_off, strides)
+        moved = efficiency_one(a, best, cost, progress, J, step_off)
         if not (ok and moved > eff * (1 + 1e-12)):
             break
         config[:] = best

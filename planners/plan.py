@@ -252,7 +252,8 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         t0 = time.perf_counter()
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
                               None if trailing is None else trailing[sl], origins[sl], config,
-                              lazy=lattice.PRUNE and planner in lattice.LAZY)
+                              lazy=lattice.PRUNE and planner in lattice.LAZY,
+                              defer_swings=planner in lattice.DEFER_SWINGS)
         t1 = time.perf_counter()
         result = _SEARCHES[planner](tables)
         t2 = stages.add("search", t1)
@@ -312,7 +313,7 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     messages = {}
     if not result.found.all():
         failed = np.flatnonzero(~result.found)
-        if tables.lazy:
+        if tables.lazy or tables.deferred:
             tables.complete(failed)  # the diagnosis reads every legal prefix
         for a, (message, prefix, depth) in zip(failed.tolist(),
                                                _diagnose(tables, failed, profiles, origins),
@@ -320,6 +321,11 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
             messages[a] = message, depth
             result.configs[a] = prefix  # a failed agent keeps its longest legal prefix
     steps, swings = st.indices(result.configs)
+    Np = tables.controls.shape[1]
+    if tables.deferred:  # (a search reads every swing of the configuration it returns)
+        unbuilt = tables.pending.take(rows * Np + swings).any(axis=1)
+        if unbuilt.any():
+            tables.build_pending(np.flatnonzero(unbuilt))
     foot_nodes = np.empty((A, st.n + 1), dtype=np.int64)
     foot_nodes[:, 0] = 1
     foot_nodes[:, 1:] = st.step_front[steps]
@@ -330,7 +336,6 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     foot_z = tables.node_z.take(at_node)
     lengths = tables.length.take(at_step)
     rises = tables.rise.take(at_step)
-    Np = tables.controls.shape[1]
     controls = tables.controls.reshape(A * Np, 4, 2).take(rows * Np + swings, axis=0)
     controls[..., 0] += origins[:, None, None]
     leg_length = np.array([leg.length for leg in legs])[:, None]

@@ -8,8 +8,10 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
+from planners.lattice_kernel import swing_at
 
-__all__ = ["SearchResult", "all_configs_evaluated", "evaluate_one", "neighbour_deltas"]
+__all__ = ["SearchResult", "all_configs_evaluated", "efficiency_one", "evaluate_one",
+           "neighbour_deltas"]
 
 #: Largest number of (agent, configuration, step) entries evaluated in one gather.
 GATHER_BUDGET = 1 << 22
@@ -79,10 +81,11 @@ def all_configs_evaluated(tables: StepTables, agents: np.ndarray):
 
 
 @nb.njit(cache=True, nogil=True)
-def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_off, strides):
+def evaluate_one(a, q, step_legal, sw, cost, progress, J, step_off, swing_off, strides):
     """Legality and efficiency of configuration ``q`` (n,) for table row ``a``, rounded
     to 1e-12 as :meth:`~planners.lattice.StepTables.evaluate` (compiled, for the
-    searches' kernels)."""
+    searches' kernels; swings read through ``sw``,
+    :func:`~planners.lattice_kernel.swing_at`, up to the first illegal step or swing)."""
     n = q.size
     m_prev = 0  # lattice index of the stance foothold f_{k-1}
     m_prev2 = 0  # of the lift-off foothold f_{k-2}
@@ -94,7 +97,7 @@ def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_
         step = step_off[k] + m_prev * J + q[k]
         stride = q[k] + (j_prev if k > 0 else 0)
         swing = swing_off[k] + m_prev2 * strides[k] + stride
-        if not (step_legal[a, step] and swing_ok[a, swing]):
+        if legal and not (step_legal[a, step] and swing_at(sw, a, swing)):
             legal = False
         energy += cost[a, step]
         length += progress[a, step]
@@ -103,3 +106,18 @@ def evaluate_one(a, q, step_legal, swing_ok, cost, progress, J, step_off, swing_
         m_prev += q[k]
         j_prev = q[k]
     return legal, np.rint(length / energy * 1e12) / 1e12
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def efficiency_one(a, q, cost, progress, J, step_off):
+    """The efficiency of :func:`evaluate_one` alone (it does not depend on the swings, so
+    none is read): ``q`` (n,) for table row ``a``, rounded to 1e-12."""
+    m_prev = 0
+    energy = 0.0
+    length = 0.0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        energy += cost[a, step]
+        length += progress[a, step]
+        m_prev += q[k]
+    return np.rint(length / energy * 1e12) / 1e12

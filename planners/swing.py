@@ -161,18 +161,21 @@ def adjust_swings(start_s, start_z, end_s, end_z, profile, leg: Leg,
 
 
 _jit = nb.njit(cache=True, nogil=True)
+#: Kernels that allocate nothing: compiled without numba's runtime, so that the arrays
+#: they take are not reference-counted at every call (atomic increments and decrements).
+_leaf = nb.njit(cache=True, nogil=True, _nrt=False)
 #: Levels of the raster's range-maximum table the kernel uses: spans up to 2**7 cells
 #: (0.5 m) take two look-ups, longer ones a few more.
 TABLE_LEVELS = 7
 
 
-@_jit
+@_leaf
 def _round9(x):
     """``np.round(x, 9)`` of a float."""
     return np.rint(x * 1e9) / 1e9
 
 
-@_jit
+@_leaf
 def _cell(x, start, cell, scale, c):
     """:func:`planners.profile.cell_index` of one arc length ``x`` [m] in a raster of
     ``c`` cells (``scale`` = 1 / ``cell``)."""
@@ -188,7 +191,7 @@ def _cell(x, start, cell, scale, c):
     return k
 
 
-@_jit
+@_leaf
 def _raster_max(a, b, start, cell, scale, table):
     """:meth:`HeightRaster.max_height` of one interval [m], from the raster's
     range-maximum table (L, c)."""
@@ -197,7 +200,7 @@ def _raster_max(a, b, start, cell, scale, table):
     return _cells_max(ia, max(_cell(b, start, cell, scale, c), ia), table)
 
 
-@_jit
+@_leaf
 def _cells_max(ia, ib, table):
     """:func:`_raster_max` of the cells ``ia``..``ib`` (``ib`` >= ``ia``)."""
     levels = table.shape[0]
@@ -214,7 +217,7 @@ def _cells_max(ia, ib, table):
     return max(best, table[k, ib - width + 1])
 
 
-@_jit
+@_leaf
 def _raster_vertices(a, b, start, cell, scale, vertex_cum):
     """:meth:`HeightRaster.vertices_between` of one interval."""
     c = vertex_cum.size - 1
@@ -240,7 +243,7 @@ def _adjust(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cel
             scratch)
 
 
-@_jit
+@_leaf
 def adjust_one(start_s, start_z, end_s, end_z, heel, toe, ankle, foot, r_start, cell,
                table, vertex_cum, basis, influence, clearance, swing_lift, max_swing_lift,
                max_foot_slope, max_adjustments, ctrl, out_summit, scratch):
