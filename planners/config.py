@@ -144,9 +144,11 @@ class PlannerConfig:
     turn_threshold : float
         Largest foot rotation per step on curved paths (§5.4) [rad].
     search_starts : int
-        Initial configurations of ``best_first`` (1 is the paper's single FIND_INIT +
-        BFP; 2 adds the energy-budget start, 3 the greedy one, more add constant-step
-        starts, used only where the first three end in different local optima).
+        Initial configurations of ``best_first_multistart`` (``best_first`` is the
+        paper's single FIND_INIT + BFP and ignores this): 1 is the nearest legal
+        configuration to the neutral one; 2 adds the energy-budget start, 3 the greedy
+        one, more add constant-step starts, used only where the first three end in
+        different local optima.
     snap : bool
         Let each lattice foothold slide by up to half a grid increment to the nearest
         position where the whole foot is supported (deviation from the fixed grid of
