@@ -152,8 +152,11 @@ class CrowdParams:
         reached in a straight line clear of the walls (tested at the line's quarters),
         down to the walker's own projection on it, instead of the centre-line point
         ``target_distance`` ahead (:func:`crowdwalk.crowd.routing.steering_targets`): a
-        walker beside a door lines up with it before entering. Opt-in, measured
-        (docs/architecture.md, "Lining up at doors").
+        walker beside a door lines up with it before entering; never a point within
+        the walker's own radius (a lone walker whose route ran beneath it along RiMEA 9's
+        wall stood there for 300 s). Opt-in, measured (docs/architecture.md, "Lining up
+        at doors"; with C0 it empties RiMEA 10's rooms sooner and the corridor's
+        counterflow then locks: "C0 + line_up through the whole verify").
     opening_ease : bool
         Scale the soft wall term (``SteeringParams.wall_weight``) by
         ``opening_wall_factor`` for walkers inside an opening zone
