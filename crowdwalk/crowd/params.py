@@ -133,7 +133,12 @@ class CrowdParams:
         side-steps or steps back (the clog fan turned round) is followed, face to face.
     headway_steer : bool
         With ``"headway"``: steering scores each candidate direction at the step the
-        model allows along it, as ``"contact_gap"`` does.
+        model allows along it, as ``"contact_gap"`` does; not inside the
+        ``headway_free_margin`` zone, where the model is off (session 14: 0.8 m door,
+        seeds 4–9, with C0 + ``line_up`` 1.14 → 1.20 /s; C0 + ``line_up`` alone 1.28).
+        It lets walkers overtake: with C0 + ``line_up`` RiMEA 7's 1.6 m/s group ×0.886
+        → ×0.992 and lone walkers 0.814 → 0.999 of their free speed at worst
+        (docs/architecture.md, "C0 + line_up through the whole verify").
     lane_keep : bool
         Where a walker's lane runs into a wall (a door ahead off its axis), aim at the
         same side of the opening as far off its axis as fits, instead of at its centre
@@ -147,8 +152,11 @@ class CrowdParams:
         reached in a straight line clear of the walls (tested at the line's quarters),
         down to the walker's own projection on it, instead of the centre-line point
         ``target_distance`` ahead (:func:`crowdwalk.crowd.routing.steering_targets`): a
-        walker beside a door lines up with it before entering. Opt-in, measured
-        (docs/architecture.md, "Lining up at doors").
+        walker beside a door lines up with it before entering; never a point within
+        the walker's own radius (a lone walker whose route ran beneath it along RiMEA 9's
+        wall stood there for 300 s). Opt-in, measured (docs/architecture.md, "Lining up
+        at doors"; with C0 it empties RiMEA 10's rooms sooner and the corridor's
+        counterflow then locks: "C0 + line_up through the whole verify").
     opening_ease : bool
         Scale the soft wall term (``SteeringParams.wall_weight``) by
         ``opening_wall_factor`` for walkers inside an opening zone

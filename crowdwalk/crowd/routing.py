@@ -352,7 +352,9 @@ def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarr
         xb, rb = xy[b], radius[b]
 
         def clear(cand):
-            ok = clearance(cand) >= rb
+            # not a point under the walker's own body (its projection when the centre
+            # line runs beneath it beside a wall): no direction, and it stands for good
+            ok = (clearance(cand) >= rb) & (np.linalg.norm(cand - xb, axis=1) >= rb)
             for f in (0.25, 0.5, 0.75):
                 ok &= clearance(xb + f * (cand - xb)) >= rb
             return ok

@@ -309,10 +309,14 @@ class CrowdSimulation:
                 followed = nbs.valid & (np.einsum("kmj,kj->km", e[nbs.agent], e[idx]) > -0.5)
             elif nbs.heading is not None:
                 followed = nbs.valid & (np.cos(nbs.heading - h[:, None]) > 0.0)
+            scored = nbs.valid
             if self.free_zone is not None:  # in and near openings: walk into free space
-                followed &= ~self.free_zone.inside(pos)[:, None]
+                free_here = self.free_zone.inside(pos)[:, None]
+                followed &= ~free_here
+                # nor does headway_steer score directions there at a headway step
+                scored = scored & ~free_here
             lane = prm.headway_lane * self.shape.bound[idx]
-            return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
+            return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, scored, followed,
                             free, leg, prm.headway_time, lane=lane)
         return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                         free, leg, prm.contact_time_gap)

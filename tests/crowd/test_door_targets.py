@@ -67,3 +67,18 @@ def test_lane_keeping_keeps_a_walker_off_axis_where_its_lane_fits_the_door():
     assert np.allclose(np.abs(t1[:, 1]), 0.2)  # the widest lane that fits
     assert (np.sign(t1[:, 1]) == np.sign(xy[:, 1])).all()  # on the walker's side
     assert (field(t1) >= 0.2).all()
+
+
+def test_lining_up_never_aims_under_the_walkers_own_body():
+    # a dead end 0.3 m ahead of a walker on the centre line: every centre-line point
+    # ahead is in or too near the wall, only its own projection clears; aiming there (a
+    # few centimetres off) gave no direction and a lone walker beside RiMEA 9's door
+    # stood there for 300 s
+    field = ClearanceField.from_area(shapely.box(-2, -2, 2, 2))
+    xy = np.array([[1.7, 0.0], [1.65, 0.03]])
+    k = len(xy)
+    params = CrowdParams(lane_keep=True, line_up=True)
+    target, _ = steering_targets(Line(), route=np.zeros(k, int), progress=xy[:, 0].copy(),
+                                 xy=xy, heading=np.zeros(k), radius=np.full(k, 0.2),
+                                 clearance=field, params=params)
+    assert (np.linalg.norm(target - xy, axis=1) >= 0.2).all(), target
