@@ -290,15 +290,17 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
 
 
 @nb.njit(cache=True, nogil=True)
-def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
+def _clear_of_a(i, pairs, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
                 b_yaw_now, b_end, b_yaw_end, b_remaining, b_shape, runs, ok, centre_ok):
-    """:func:`_gaps` with runs, keeping the signs only: each A's rows of ``ok`` and
-    ``centre_ok`` (m, J) become "shorter than the run's first blocked length" (the
-    reduction over A's neighbours of ``_gaps``' negative entries). A clear entry's
-    disc pairs are skipped where a disc of one body keeps clear of the other's holding
-    disc about its centre (every disc of a body, widened for its turn, lies within its
-    shoulder offset of the centre's track): the same signs, fewer disc pairs."""
-    npairs, nj = pa.shape[0], ok.shape[1]
+    """:func:`_gaps` with runs for one A (row ``i`` of the ``a_*`` arrays) against its
+    neighbours ``pairs`` (rows of the ``b_*`` arrays, in order), keeping the signs only:
+    A's rows of ``ok`` and ``centre_ok`` (m, J) become "shorter than the run's first
+    blocked length" (the reduction over A's neighbours of ``_gaps``' negative entries).
+    A clear entry's disc pairs are skipped where a disc of one body keeps clear of the
+    other's holding disc about its centre (every disc of a body, widened for its turn,
+    lies within its shoulder offset of the centre's track): the same signs, fewer disc
+    pairs."""
+    nj = ok.shape[1]
     bx = np.empty(3)
     by = np.empty(3)
     bvx = np.empty(3)
@@ -308,11 +310,9 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
     stop_c = np.empty(n_runs, np.int64)
     width = np.empty(n_runs)
     far = 0.0
-    for p in range(npairs):
-        i = pa[p]
-        if p == 0 or i != pa[p - 1]:
-            _run_limits(i, a_start, a_end, ok, centre_ok, runs, stop, stop_c, width)
-        ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
+    _run_limits(i, a_start, a_end, ok, centre_ok, runs, stop, stop_c, width)
+    ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
+    for p in pairs:
         rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
         bound = max(ra, sa + ras) + max(rb, sb + rbs)
         tb, bend_b = _discs_of_b(p, b_now, b_yaw_now, b_end, b_yaw_end, b_remaining, sb, bx, by,
@@ -373,11 +373,23 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
                     break
             if best < 0.0:
                 stop[c] = l
-        if p == npairs - 1 or pa[p + 1] != i:  # A's last neighbour: its rows
-            for c in range(n_runs):
-                for l in range(runs):
-                    ok[i, c * runs + l] = l < stop[c]
-                    centre_ok[i, c * runs + l] = l < stop_c[c]
+    for c in range(n_runs):
+        for l in range(runs):
+            ok[i, c * runs + l] = l < stop[c]
+            centre_ok[i, c * runs + l] = l < stop_c[c]
+
+
+@nb.njit(cache=True, nogil=True)
+def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
+                b_yaw_now, b_end, b_yaw_end, b_remaining, b_shape, runs, ok, centre_ok):
+    """:func:`_clear_of_a` for each A of ``pa`` (P,) (each A's neighbours together)."""
+    first = 0
+    for p in range(pa.shape[0]):
+        if p == pa.shape[0] - 1 or pa[p + 1] != pa[p]:  # A's last neighbour
+            _clear_of_a(pa[p], np.arange(first, p + 1), a_start, a_yaw0, a_end, a_yaw1,
+                        a_dur, a_elapsed, a_shape, b_now, b_yaw_now, b_end, b_yaw_end,
+                        b_remaining, b_shape, runs, ok, centre_ok)
+            first = p + 1
 
 
 def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end: np.ndarray,
