@@ -209,3 +209,39 @@ def test_clear_runs_keeps_exactly_the_signs_of_the_gaps_reduced_over_the_neighbo
     alone = np.setdiff1d(np.arange(m), pa)
     np.testing.assert_array_equal(got_ok[alone], ok[alone])  # no neighbours: untouched
     assert want_ok[pa].any() and (~want_ok[pa] & wall_ok[pa]).any()  # both kinds occur
+
+
+def test_clashes_with_neighbours_are_the_steps_with_a_negative_gap_to_a_valid_neighbour():
+    from crowdwalk.crowd.conflicts import clashes_with_neighbours
+    from crowdwalk.crowd.steering import Neighbours
+
+    rng = np.random.default_rng(5)
+    m, k = 40, 7
+    shape = BodyShape.from_axes(rng.uniform(0.15, 0.2, (m, k)).ravel(),
+                                rng.uniform(0.2, 0.26, (m, k)).ravel()).packed().reshape(m, k, 3)
+    start = rng.uniform(0, 3, (m, 2))
+    now = start[:, None] + rng.normal(0, 0.5, (m, k, 2))
+    nbs = Neighbours(valid=rng.random((m, k)) < 0.7, now=now,
+                     end=now + rng.normal(0, 0.2, (m, k, 2)), velocity=np.zeros((m, k, 2)),
+                     radius=shape[..., 0], remaining=rng.uniform(0, 0.5, (m, k)),
+                     yaw_now=rng.uniform(-3, 3, (m, k)), yaw_end=rng.uniform(-3, 3, (m, k)),
+                     shape=shape)
+    rows = np.flatnonzero(rng.random(m) < 0.8)
+    own = shape[rows, 0]
+    kw = dict(start=start[rows], end=start[rows] + rng.normal(0, 0.3, (rows.size, 2)),
+              duration=rng.uniform(0.3, 0.6, rows.size), elapsed=rng.uniform(0, 0.1, rows.size),
+              yaw=rng.uniform(-3, 3, rows.size), yaw_end=rng.uniform(-3, 3, rows.size),
+              shape=np.column_stack([own, 0.8 * own, np.full(rows.size, 0.05)]))
+    got = clashes_with_neighbours(nbs, rows, **kw)
+    pa, pk = np.nonzero(nbs.valid[rows])  # every (decider, valid neighbour) pair at once
+    nb = rows[pa]
+    gaps = body_gaps(pa, a_start=kw["start"], a_yaw0=kw["yaw"], a_end=kw["end"][:, None],
+                     a_yaw1=kw["yaw_end"][:, None], a_duration=kw["duration"][:, None],
+                     a_elapsed=kw["elapsed"], a_shape=kw["shape"], b_now=nbs.now[nb, pk],
+                     b_yaw_now=nbs.yaw_now[nb, pk], b_end=nbs.end[nb, pk],
+                     b_yaw_end=nbs.yaw_end[nb, pk], b_remaining=nbs.remaining[nb, pk],
+                     b_shape=shape[nb, pk])[0][:, 0]
+    want = np.zeros(rows.size, bool)
+    np.logical_or.at(want, pa, gaps < 0.0)
+    np.testing.assert_array_equal(got, want)
+    assert want.any() and not want.all()
