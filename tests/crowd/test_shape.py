@@ -245,3 +245,31 @@ def test_clashes_with_neighbours_are_the_steps_with_a_negative_gap_to_a_valid_ne
     np.logical_or.at(want, pa, gaps < 0.0)
     np.testing.assert_array_equal(got, want)
     assert want.any() and not want.all()
+
+
+def test_clear_runs_decides_touching_bodies_as_the_exact_gaps_do():
+    # neighbours within a few ulp of touching (where the quick norms of clear_runs could
+    # round to the other side): its signs are still body_gaps' (the exact norms')
+    rng = np.random.default_rng(8)
+    m = 4000
+    shape = BodyShape.from_axes(np.full(m, 0.18), np.where(np.arange(m) % 2, 0.22, 0.18))
+    packed = shape.packed()
+    angle = rng.uniform(-np.pi, np.pi, m)
+    along = np.column_stack([np.cos(angle), np.sin(angle)])
+    start = rng.uniform(-50, 50, (m, 2))
+    end = start + 0.3 * along
+    # centre discs a few ulp from touching (about 1 in 200 is decided the other way by
+    # sqrt(x x + y y) than by hypot)
+    touch = packed[:, 0] * 2 + rng.uniform(-3e-16, 3e-16, m)
+    b_now = end + touch[:, None] * np.column_stack([-along[:, 1], along[:, 0]])
+    kw = dict(a_start=start, a_yaw0=angle, a_end=end[:, None], a_yaw1=angle[:, None],
+              a_duration=np.full((m, 1), 0.5), a_elapsed=np.zeros(m), a_shape=packed,
+              b_now=b_now, b_yaw_now=angle, b_end=b_now, b_yaw_end=angle,
+              b_remaining=np.zeros(m), b_shape=packed)
+    pa = np.arange(m)
+    gaps, centre_gaps = body_gaps(pa, **kw)
+    ok, centre_ok = np.ones((m, 1), bool), np.ones((m, 1), bool)
+    clear_runs(pa, **kw, runs=1, ok=ok, centre_ok=centre_ok)
+    np.testing.assert_array_equal(ok[:, 0], gaps[:, 0] >= 0.0)
+    np.testing.assert_array_equal(centre_ok[:, 0], centre_gaps[:, 0] >= 0.0)
+    assert ok.any() and not ok.all()  # both sides of touching occur

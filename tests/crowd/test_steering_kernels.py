@@ -29,3 +29,19 @@ def test_wrap_and_segment_distance_give_numpys_values():
     got = [_segments(*q.ravel()) for q in p]
     np.testing.assert_array_equal(got, want)
     assert (want == 0.0).any() and (want > 0.0).any()  # crossing and apart both occur
+
+
+def test_the_crowd_kernel_cache_is_stamped_with_the_crowd_sources():
+    # the steering kernels call clearance's and shape's: importing crowdwalk.crowd cleared
+    # its numba cache unless the stamp (planners.kernel_cache) matched every crowd source
+    import os
+    from pathlib import Path
+
+    import crowdwalk.crowd
+    from planners.kernel_cache import STAMP, cache_dir, sources_digest
+
+    package = Path(crowdwalk.crowd.__file__).resolve().parent
+    directory = cache_dir(package)
+    if directory is None or not os.access(directory, os.W_OK):
+        return  # numba caches nothing here
+    assert (directory / STAMP).read_text().strip() == sources_digest(package)
