@@ -123,7 +123,7 @@ def _shoulders(a, yaw_end, position, ends, yaw, shape, dist, ox, oy, cell, near,
     discs keep their radius (widened for the turn to ``yaw_end`` (C,) [rad]) from the
     walls at the step's end and halfway, or do not come closer than they are now; tested
     only where the centre's clearance ``near`` (C, L) [m] is within the outline's reach
-    (steering._shoulders_clear)."""
+    (clearance grows by at most the distance moved)."""
     n_c, n_l = near.shape
     offset = shape[a, 2]
     reach = shape[a, 1] + 2 * offset
@@ -165,7 +165,7 @@ def _blocked(a, yaw_end, pairs, timed, position, yaw, ends, shape, need, dist, o
              nb_yaw_end, nb_remaining, nb_shape, ok, centre_ok):
     """Row ``a``'s candidate steps clear of the walls and its ``pairs`` neighbours, the
     torso turning to ``yaw_end`` (C,): its rows of ``ok`` and ``centre_ok`` (m, J) (the
-    centre discs alone; steering.choose_steps' ``clear``)."""
+    centre discs alone, which no facing can beat)."""
     n_c, n_l = near.shape[1], near.shape[2]
     _shoulders(a, yaw_end, position, ends, yaw, shape, dist, ox, oy, cell, near[a],
                wall_ok[a], ok[a])
