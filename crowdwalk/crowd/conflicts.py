@@ -13,7 +13,7 @@ import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
-from crowdwalk.crowd.shape import _gaps, body_gaps
+from crowdwalk.crowd.shape import FAR_MARGIN, _gaps, _segment_distance, body_gaps
 from crowdwalk.crowd.steering import Neighbours
 
 __all__ = ["clashes_with_neighbours", "same_tick_yielders"]
@@ -46,7 +46,10 @@ def _clashes(rows, valid, start, yaw, end, yaw_end, duration, elapsed, shape, nb
     """``clash`` (k,): whether the step of each of the k deciders at ``rows`` of the
     neighbour arrays (m, K, ...) comes closer than touching to one of its ``valid``
     neighbours (:func:`~crowdwalk.crowd.shape.body_gaps` of the step against them, one
-    decider at a time; the a-arrays have k rows, one candidate each)."""
+    decider at a time; the a-arrays have k rows, one candidate each). A neighbour whose
+    sweep keeps clear of the decider's by the two holding discs (``FAR_MARGIN`` to
+    spare) is not evaluated: ``body_gaps`` gives it a gap >= 0 then (the centres'
+    approach is at least the sweeps' distance)."""
     n_k = valid.shape[1]
     pa = np.zeros(n_k, np.int64)
     b_now, b_end = np.empty((n_k, 2)), np.empty((n_k, 2))
@@ -56,13 +59,21 @@ def _clashes(rows, valid, start, yaw, end, yaw_end, duration, elapsed, shape, nb
     no = np.ones((0, 0), np.bool_)
     for q in range(rows.shape[0]):
         r = rows[q]
+        hold_a = max(shape[q, 0], shape[q, 2] + shape[q, 1])
         n = 0
         for k in range(n_k):
-            if valid[r, k]:
-                b_now[n], b_end[n], b_shape[n] = nb_now[r, k], nb_end[r, k], nb_shape[r, k]
-                b_yaw_now[n], b_yaw_end[n] = nb_yaw_now[r, k], nb_yaw_end[r, k]
-                b_remaining[n] = nb_remaining[r, k]
-                n += 1
+            if not valid[r, k]:
+                continue
+            bound = hold_a + max(nb_shape[r, k, 0], nb_shape[r, k, 2] + nb_shape[r, k, 1])
+            far = _segment_distance(start[q, 0], start[q, 1], end[q, 0, 0], end[q, 0, 1],
+                                    nb_now[r, k, 0], nb_now[r, k, 1], nb_end[r, k, 0],
+                                    nb_end[r, k, 1], False)
+            if far - bound >= FAR_MARGIN:
+                continue
+            b_now[n], b_end[n], b_shape[n] = nb_now[r, k], nb_end[r, k], nb_shape[r, k]
+            b_yaw_now[n], b_yaw_end[n] = nb_yaw_now[r, k], nb_yaw_end[r, k]
+            b_remaining[n] = nb_remaining[r, k]
+            n += 1
         if n == 0:
             continue
         one = slice(q, q + 1)
