@@ -89,71 +89,80 @@ def _at_least(dist, least, ox, oy, cell, x, y, floor):
 @nb.njit(cache=True, nogil=True)
 def _step_walls(dist, least, ox, oy, cell, position, stance, ends, dirs, lengths, radius,
                 reach, foot_clearance, wall_ok, near):
-    m, n_c, n_l = wall_ok.shape
+    for a in range(wall_ok.shape[0]):
+        _walls_of(a, dist, least, ox, oy, cell, position, stance, ends, dirs, lengths, radius,
+                  reach, foot_clearance, wall_ok, near)
+
+
+@nb.njit(cache=True, nogil=True)
+def _walls_of(a, dist, least, ox, oy, cell, position, stance, ends, dirs, lengths, radius,
+              reach, foot_clearance, wall_ok, near):
+    """:meth:`ClearanceField.step_walls` of walker (row) ``a``: its rows of ``wall_ok``
+    and ``near`` (m, C, L)."""
+    _, n_c, n_l = wall_ok.shape
     ny, nx = dist.shape
-    for a in range(m):
-        px, py = position[a, 0], position[a, 1]
-        r = min(radius[a], _bilinear(dist, ox, oy, cell, px, py) - 1e-6)
-        # every point a candidate samples (ends, midpoints, quarters, footholds) lies in
-        # the box of the ends, the position and the footholds: where each block under
-        # that box is at least the largest floor, every sample is +inf (not sampled), so
-        # every candidate is clear, as the tests below would find it
-        x0 = x1 = px
-        y0 = y1 = py
-        top = max(max(r, reach[a]), foot_clearance)
-        for c in range(n_c):
-            for l in range(n_l):
-                ex, ey = ends[a, c, l, 0], ends[a, c, l, 1]
+    px, py = position[a, 0], position[a, 1]
+    r = min(radius[a], _bilinear(dist, ox, oy, cell, px, py) - 1e-6)
+    # every point a candidate samples (ends, midpoints, quarters, footholds) lies in
+    # the box of the ends, the position and the footholds: where each block under
+    # that box is at least the largest floor, every sample is +inf (not sampled), so
+    # every candidate is clear, as the tests below would find it
+    x0 = x1 = px
+    y0 = y1 = py
+    top = max(max(r, reach[a]), foot_clearance)
+    for c in range(n_c):
+        for l in range(n_l):
+            ex, ey = ends[a, c, l, 0], ends[a, c, l, 1]
+            fx = stance[a, 0] + lengths[l] * dirs[a, c, 0]
+            fy = stance[a, 1] + lengths[l] * dirs[a, c, 1]
+            x0, x1 = min(x0, min(ex, fx)), max(x1, max(ex, fx))
+            y0, y1 = min(y0, min(ey, fy)), max(y1, max(ey, fy))
+            dx, dy = ex - px, ey - py
+            top = max(top, r + 0.25 * np.sqrt(dx * dx + dy * dy))
+    r0, r1, c0, c1 = (y0 - oy) / cell, (y1 - oy) / cell, (x0 - ox) / cell, (x1 - ox) / cell
+    clear = r0 >= 0.0 and r1 < ny - 1 and c0 >= 0.0 and c1 < nx - 1
+    if clear:
+        for bi in range(int(r0) // BLOCK, int(r1) // BLOCK + 1):
+            for bj in range(int(c0) // BLOCK, int(c1) // BLOCK + 1):
+                if not least[bi, bj] >= top:
+                    clear = False
+                    break
+            if not clear:
+                break
+    if clear:
+        wall_ok[a] = True
+        near[a] = np.inf
+        return
+    for c in range(n_c):
+        blocked = False
+        for l in range(n_l):
+            if blocked:  # a shorter step is blocked: so is this one (not tested)
+                wall_ok[a, c, l] = False
+                near[a, c, l] = np.inf
+                continue
+            ex, ey = ends[a, c, l, 0], ends[a, c, l, 1]
+            at_end = _at_least(dist, least, ox, oy, cell, ex, ey, max(r, reach[a]))
+            dx, dy = ex - px, ey - py
+            span = 0.25 * np.sqrt(dx * dx + dy * dy)
+            half = _at_least(dist, least, ox, oy, cell, 0.5 * (ex + px), 0.5 * (ey + py),
+                             max(r + span, reach[a]))
+            # and at the sweep's quarters where the body passes near a wall (the
+            # clearance changes by at most the distance moved)
+            if half < r + span:
+                q1 = _bilinear(dist, ox, oy, cell, 0.75 * px + 0.25 * ex,
+                               0.75 * py + 0.25 * ey)
+                q3 = _bilinear(dist, ox, oy, cell, 0.25 * px + 0.75 * ex,
+                               0.25 * py + 0.75 * ey)
+                half = min(half, min(q1, q3))
+            ok = at_end >= r and half >= r
+            if ok:  # the new foothold itself must lie inside the walkable area
                 fx = stance[a, 0] + lengths[l] * dirs[a, c, 0]
                 fy = stance[a, 1] + lengths[l] * dirs[a, c, 1]
-                x0, x1 = min(x0, min(ex, fx)), max(x1, max(ex, fx))
-                y0, y1 = min(y0, min(ey, fy)), max(y1, max(ey, fy))
-                dx, dy = ex - px, ey - py
-                top = max(top, r + 0.25 * np.sqrt(dx * dx + dy * dy))
-        r0, r1, c0, c1 = (y0 - oy) / cell, (y1 - oy) / cell, (x0 - ox) / cell, (x1 - ox) / cell
-        clear = r0 >= 0.0 and r1 < ny - 1 and c0 >= 0.0 and c1 < nx - 1
-        if clear:
-            for bi in range(int(r0) // BLOCK, int(r1) // BLOCK + 1):
-                for bj in range(int(c0) // BLOCK, int(c1) // BLOCK + 1):
-                    if not least[bi, bj] >= top:
-                        clear = False
-                        break
-                if not clear:
-                    break
-        if clear:
-            wall_ok[a] = True
-            near[a] = np.inf
-            continue
-        for c in range(n_c):
-            blocked = False
-            for l in range(n_l):
-                if blocked:  # a shorter step is blocked: so is this one (not tested)
-                    wall_ok[a, c, l] = False
-                    near[a, c, l] = np.inf
-                    continue
-                ex, ey = ends[a, c, l, 0], ends[a, c, l, 1]
-                at_end = _at_least(dist, least, ox, oy, cell, ex, ey, max(r, reach[a]))
-                dx, dy = ex - px, ey - py
-                span = 0.25 * np.sqrt(dx * dx + dy * dy)
-                half = _at_least(dist, least, ox, oy, cell, 0.5 * (ex + px), 0.5 * (ey + py),
-                                 max(r + span, reach[a]))
-                # and at the sweep's quarters where the body passes near a wall (the
-                # clearance changes by at most the distance moved)
-                if half < r + span:
-                    q1 = _bilinear(dist, ox, oy, cell, 0.75 * px + 0.25 * ex,
-                                   0.75 * py + 0.25 * ey)
-                    q3 = _bilinear(dist, ox, oy, cell, 0.25 * px + 0.75 * ex,
-                                   0.25 * py + 0.75 * ey)
-                    half = min(half, min(q1, q3))
-                ok = at_end >= r and half >= r
-                if ok:  # the new foothold itself must lie inside the walkable area
-                    fx = stance[a, 0] + lengths[l] * dirs[a, c, 0]
-                    fy = stance[a, 1] + lengths[l] * dirs[a, c, 1]
-                    ok = _at_least(dist, least, ox, oy, cell, fx, fy,
-                                   foot_clearance) >= foot_clearance
-                wall_ok[a, c, l] = ok
-                near[a, c, l] = min(at_end, half)
-                blocked = not ok
+                ok = _at_least(dist, least, ox, oy, cell, fx, fy,
+                               foot_clearance) >= foot_clearance
+            wall_ok[a, c, l] = ok
+            near[a, c, l] = min(at_end, half)
+            blocked = not ok
 
 
 @dataclass(frozen=True)

@@ -9,10 +9,11 @@ its own committed sweep (:func:`crowdwalk.crowd.shape.body_gaps`).
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
-from crowdwalk.crowd.shape import body_gaps
+from crowdwalk.crowd.shape import FAR_MARGIN, _gaps, _segment_distance, body_gaps
 from crowdwalk.crowd.steering import Neighbours
 
 __all__ = ["clashes_with_neighbours", "same_tick_yielders"]
@@ -26,21 +27,63 @@ def clashes_with_neighbours(neighbours: Neighbours, rows: np.ndarray, *, start: 
     from ``start`` to ``end`` (k, 2) [m] over ``duration`` (k,) [s], ``elapsed`` (k,) [s]
     of it already gone, turning from ``yaw`` to ``yaw_end`` (k,) [rad], of outline
     ``shape`` (k, 3) — come closer to a neighbour than touching."""
-    valid = neighbours.valid[rows]
-    pa, pk = np.nonzero(valid)
+    f = np.ascontiguousarray
     clash = np.zeros(rows.size, bool)
-    if pa.size == 0:
+    if rows.size == 0 or neighbours.valid.shape[1] == 0:
         return clash
-    nb, nr = rows[pa], pk
     yaw_now, yaw_end_nb = neighbours.yaws()
-    gaps = body_gaps(pa, a_start=start, a_yaw0=yaw, a_end=end[:, None, :],
-                     a_yaw1=yaw_end[:, None], a_duration=duration[:, None], a_elapsed=elapsed,
-                     a_shape=shape, b_now=neighbours.now[nb, nr], b_yaw_now=yaw_now[nb, nr],
-                     b_end=neighbours.end[nb, nr], b_yaw_end=yaw_end_nb[nb, nr],
-                     b_remaining=neighbours.remaining[nb, nr],
-                     b_shape=neighbours.outlines()[nb, nr])[0][:, 0]
-    np.logical_or.at(clash, pa, gaps < 0.0)
+    _clashes(f(rows, np.int64), f(neighbours.valid, bool), f(start, float), f(yaw, float),
+             f(end, float)[:, None, :], f(yaw_end, float)[:, None], f(duration, float)[:, None],
+             f(elapsed, float), f(shape, float), f(neighbours.now, float), f(yaw_now, float),
+             f(neighbours.end, float), f(yaw_end_nb, float), f(neighbours.remaining, float),
+             f(neighbours.outlines(), float), clash)
     return clash
+
+
+@nb.njit(cache=True, nogil=True)
+def _clashes(rows, valid, start, yaw, end, yaw_end, duration, elapsed, shape, nb_now,
+             nb_yaw_now, nb_end, nb_yaw_end, nb_remaining, nb_shape, clash):
+    """``clash`` (k,): whether the step of each of the k deciders at ``rows`` of the
+    neighbour arrays (m, K, ...) comes closer than touching to one of its ``valid``
+    neighbours (:func:`~crowdwalk.crowd.shape.body_gaps` of the step against them, one
+    decider at a time; the a-arrays have k rows, one candidate each). A neighbour whose
+    sweep keeps clear of the decider's by the two holding discs (``FAR_MARGIN`` to
+    spare) is not evaluated: ``body_gaps`` gives it a gap >= 0 then (the centres'
+    approach is at least the sweeps' distance)."""
+    n_k = valid.shape[1]
+    pa = np.zeros(n_k, np.int64)
+    b_now, b_end = np.empty((n_k, 2)), np.empty((n_k, 2))
+    b_yaw_now, b_yaw_end, b_remaining = np.empty(n_k), np.empty(n_k), np.empty(n_k)
+    b_shape = np.empty((n_k, 3))
+    out, out_centre = np.empty((n_k, 1)), np.empty((n_k, 1))
+    no = np.ones((0, 0), np.bool_)
+    for q in range(rows.shape[0]):
+        r = rows[q]
+        hold_a = max(shape[q, 0], shape[q, 2] + shape[q, 1])
+        n = 0
+        for k in range(n_k):
+            if not valid[r, k]:
+                continue
+            bound = hold_a + max(nb_shape[r, k, 0], nb_shape[r, k, 2] + nb_shape[r, k, 1])
+            far = _segment_distance(start[q, 0], start[q, 1], end[q, 0, 0], end[q, 0, 1],
+                                    nb_now[r, k, 0], nb_now[r, k, 1], nb_end[r, k, 0],
+                                    nb_end[r, k, 1], False)
+            if far - bound >= FAR_MARGIN:
+                continue
+            b_now[n], b_end[n], b_shape[n] = nb_now[r, k], nb_end[r, k], nb_shape[r, k]
+            b_yaw_now[n], b_yaw_end[n] = nb_yaw_now[r, k], nb_yaw_end[r, k]
+            b_remaining[n] = nb_remaining[r, k]
+            n += 1
+        if n == 0:
+            continue
+        one = slice(q, q + 1)
+        _gaps(pa[:n], start[one], yaw[one], end[one], yaw_end[one], duration[one],
+              elapsed[one], shape[one], b_now[:n], b_yaw_now[:n], b_end[:n], b_yaw_end[:n],
+              b_remaining[:n], b_shape[:n], 0, no, no, out[:n], out_centre[:n])
+        for p in range(n):
+            if out[p, 0] < 0.0:
+                clash[q] = True
+                break
 
 
 def same_tick_yielders(*, agent: np.ndarray, start: np.ndarray, end: np.ndarray,

@@ -84,50 +84,59 @@ def disc_centres(xy: np.ndarray, yaw: np.ndarray, offset: np.ndarray) -> np.ndar
 
 
 @nb.njit(cache=True, nogil=True)
-def _closest(rx, ry, wx, wy, span):
-    """min over s in [0, span] of |r + w s|."""
+def _closest(rx, ry, wx, wy, span, exact=True):
+    """min over s in [0, span] of |r + w s|: ``hypot`` of the nearest offset, or with
+    ``exact`` False its ``sqrt(x x + y y)`` (a few ulp apart, about twice as fast; for
+    decisions that fall back on the exact value near their threshold, see
+    :data:`SURE`)."""
     ww = wx * wx + wy * wy
     s = 0.0
     if ww > 0.0:
         s = min(max(-(rx * wx + ry * wy) / ww, 0.0), span)
-    return np.hypot(rx + s * wx, ry + s * wy)
+    x, y = rx + s * wx, ry + s * wy
+    return np.hypot(x, y) if exact else np.sqrt(x * x + y * y)
 
 
 @nb.njit(cache=True, nogil=True)
-def _approach(ax, ay, avx, avy, ta, bx, by, bvx, bvy, tb):
+def _approach(ax, ay, avx, avy, ta, bx, by, bvx, bvy, tb, exact=True):
     """Closest approach [m] of two points moving from now (time 0) with velocities ``av``
-    for ``ta`` s and ``bv`` for ``tb`` s, then standing (exact: piecewise linear)."""
+    for ``ta`` s and ``bv`` for ``tb`` s, then standing (exact: piecewise linear; the
+    norms as :func:`_closest` ``exact``)."""
     t1, t2 = min(ta, tb), max(ta, tb)
     rx, ry = ax - bx, ay - by
     wx, wy = avx - bvx, avy - bvy
-    d = _closest(rx, ry, wx, wy, t1)
+    d = _closest(rx, ry, wx, wy, t1, exact)
     rx += t1 * wx
     ry += t1 * wy
     if ta < tb:
         wx, wy = -bvx, -bvy
     else:
         wx, wy = avx, avy
-    return min(d, _closest(rx, ry, wx, wy, t2 - t1))
+    return min(d, _closest(rx, ry, wx, wy, t2 - t1, exact))
 
 
 @nb.njit(cache=True, nogil=True)
-def _segment_distance(ax, ay, bx, by, cx, cy, dx, dy):
+def _segment_distance(ax, ay, bx, by, cx, cy, dx, dy, exact=True):
     """Least distance [m] between the segments ab and cd (0 where they cross or touch,
-    or are collinear)."""
+    or are collinear; the norms as :func:`_closest` ``exact``)."""
     o1 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
     o2 = (bx - ax) * (dy - ay) - (by - ay) * (dx - ax)
     o3 = (dx - cx) * (ay - cy) - (dy - cy) * (ax - cx)
     o4 = (dx - cx) * (by - cy) - (dy - cy) * (bx - cx)
     if o1 * o2 <= 0.0 and o3 * o4 <= 0.0:
         return 0.0
-    return min(min(_closest(cx - ax, cy - ay, dx - cx, dy - cy, 1.0),
-                   _closest(cx - bx, cy - by, dx - cx, dy - cy, 1.0)),
-               min(_closest(ax - cx, ay - cy, bx - ax, by - ay, 1.0),
-                   _closest(ax - dx, ay - dy, bx - ax, by - ay, 1.0)))
+    return min(min(_closest(cx - ax, cy - ay, dx - cx, dy - cy, 1.0, exact),
+                   _closest(cx - bx, cy - by, dx - cx, dy - cy, 1.0, exact)),
+               min(_closest(ax - cx, ay - cy, bx - ax, by - ay, 1.0, exact),
+                   _closest(ax - dx, ay - dy, bx - ax, by - ay, 1.0, exact)))
 
 
 #: What a run's far test keeps below its bound [m] (covers the rounding, ~1e-13 m).
 FAR_MARGIN = 1e-9
+#: :func:`_clear_of_a` decides on the quick norms (``exact=False``) where they are
+#: farther than this from a decision's threshold [m], else on the exact ones: the two
+#: differ by a few ulp (~1e-15 m at these distances), so the decisions are the exact ones.
+SURE = 1e-10
 
 _SIDE = (0.0, 1.0, -1.0)
 
@@ -290,15 +299,18 @@ def _gaps(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now, 
 
 
 @nb.njit(cache=True, nogil=True)
-def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
+def _clear_of_a(i, pairs, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
                 b_yaw_now, b_end, b_yaw_end, b_remaining, b_shape, runs, ok, centre_ok):
-    """:func:`_gaps` with runs, keeping the signs only: each A's rows of ``ok`` and
-    ``centre_ok`` (m, J) become "shorter than the run's first blocked length" (the
-    reduction over A's neighbours of ``_gaps``' negative entries). A clear entry's
-    disc pairs are skipped where a disc of one body keeps clear of the other's holding
-    disc about its centre (every disc of a body, widened for its turn, lies within its
-    shoulder offset of the centre's track): the same signs, fewer disc pairs."""
-    npairs, nj = pa.shape[0], ok.shape[1]
+    """:func:`_gaps` with runs for one A (row ``i`` of the ``a_*`` arrays) against its
+    neighbours ``pairs`` (rows of the ``b_*`` arrays, in order), keeping the signs only:
+    A's rows of ``ok`` and ``centre_ok`` (m, J) become "shorter than the run's first
+    blocked length" (the reduction over A's neighbours of ``_gaps``' negative entries).
+    A clear entry's disc pairs are skipped where a disc of one body keeps clear of the
+    other's holding disc about its centre (every disc of a body, widened for its turn,
+    lies within its shoulder offset of the centre's track): the same signs, fewer disc
+    pairs. Distances are decided on the quick norms unless within :data:`SURE` of a
+    threshold (then on the exact ones): the same signs, about half the time."""
+    nj = ok.shape[1]
     bx = np.empty(3)
     by = np.empty(3)
     bvx = np.empty(3)
@@ -308,11 +320,9 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
     stop_c = np.empty(n_runs, np.int64)
     width = np.empty(n_runs)
     far = 0.0
-    for p in range(npairs):
-        i = pa[p]
-        if p == 0 or i != pa[p - 1]:
-            _run_limits(i, a_start, a_end, ok, centre_ok, runs, stop, stop_c, width)
-        ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
+    _run_limits(i, a_start, a_end, ok, centre_ok, runs, stop, stop_c, width)
+    ra, ras, sa = a_shape[i, 0], a_shape[i, 1], a_shape[i, 2]
+    for p in pairs:
         rb, rbs, sb = b_shape[p, 0], b_shape[p, 1], b_shape[p, 2]
         bound = max(ra, sa + ras) + max(rb, sb + rbs)
         tb, bend_b = _discs_of_b(p, b_now, b_yaw_now, b_end, b_yaw_end, b_remaining, sb, bx, by,
@@ -324,22 +334,27 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
             if l >= stop_c[c]:
                 continue
             if l == 0:
-                far = _segment_distance(
-                    a_start[i, 0], a_start[i, 1], a_end[i, j + runs - 1, 0],
-                    a_end[i, j + runs - 1, 1], b_now[p, 0], b_now[p, 1], b_end[p, 0],
-                    b_end[p, 1]) - width[c]
+                sx, sy = a_start[i, 0], a_start[i, 1]
+                lx, ly = a_end[i, j + runs - 1, 0], a_end[i, j + runs - 1, 1]
+                far = _segment_distance(sx, sy, lx, ly, b_now[p, 0], b_now[p, 1],
+                                        b_end[p, 0], b_end[p, 1], False) - width[c]
+                if abs(far - bound - FAR_MARGIN) < SURE:
+                    far = _segment_distance(sx, sy, lx, ly, b_now[p, 0], b_now[p, 1],
+                                            b_end[p, 0], b_end[p, 1]) - width[c]
             if far - bound >= FAR_MARGIN:
                 continue
             ta, f, ex, ey, ax0, ay0, avx, avy = _centre_motion(i, j, a_start, a_end, a_dur,
                                                                a_elapsed)
-            d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
+            d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb, False)
+            if abs(d - ra - rb) < SURE or abs(d - bound) < SURE:
+                d = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0], tb)
             if d - ra - rb < 0.0:
                 stop_c[c] = l
             if l >= stop[c]:
                 continue
             if d >= bound:
                 continue
-            best = d - ra - rb
+            best = d - ra - rb  # only its sign counts from here
             if best < 0.0:
                 stop[c] = l
                 continue
@@ -358,8 +373,17 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
                     cvx = (ex - ku * sa * sn1 - cx0) / ta
                     cvy = (ey + ku * sa * cs1 - cy0) / ta
                 # disc u against B's holding disc: clear of all of B's discs
-                e = d if u == 0 else _approach(cx0, cy0, cvx, cvy, ta, bx[0], by[0],
-                                               bvx[0], bvy[0], tb)
+                if u == 0:
+                    e = d
+                    if abs(e - rad_a - hold_b - FAR_MARGIN) < SURE:
+                        e = _approach(ax0, ay0, avx, avy, ta, bx[0], by[0], bvx[0], bvy[0],
+                                      tb)
+                else:
+                    e = _approach(cx0, cy0, cvx, cvy, ta, bx[0], by[0], bvx[0], bvy[0], tb,
+                                  False)
+                    if abs(e - rad_a - hold_b - FAR_MARGIN) < SURE:
+                        e = _approach(cx0, cy0, cvx, cvy, ta, bx[0], by[0], bvx[0], bvy[0],
+                                      tb)
                 if e - rad_a - hold_b >= FAR_MARGIN:
                     continue
                 for v in range(3):
@@ -367,17 +391,32 @@ def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b
                         continue
                     rad_b = rb if v == 0 else rbs + bend_b
                     g = _approach(cx0, cy0, cvx, cvy, ta, bx[v], by[v], bvx[v], bvy[v],
-                                  tb) - rad_a - rad_b
+                                  tb, False) - rad_a - rad_b
+                    if abs(g) < SURE:
+                        g = _approach(cx0, cy0, cvx, cvy, ta, bx[v], by[v], bvx[v], bvy[v],
+                                      tb) - rad_a - rad_b
                     best = min(best, g)
                 if best < 0.0:
                     break
             if best < 0.0:
                 stop[c] = l
-        if p == npairs - 1 or pa[p + 1] != i:  # A's last neighbour: its rows
-            for c in range(n_runs):
-                for l in range(runs):
-                    ok[i, c * runs + l] = l < stop[c]
-                    centre_ok[i, c * runs + l] = l < stop_c[c]
+    for c in range(n_runs):
+        for l in range(runs):
+            ok[i, c * runs + l] = l < stop[c]
+            centre_ok[i, c * runs + l] = l < stop_c[c]
+
+
+@nb.njit(cache=True, nogil=True)
+def _clear_runs(pa, a_start, a_yaw0, a_end, a_yaw1, a_dur, a_elapsed, a_shape, b_now,
+                b_yaw_now, b_end, b_yaw_end, b_remaining, b_shape, runs, ok, centre_ok):
+    """:func:`_clear_of_a` for each A of ``pa`` (P,) (each A's neighbours together)."""
+    first = 0
+    for p in range(pa.shape[0]):
+        if p == pa.shape[0] - 1 or pa[p + 1] != pa[p]:  # A's last neighbour
+            _clear_of_a(pa[p], np.arange(first, p + 1), a_start, a_yaw0, a_end, a_yaw1,
+                        a_dur, a_elapsed, a_shape, b_now, b_yaw_now, b_end, b_yaw_end,
+                        b_remaining, b_shape, runs, ok, centre_ok)
+            first = p + 1
 
 
 def body_gaps(pa: np.ndarray, *, a_start: np.ndarray, a_yaw0: np.ndarray, a_end: np.ndarray,

@@ -26,8 +26,10 @@ al. 2014), and a small right-hand bias breaks the left/right symmetry so opposin
 form lanes instead of deadlocking (Helbing & Molnár 1995 observe the same symmetry
 breaking in real crowds).
 
-Everything is vectorised over (deciding agents × candidate directions × step lengths ×
-neighbours); no Python loop over agents.
+The work is two compiled kernels over the deciding agents' rows
+(:mod:`~crowdwalk.crowd.steering_kernels`: the candidates' clear lengths, then their
+utilities and the choice), which hold no GIL, so the crowd's row threads steer on every
+core at once; no Python loop over agents.
 """
 
 from __future__ import annotations
@@ -37,9 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.geometry import distance, point_segment_distance, segment_distance
-from crowdwalk.crowd.shape import clear_runs, disc_centres
 from crowdwalk.crowd.speed import GapSteps
+from crowdwalk.crowd.steering_kernels import step_limits, step_utility
 from crowdwalk.errors import invalid
 
 __all__ = ["SteeringParams", "Neighbours", "StepChoice", "choose_steps"]
@@ -307,258 +308,51 @@ def choose_steps(
     if m == 0:
         return StepChoice(np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool), np.zeros(0),
                           np.zeros(0))
-    yaw = heading if yaw is None else np.asarray(yaw, dtype=float)
+    f = np.ascontiguousarray
+    position, stance = f(position, float), f(stance, float)
+    heading, radius = f(heading, float), f(radius, float)
+    nominal_step = f(nominal_step, float)
+    yaw = heading if yaw is None else f(yaw, float)
     shape = (np.column_stack([radius, radius, np.zeros(m)]) if shape is None
-             else np.asarray(shape, dtype=float))
-    speed = 2.0 * nominal_step if speed is None else np.asarray(speed, dtype=float)
-    lengths = np.asarray(params.step_lengths)  # (L,)
-    # candidates: fixed offsets from the route direction, plus keeping the current heading
-    # (so a walker going straight keeps its exact line and its footstep plan)
-    route_angle = np.arctan2(route_direction[:, 1], route_direction[:, 0])
-    keep = (heading - route_angle + np.pi) % (2 * np.pi) - np.pi
-    offsets = np.concatenate([np.broadcast_to(np.deg2rad(params.offsets_deg), (m, len(
-        params.offsets_deg))), keep[:, None]], axis=1)  # (m, C)
-    dirs = _rotate(route_direction[:, None, :], offsets)  # (m, C, 2)
-    ends = stance[:, None, None, :] + 0.5 * lengths[None, None, :, None] * dirs[:, :, None, :]
-    # (m, C, L, 2): body position at the end of a step of each length
-    cand_heading = np.arctan2(dirs[..., 1], dirs[..., 0])  # (m, C)
-
-    def facing(turned) -> np.ndarray:  # (m, C) torso facing at the step's end
-        turn = cand_heading + turned - yaw[:, None]
-        return yaw[:, None] + (turn + np.pi) % (2 * np.pi) - np.pi  # unwrapped
-
-    # hard limits: walls (sampled at each length's end point and the sweep's midpoint)
-    # a step may not bring the body closer to a wall than its radius, unless it was
-    # already closer (then it may not get closer still: agents can leave a wall); and at
-    # the sweep's quarters where the body passes near a wall (a straight sweep past a
-    # convex corner dips closest between the samples: RiMEA 6 measured a body edge 1.6 cm
-    # into the inner corner with end and midpoint alone); the new foothold itself must
-    # lie inside the walkable area (one kernel: ClearanceField.step_walls)
-    wall_ok, near = clearance.step_walls(position, stance, ends, dirs, lengths, radius,
-                                         shape[:, 1] + 2 * shape[:, 2],
-                                         params.foot_clearance)
-    # hard limits: swept bodies of neighbours (only those a step could reach)
-    timed = neighbours.remaining is not None and step_time is not None
-    pa = np.zeros(0, dtype=np.int64)
-    if neighbours.valid.shape[1]:
-        need = radius[:, None] + neighbours.radius  # (m, K)
-        if timed:  # the outlines' holding discs
-            nb_shape = neighbours.outlines()
-            need = (np.maximum(shape[:, 0], shape[:, 1] + shape[:, 2])[:, None]
-                    + np.maximum(nb_shape[..., 0], nb_shape[..., 1] + nb_shape[..., 2]))
-        gap0 = point_segment_distance(position[:, None, :], neighbours.now, neighbours.end)
-        reach = distance(ends, position[:, None, None, :]).max(axis=(1, 2))
-        relevant = neighbours.valid & (gap0 - need < reach[:, None] + 1e-9)
-        # the relevant (agent, neighbour) pairs only, not every agent padded to the most
-        # crowded one's count
-        pa, pk = np.nonzero(relevant)  # (P,), agent-major
-    n_c, n_l = dirs.shape[1], lengths.size
-
-    def clear(rows: np.ndarray, yaw_end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(r, C, L) bool: the steps of ``rows`` (ascending) clear of walls and
-        neighbours, the torsos turning to ``yaw_end`` (m, C); and the same for the
-        centre discs alone (no facing can do better)."""
-        centre = wall_ok[rows]
-        ok = centre & _shoulders_clear(
-            position[rows], ends[rows], yaw=yaw[rows], yaw_end=yaw_end[rows],
-            shape=shape[rows], clearance=clearance,
-            near=near[rows])
-        local = np.full(m, -1)
-        local[rows] = np.arange(rows.size)
-        sel = np.flatnonzero(local[pa] >= 0)
-        if sel.size == 0:
-            return ok, centre
-        qa, qk = pa[sel], pk[sel]
-        centre = centre.copy()
-        if timed:
-            # in time: both outlines move along their sweeps from now on and then stand
-            # (the candidate's body from ``position`` to ``ends`` over the step, its
-            # torso turning from ``yaw`` to ``yaw_end``)
-            dur = np.maximum(lengths[None, :] / speed[:, None], step_time[:, None])
-            nb_yaw, nb_yaw_end = neighbours.yaws()
-            # only a run's lengths up to its first blocked one count (free_lengths): the
-            # kernel stops there (the same result; 2.1 times faster on the 1,000-walker
-            # stadium's calls; scripts/check_identical_runs.py: identical runs)
-            a_ok = np.ones((m, n_c * n_l), bool)
-            a_centre_ok = a_ok.copy()
-            a_ok[rows] = ok.reshape(rows.size, -1)
-            a_centre_ok[rows] = centre.reshape(rows.size, -1)
-            # only the signs are kept, reduced over each walker's neighbours in the
-            # kernel (clear_runs: the signs of body_gaps; identical runs)
-            clear_runs(
-                qa, a_start=position, a_yaw0=yaw, a_end=ends.reshape(m, n_c * n_l, 2),
-                a_yaw1=np.repeat(yaw_end, n_l, axis=1), a_duration=np.tile(dur, (1, n_c)),
-                a_elapsed=np.zeros(m) if lag is None else lag, a_shape=shape,
-                b_now=neighbours.now[qa, qk], b_yaw_now=nb_yaw[qa, qk],
-                b_end=neighbours.end[qa, qk], b_yaw_end=nb_yaw_end[qa, qk],
-                b_remaining=neighbours.remaining[qa, qk], b_shape=nb_shape[qa, qk],
-                runs=n_l, ok=a_ok, centre_ok=a_centre_ok)
-            return (a_ok[rows].reshape(rows.size, n_c, n_l),
-                    a_centre_ok[rows].reshape(rows.size, n_c, n_l))
-        else:
-            q0 = neighbours.now[qa, qk][:, None, None, :]  # (P, 1, 1, 2)
-            q1 = neighbours.end[qa, qk][:, None, None, :]
-            d = segment_distance(position[qa][:, None, None, :], ends[qa], q0, q1)
-            blocked = centre_blocked = d < need[qa, qk][:, None, None]  # (P, C, L)
-        first = np.flatnonzero(np.concatenate([[True], qa[1:] != qa[:-1]]))
-        ok[local[qa[first]]] &= ~np.logical_or.reduceat(blocked, first, axis=0)
-        centre[local[qa[first]]] &= ~np.logical_or.reduceat(centre_blocked, first, axis=0)
-        return ok, centre
-
-    def free_lengths(ok: np.ndarray) -> np.ndarray:  # feasible lengths from the short end
-        n_free = np.cumprod(ok, axis=2).sum(axis=2)
-        return np.where(n_free > 0, lengths[np.maximum(n_free - 1, 0)], 0.0)
-
-    everyone = np.arange(m)
-    yaw_end = facing(0.0)
-    ok, centre = clear(everyone, yaw_end)
-    free = free_lengths(ok)  # (m, C)
-    if timed:
-        # walkers who cannot take their preferred step ahead facing forward, where a
-        # body as narrow as it is deep could, try keeping their facing (a side step or a
-        # step back without turning: shuffling in a queue), then turning their shoulders
-        # by each twist, the way they are turned already (else to the left; the outline
-        # is symmetric): a candidate takes the first facing that lets it step strictly
-        # further than facing forward
-        ahead = np.abs(offsets) <= np.deg2rad(25.0) + 1e-9
-        want = np.minimum(nominal_step, lengths[-1]) - 1e-9
-        narrow = free_lengths(centre)  # no facing steps further
-        rows = np.flatnonzero((np.where(ahead, free, 0.0).max(axis=1) < want)
-                              & (narrow > free + 1e-9).any(axis=1))
-        side = np.where(((yaw - heading + np.pi) % (2 * np.pi) - np.pi) < -1e-3, -1.0, 1.0)
-        options = [np.broadcast_to(yaw[:, None], (m, n_c))] if params.keep_facing else []
-        options += [facing(side[:, None] * phi) for phi in np.deg2rad(params.twists_deg)]
-        for twisted in options if rows.size else ():
-            reach_t = free_lengths(clear(rows, twisted)[0])
-            r_, c_ = np.nonzero(reach_t > free[rows] + 1e-9)
-            free[rows[r_], c_] = reach_t[r_, c_]
-            yaw_end[rows[r_], c_] = twisted[rows[r_], c_]
-    turned = (yaw_end - cand_heading + np.pi) % (2 * np.pi) - np.pi  # (m, C) twist [rad]
-
-    # utility at the end point of the preferred (or longest clear) step
-    use = np.minimum(free, nominal_step[:, None])  # (m, C)
-    if gap is not None:
-        use = np.minimum(use, gap.along(dirs, everyone=True)[1])
-    end = stance[:, None, :] + 0.5 * use[..., None] * dirs  # (m, C, 2)
-    cand = np.concatenate([end, position[:, None, :]], axis=1)  # (m, C+1, 2); last = wait
-    utility = distance(target[:, None, :], cand)
-    if neighbours.valid.shape[1]:
-        # soft terms from the nearest ``soft_neighbours`` (sorted nearest first); the hard
-        # limit above used every neighbour a step could reach
-        ks = params.soft_neighbours
-        nb = Neighbours(*(None if a is None else a[:, :ks] for a in (
-            neighbours.valid, neighbours.now, neighbours.end, neighbours.velocity,
-            neighbours.radius, neighbours.heading)))
-        rr = radius[:, None, None] + nb.radius[:, None, :]
-        gap_end = distance(cand[:, :, None, :], nb.end[:, None, :, :])
-        rep = params.personal_weight * np.exp(-(gap_end - rr) / params.personal_range)
-        if personal_scale is not None:
-            rep = rep * np.asarray(personal_scale, float)[:, None, None]
-        # anticipation: the closest approach within ``anticipation`` seconds if this agent
-        # walked the candidate direction at its speed and the oncoming neighbour kept its
-        # velocity (the time-to-collision idea of Karamouzas et al. 2014)
-        utility += np.where(nb.valid[:, None, :], rep, 0.0).sum(axis=-1)
-        # the nearest ``oncoming_neighbours`` oncoming walkers among all the neighbours
-        # (not among the nearest few, who in a group walking together are its members)
-        own_dir = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-        oncoming = neighbours.valid & (np.einsum("mkj,mj->mk", neighbours.velocity,
-                                                 own_dir) < -0.1)
-        ka = min(params.oncoming_neighbours, oncoming.shape[1])
-        pick = np.argsort(~oncoming, axis=1, kind="stable")[:, :ka]  # nearest first
-        oncoming = np.take_along_axis(oncoming, pick, axis=1)
-        on_v = np.take_along_axis(neighbours.velocity, pick[..., None], axis=1)
-        on_p = np.take_along_axis(neighbours.now, pick[..., None], axis=1)
-        on_r = np.take_along_axis(neighbours.radius, pick, axis=1)
-        mine = speed[:, None, None] * dirs  # (m, C, 2) candidate velocities
-        mine = np.concatenate([mine, np.zeros((m, 1, 2))], axis=1)  # waiting stands
-        rel_p = (on_p - position[:, None, :])[:, None, :, :]  # (m, 1, K, 2)
-        rel_v = on_v[:, None, :, :] - mine[:, :, None, :]  # (m, C+1, K, 2)
-        vv = np.einsum("mckj,mckj->mck", rel_v, rel_v)
-        t_close = np.clip(-np.einsum("mckj,mckj->mck", np.broadcast_to(rel_p, rel_v.shape),
-                                     rel_v) / np.maximum(vv, 1e-12), 0.0, params.anticipation)
-        closest = distance(rel_p, -t_close[..., None] * rel_v)  # |p + t v|
-        ra = radius[:, None, None] + on_r[:, None, :]
-        utility += np.where(oncoming[:, None, :], params.personal_weight
-                            * np.exp(-(closest - ra) / params.personal_range), 0.0).sum(axis=-1)
-    wall_gap = clearance(cand) - radius[:, None]  # soft term uses the full radius
-    wall_w = params.wall_weight if wall_scale is None else params.wall_weight * np.asarray(
-        wall_scale, float)[:, None]
-    utility += wall_w * np.exp(-np.maximum(wall_gap, 0.0) / params.wall_range)
-    utility[:, :-1] += params.twist_weight * (1.0 - np.cos(turned))
-    utility[:, :-1] += params.turn_weight * (1.0 - np.cos(cand_heading - heading[:, None]))
-    utility[:, :-1] += params.right_bias * np.maximum(np.sin(offsets), 0.0)
-    utility[:, :-1] = np.where(np.abs(offsets) <= np.pi / 2 + 1e-9, utility[:, :-1], np.inf)
-    utility[:, -1] += params.wait_cost
-    if stuck is not None and neighbours.heading is not None and neighbours.valid.shape[1]:
-        # two walkers standing face to face: after ``give_way_after`` seconds waiting gets
-        # dearer every second, so a side step (which gains nothing towards the target)
-        # wins and the pair passes; both have the same right-hand bias
-        own_dir = np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-        facing = ((np.cos(neighbours.heading - heading[:, None]) < -0.5)
-                  & (np.linalg.norm(neighbours.now - position[:, None, :], axis=-1) < 1.2)
-                  & (np.einsum("mkj,mj->mk", neighbours.now - position[:, None, :], own_dir) > 0)
-                  & neighbours.valid).any(axis=1)
-        late = np.maximum(np.asarray(stuck, dtype=float) - params.give_way_after, 0.0)
-        utility[:, -1] += np.where(facing, params.give_way_weight * late, 0.0)
-    if stuck is not None:
-        # a clog (walkers wedged against each other and the walls in front of a narrow
-        # opening): after ``clog_after`` seconds every standing walker grows impatient,
-        # so that steps aside or back (see CrowdSimulation: the backward fan) loosen it
-        late = np.maximum(np.asarray(stuck, dtype=float) - params.clog_after, 0.0)
-        utility[:, -1] += params.give_way_weight * late
-    utility[:, :-1] = np.where(free >= params.min_step, utility[:, :-1], np.inf)
-    if params.turn_limit_deg is not None:
-        # the last candidate keeps the current heading: how far the walker can go on
-        utility[:, :-1] = np.where(_within_turn_limit(
-            cand_heading, heading, free[:, -1], nominal_step, stuck, params),
-            utility[:, :-1], np.inf)
-
-    n_dir = offsets.shape[1]
-    best = np.argmin(utility, axis=1)
-    move = best < n_dir
-    pick = np.minimum(best, n_dir - 1)
-    rows = np.arange(m)
-    return StepChoice(
-        direction=dirs[rows, pick],
-        free_length=np.where(move, free[rows, pick], 0.0),
-        move=move,
-        yaw=np.where(move, yaw_end[rows, pick], yaw),
-        utility=utility[rows, best],
-    )
-
-
-def _within_turn_limit(cand_heading, heading, ahead, nominal_step, stuck,
-                       params: SteeringParams) -> np.ndarray:
-    """(m, C) bool: candidates (headings (m, C) [rad]) within ``params.turn_limit_deg``
-    of the current ``heading`` (m,) [rad], or spared: a walker whose step straight on,
-    ``ahead`` (m,) [m], is shorter than ``turn_limit_spare`` × ``nominal_step`` (m,)
-    [m], or that was standing (``stuck`` (m,) [s] > 0)."""
-    turn = np.abs((cand_heading - heading[:, None] + np.pi) % (2 * np.pi) - np.pi)
-    ok = turn <= np.deg2rad(params.turn_limit_deg) + 1e-9
-    spared = ahead < params.turn_limit_spare * nominal_step - 1e-9
-    if stuck is not None:
-        spared |= np.asarray(stuck, dtype=float) > 0.0
-    return ok | spared[:, None]
-
-
-def _shoulders_clear(position, ends, *, yaw, yaw_end, shape, clearance,
-                     near) -> np.ndarray:
-    """(m, C, L) bool: the shoulder discs keep their radius (widened for the turn) from
-    the walls at the step's end and halfway, or do not come closer than they are now.
-    Only where the centre's clearance ``near`` (m, C, L) [m] (the smaller at the end and
-    halfway) is within the outline's reach plus the largest widening are they tested
-    (clearance grows by at most the distance moved)."""
-    ok = np.ones(ends.shape[:-1], bool)
-    offset = shape[:, 2]
-    reach = shape[:, 1] + 2 * offset
-    i, c, l = np.nonzero((near < reach[:, None, None]) & (offset > 0)[:, None, None])
-    if i.size == 0:
-        return ok
-    y0, y1 = yaw[i], yaw_end[i, c]
-    bend = offset[i] * (1.0 - np.cos(0.5 * (y1 - y0)))
-    now = disc_centres(position[i], y0, offset[i])[:, 1:]  # (k, 2, 2): left, right
-    end = disc_centres(ends[i, c, l], y1, offset[i])[:, 1:]
-    r = shape[i, 1][:, None] + bend[:, None]
-    r = np.minimum(r, clearance(now) - 1e-6)
-    ok[i, c, l] = np.all((clearance(end) >= r) & (clearance(0.5 * (now + end)) >= r), axis=1)
-    return ok
+             else f(shape, float))
+    speed = 2.0 * nominal_step if speed is None else f(speed, float)
+    nbs = neighbours
+    timed = nbs.remaining is not None and step_time is not None
+    n_k = nbs.valid.shape[1]
+    nb_yaw_now, nb_yaw_end = nbs.yaws()
+    none = np.zeros((m, n_k))
+    prm = params
+    field = (clearance.distance, float(clearance.origin[0]), float(clearance.origin[1]),
+             float(clearance.cell))
+    # candidates and the longest step along each clear of the walls and the neighbours
+    offsets, cand_heading, dirs, free, yaw_end = step_limits(
+        position, stance, heading, f(route_direction, float), yaw, radius, shape, speed,
+        f(step_time, float) if timed else np.zeros(m),
+        np.zeros(m) if lag is None else f(lag, float), nominal_step, timed,
+        f(nbs.valid, bool), f(nbs.now, float), f(nbs.end, float), f(nbs.radius, float),
+        f(nb_yaw_now, float), f(nb_yaw_end, float),
+        f(nbs.remaining, float) if timed else none, f(nbs.outlines(), float), field[0],
+        clearance.block_least, *field[1:], np.deg2rad(prm.offsets_deg),
+        np.asarray(prm.step_lengths, float), float(prm.foot_clearance),
+        float(np.deg2rad(25.0) + 1e-9), bool(prm.keep_facing), np.deg2rad(prm.twists_deg))
+    # the utility at the end point of the preferred (or longest clear) step
+    cap = np.full(free.shape, np.inf) if gap is None else f(
+        gap.along(dirs, everyone=True)[1], float)
+    ones = np.ones(m)
+    weights = np.array([prm.personal_weight, prm.personal_range, prm.soft_neighbours,
+                        prm.anticipation, prm.oncoming_neighbours, prm.wall_weight,
+                        prm.wall_range, prm.turn_weight, prm.right_bias, prm.wait_cost,
+                        prm.give_way_after, prm.give_way_weight, prm.clog_after,
+                        prm.twist_weight, prm.min_step, np.pi / 2 + 1e-9], float)
+    turn_limit = np.array([np.nan if prm.turn_limit_deg is None else
+                           np.deg2rad(prm.turn_limit_deg) + 1e-9, prm.turn_limit_spare])
+    direction, free_length, move, chosen_yaw, utility = step_utility(
+        position, stance, f(target, float), heading, yaw, radius, speed, nominal_step,
+        np.zeros(m) if stuck is None else f(stuck, float), offsets,
+        cand_heading, dirs, free, yaw_end, cap, f(nbs.valid, bool), f(nbs.now, float),
+        f(nbs.end, float), f(nbs.velocity, float), f(nbs.radius, float),
+        none if nbs.heading is None else f(nbs.heading, float), nbs.heading is not None,
+        ones if personal_scale is None else f(personal_scale, float),
+        ones if wall_scale is None else f(wall_scale, float), *field, weights, turn_limit)
+    return StepChoice(direction=direction, free_length=free_length, move=move,
+                      yaw=chosen_yaw, utility=utility)

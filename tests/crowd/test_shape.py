@@ -209,3 +209,67 @@ def test_clear_runs_keeps_exactly_the_signs_of_the_gaps_reduced_over_the_neighbo
     alone = np.setdiff1d(np.arange(m), pa)
     np.testing.assert_array_equal(got_ok[alone], ok[alone])  # no neighbours: untouched
     assert want_ok[pa].any() and (~want_ok[pa] & wall_ok[pa]).any()  # both kinds occur
+
+
+def test_clashes_with_neighbours_are_the_steps_with_a_negative_gap_to_a_valid_neighbour():
+    from crowdwalk.crowd.conflicts import clashes_with_neighbours
+    from crowdwalk.crowd.steering import Neighbours
+
+    rng = np.random.default_rng(5)
+    m, k = 40, 7
+    shape = BodyShape.from_axes(rng.uniform(0.15, 0.2, (m, k)).ravel(),
+                                rng.uniform(0.2, 0.26, (m, k)).ravel()).packed().reshape(m, k, 3)
+    start = rng.uniform(0, 3, (m, 2))
+    now = start[:, None] + rng.normal(0, 0.5, (m, k, 2))
+    nbs = Neighbours(valid=rng.random((m, k)) < 0.7, now=now,
+                     end=now + rng.normal(0, 0.2, (m, k, 2)), velocity=np.zeros((m, k, 2)),
+                     radius=shape[..., 0], remaining=rng.uniform(0, 0.5, (m, k)),
+                     yaw_now=rng.uniform(-3, 3, (m, k)), yaw_end=rng.uniform(-3, 3, (m, k)),
+                     shape=shape)
+    rows = np.flatnonzero(rng.random(m) < 0.8)
+    own = shape[rows, 0]
+    kw = dict(start=start[rows], end=start[rows] + rng.normal(0, 0.3, (rows.size, 2)),
+              duration=rng.uniform(0.3, 0.6, rows.size), elapsed=rng.uniform(0, 0.1, rows.size),
+              yaw=rng.uniform(-3, 3, rows.size), yaw_end=rng.uniform(-3, 3, rows.size),
+              shape=np.column_stack([own, 0.8 * own, np.full(rows.size, 0.05)]))
+    got = clashes_with_neighbours(nbs, rows, **kw)
+    pa, pk = np.nonzero(nbs.valid[rows])  # every (decider, valid neighbour) pair at once
+    nb = rows[pa]
+    gaps = body_gaps(pa, a_start=kw["start"], a_yaw0=kw["yaw"], a_end=kw["end"][:, None],
+                     a_yaw1=kw["yaw_end"][:, None], a_duration=kw["duration"][:, None],
+                     a_elapsed=kw["elapsed"], a_shape=kw["shape"], b_now=nbs.now[nb, pk],
+                     b_yaw_now=nbs.yaw_now[nb, pk], b_end=nbs.end[nb, pk],
+                     b_yaw_end=nbs.yaw_end[nb, pk], b_remaining=nbs.remaining[nb, pk],
+                     b_shape=shape[nb, pk])[0][:, 0]
+    want = np.zeros(rows.size, bool)
+    np.logical_or.at(want, pa, gaps < 0.0)
+    np.testing.assert_array_equal(got, want)
+    assert want.any() and not want.all()
+
+
+def test_clear_runs_decides_touching_bodies_as_the_exact_gaps_do():
+    # neighbours within a few ulp of touching (where the quick norms of clear_runs could
+    # round to the other side): its signs are still body_gaps' (the exact norms')
+    rng = np.random.default_rng(8)
+    m = 4000
+    shape = BodyShape.from_axes(np.full(m, 0.18), np.where(np.arange(m) % 2, 0.22, 0.18))
+    packed = shape.packed()
+    angle = rng.uniform(-np.pi, np.pi, m)
+    along = np.column_stack([np.cos(angle), np.sin(angle)])
+    start = rng.uniform(-50, 50, (m, 2))
+    end = start + 0.3 * along
+    # centre discs a few ulp from touching (about 1 in 200 is decided the other way by
+    # sqrt(x x + y y) than by hypot)
+    touch = packed[:, 0] * 2 + rng.uniform(-3e-16, 3e-16, m)
+    b_now = end + touch[:, None] * np.column_stack([-along[:, 1], along[:, 0]])
+    kw = dict(a_start=start, a_yaw0=angle, a_end=end[:, None], a_yaw1=angle[:, None],
+              a_duration=np.full((m, 1), 0.5), a_elapsed=np.zeros(m), a_shape=packed,
+              b_now=b_now, b_yaw_now=angle, b_end=b_now, b_yaw_end=angle,
+              b_remaining=np.zeros(m), b_shape=packed)
+    pa = np.arange(m)
+    gaps, centre_gaps = body_gaps(pa, **kw)
+    ok, centre_ok = np.ones((m, 1), bool), np.ones((m, 1), bool)
+    clear_runs(pa, **kw, runs=1, ok=ok, centre_ok=centre_ok)
+    np.testing.assert_array_equal(ok[:, 0], gaps[:, 0] >= 0.0)
+    np.testing.assert_array_equal(centre_ok[:, 0], centre_gaps[:, 0] >= 0.0)
+    assert ok.any() and not ok.all()  # both sides of touching occur

@@ -209,13 +209,12 @@ def test_turn_limit_splits_a_sharp_turn_over_steps():
     assert turn(_turning(limited, stuck=0.5)) == turn(free)  # from standing
     # with ``turn_limit_spare`` a walker whose way straight on is cut short (neighbours,
     # walls) is spared; by default (0) it is not
-    from crowdwalk.crowd.steering import _within_turn_limit
-
-    cand = np.radians([[30.0, 60.0]])
+    from crowdwalk.crowd.steering_kernels import turn_allowed
 
     def ok(params, ahead):
-        return _within_turn_limit(cand, np.zeros(1), np.array([ahead]), np.array([0.7]),
-                                  np.zeros(1), params).tolist()
+        limit = np.radians(params.turn_limit_deg) + 1e-9
+        return [[turn_allowed(np.radians(c), 0.0, ahead, 0.7, 0.0, limit,
+                              params.turn_limit_spare) for c in (30.0, 60.0)]]
 
     spare = replace(limited, turn_limit_spare=1.0)
     assert ok(spare, 0.75) == [[True, False]] and ok(spare, 0.6) == [[True, True]]
