@@ -28,7 +28,8 @@ from planners.swing import _cell, adjust_one
 
 __all__ = ["Lattice", "SWING_CONTEXT", "build_agents", "build_pending", "build_swing",
            "complete", "complete_agents",
-           "config_efficiency", "config_legal", "eval_step", "eval_swing", "inline", "prepare",
+           "config_efficiency", "config_legal", "efficiency_one", "eval_step", "eval_swing",
+           "inline", "prepare",
            "prepare_agents", "probe", "probe_efficiency", "step_legal", "swing_at",
            "swing_legal"]
 
@@ -669,6 +670,22 @@ def probe(step_done, reason, swing_done, swing_ok, step_off, swing_off, strides,
     return 1
 
 
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def efficiency_one(a, q, cost, progress, J, step_off):
+    """The efficiency of configuration ``q`` (n,) for table row ``a`` (progress / energy,
+    rounded to 1e-12), as :func:`planners.search.evaluate_one` gives it; no swing is read
+    (it does not depend on them)."""
+    m_prev = 0
+    energy = 0.0
+    length = 0.0
+    for k in range(q.size):
+        step = step_off[k] + m_prev * J + q[k]
+        energy += cost[a, step]
+        length += progress[a, step]
+        m_prev += q[k]
+    return np.rint(length / energy * 1e12) / 1e12
+
+
 @_jit
 def probe_efficiency(step_done, reason, swing_done, swing_ok, cost, progress, step_off,
                      swing_off, strides, J, a, q):
@@ -678,15 +695,7 @@ def probe_efficiency(step_done, reason, swing_done, swing_ok, cost, progress, st
                   a, q)
     if legal != 1:
         return legal, 0.0
-    m_prev = 0
-    energy = 0.0
-    length = 0.0
-    for k in range(q.size):
-        step = step_off[k] + m_prev * J + q[k]
-        energy += cost[a, step]
-        length += progress[a, step]
-        m_prev += q[k]
-    return 1, np.rint(length / energy * 1e12) / 1e12
+    return 1, efficiency_one(a, q, cost, progress, J, step_off)
 
 
 @_inline

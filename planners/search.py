@@ -8,7 +8,7 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables
-from planners.lattice_kernel import swing_at
+from planners.lattice_kernel import efficiency_one, swing_at
 
 __all__ = ["SearchResult", "all_configs_evaluated", "efficiency_one", "evaluate_one",
            "neighbour_deltas"]
@@ -108,16 +108,3 @@ def evaluate_one(a, q, step_legal, sw, cost, progress, J, step_off, swing_off, s
     return legal, np.rint(length / energy * 1e12) / 1e12
 
 
-@nb.njit(cache=True, nogil=True, _nrt=False)
-def efficiency_one(a, q, cost, progress, J, step_off):
-    """The efficiency of :func:`evaluate_one` alone (it does not depend on the swings, so
-    none is read): ``q`` (n,) for table row ``a``, rounded to 1e-12."""
-    m_prev = 0
-    energy = 0.0
-    length = 0.0
-    for k in range(q.size):
-        step = step_off[k] + m_prev * J + q[k]
-        energy += cost[a, step]
-        length += progress[a, step]
-        m_prev += q[k]
-    return np.rint(length / energy * 1e12) / 1e12
