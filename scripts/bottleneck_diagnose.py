@@ -33,7 +33,6 @@ fields, ``steering.``-prefixed SteeringParams fields, Python literals).
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import tempfile
 from dataclasses import replace
@@ -43,6 +42,7 @@ import numpy as np
 
 import crowdwalk.crowd.simulation as simulation
 from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.params import parse_overrides
 from crowdwalk.verify import _bottleneck, _run
 
 
@@ -184,11 +184,8 @@ def main() -> None:
     ap.add_argument("--blockers", type=float, default=None, metavar="SECONDS")
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
-    fields = {k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.set)}
-    steer = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("steering.")}
-    params = replace(CrowdParams(), **{k: v for k, v in fields.items()
-                                       if not k.startswith("steering.")})
-    params = replace(params, steering=replace(params.steering, **steer))
+    fields = parse_overrides(args.set)
+    params = CrowdParams().with_overrides(fields)
     counts: dict = {}
     if args.why:
         _count_soft_stands(counts)

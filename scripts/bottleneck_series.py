@@ -17,10 +17,8 @@ fields, Python literals; about 8 s per run).
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import tempfile
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +26,7 @@ from scipy import stats
 
 from crowdwalk.analysis import analyse_run
 from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.params import parse_overrides
 from crowdwalk.verify import _bottleneck, _run, seyfried_band
 
 
@@ -61,8 +60,8 @@ def main() -> None:
     ap.add_argument("--count", type=int, default=60)
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
-    fields = {k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.set)}
-    params = replace(CrowdParams(), **fields)
+    fields = parse_overrides(args.set)
+    params = CrowdParams().with_overrides(fields)
     with tempfile.TemporaryDirectory() as tmp:
         for w in args.widths:
             runs = [measure(w, s, args.count, params, Path(tmp) / f"bn_{w:g}_{s}")

@@ -20,16 +20,15 @@ Usage: ``python scripts/counterflow_facts.py [--seeds 1 2 3 4 5] [--length 30]
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import tempfile
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.params import parse_overrides
 from crowdwalk.verify import _run, counterflow_scenario
 
 
@@ -78,8 +77,8 @@ def main() -> None:
     ap.add_argument("--length", type=float, default=30.0)
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
-    fields = {k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.set)}
-    params = replace(CrowdParams(), **fields)
+    fields = parse_overrides(args.set)
+    params = CrowdParams().with_overrides(fields)
     with tempfile.TemporaryDirectory() as tmp:
         for s in args.seeds:
             print(json.dumps({**fields, **facts(s, args.length, params, Path(tmp) / str(s))}),

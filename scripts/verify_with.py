@@ -13,18 +13,10 @@ not the verified case).
 from __future__ import annotations
 
 import argparse
-import ast
-from dataclasses import replace
 
 from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.params import parse_overrides
 from crowdwalk.verify import run_verification
-
-
-def _value(text: str):
-    try:
-        return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
-        return text
 
 
 def main() -> None:
@@ -36,11 +28,8 @@ def main() -> None:
     ap.add_argument("--counterflow-length", type=float, default=30.0, metavar="M")
     ap.add_argument("--counterflow-density", type=float, default=None, metavar="PER_M2")
     args = ap.parse_args()
-    fields = {k: _value(v) for k, v in (item.split("=", 1) for item in args.set)}
-    steer = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("steering.")}
-    params = replace(CrowdParams(), **{k: v for k, v in fields.items()
-                                       if not k.startswith("steering.")})
-    params = replace(params, steering=replace(params.steering, **steer))
+    fields = parse_overrides(args.set)
+    params = CrowdParams().with_overrides(fields)
     print(f"# CrowdParams overrides: {fields}; counterflow length {args.counterflow_length} m, "
           f"start density {args.counterflow_density}")
     run_verification(full=args.full, only=args.only.split(","), seeds=args.seeds,

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import ast
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -10,7 +12,7 @@ import numpy as np
 from crowdwalk.body import PROPORTIONS
 from crowdwalk.crowd.steering import SteeringParams
 
-__all__ = ["CrowdParams"]
+__all__ = ["CrowdParams", "parse_overrides"]
 
 
 @dataclass(frozen=True)
@@ -213,8 +215,28 @@ class CrowdParams:
     opening_personal_factor: float = 1.0
     steering: SteeringParams = field(default_factory=SteeringParams)
 
+    def with_overrides(self, fields: Mapping[str, object]) -> CrowdParams:
+        """A copy with ``fields`` replaced: CrowdParams field names, or ``steering.NAME``
+        for a :class:`SteeringParams` field (what :func:`parse_overrides` gives)."""
+        steer = {k.split(".", 1)[1]: v for k, v in fields.items() if k.startswith("steering.")}
+        own = {k: v for k, v in fields.items() if not k.startswith("steering.")}
+        return replace(self, **own, steering=replace(self.steering, **steer))
+
     def body_axes(self, height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Half depth and half width (n,) [m] of bodies ``height`` (n,) [m] tall."""
         h = np.asarray(height, float)
         width = self.half_width_ratio if self.body == "three_discs" else self.radius_ratio
         return self.radius_ratio * h, width * h
+
+
+def parse_overrides(items: Sequence[str]) -> dict[str, object]:
+    """``FIELD=VALUE`` texts (the study scripts' ``--set``) as {field: value}, each VALUE
+    a Python literal, or the text itself where it is none."""
+    fields: dict[str, object] = {}
+    for item in items:
+        name, text = item.split("=", 1)
+        try:
+            fields[name] = ast.literal_eval(text)
+        except (ValueError, SyntaxError):
+            fields[name] = text
+    return fields

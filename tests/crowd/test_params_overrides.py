@@ -1,0 +1,26 @@
+"""CrowdParams overrides as the study scripts' ``--set FIELD=VALUE`` give them."""
+
+import pytest
+
+from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.params import parse_overrides
+
+
+def test_set_texts_become_values_and_replace_own_and_steering_fields():
+    fields = parse_overrides(["speed_model=headway", "headway_lane=1.233", "line_up=True",
+                              "steering.twists_deg=(45.0,)"])
+    assert fields == {"speed_model": "headway", "headway_lane": 1.233, "line_up": True,
+                      "steering.twists_deg": (45.0,)}
+    base = CrowdParams()
+    params = base.with_overrides(fields)
+    assert (params.speed_model, params.headway_lane, params.line_up) == ("headway", 1.233, True)
+    assert params.steering.twists_deg == (45.0,)
+    assert base.steering.twists_deg == (60.0,) and base.speed_model == "free"
+    assert params.steering.wall_weight == base.steering.wall_weight
+
+
+def test_an_unknown_field_is_refused():
+    with pytest.raises(TypeError):
+        CrowdParams().with_overrides({"no_such_field": 1})
+    with pytest.raises(TypeError):
+        CrowdParams().with_overrides({"steering.no_such_field": 1})
