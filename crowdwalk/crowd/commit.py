@@ -8,6 +8,7 @@ new foothold.
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 from crowdwalk.steps import StepBatch
@@ -48,36 +49,18 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
     queue's anchor is the new stance) and the steps are returned. ``threads`` (a
     :class:`crowdwalk.workers.RowThreads`, optional) finds the footings of parts of the
     steps at once."""
-    st, a, d = state, agents, direction
+    st, a = state, np.ascontiguousarray(agents, dtype=np.int64)
+    d = np.ascontiguousarray(direction, dtype=float)
     L, H = plan.length, plan.rise
-    new_c = st.stance[a] + L[:, None] * d
-    new_z = st.stance_z[a] + H
     t0 = start_time
-    end = 0.5 * (st.stance[a] + new_c)
-    st.distance[a] += np.linalg.norm(end - st.pos1[a], axis=1)
-    st.pos0[a] = st.pos1[a]
-    st.z0[a] = st.z1[a]
-    st.pos1[a] = end
-    st.z1[a] = 0.5 * (st.stance_z[a] + new_z)
-    st.t0[a] = t0
-    st.t1[a] = t0 + duration
-    st.heading[a] = np.arctan2(d[:, 1], d[:, 0])
-    st.yaw0[a] = st.yaw1[a]
-    st.yaw1[a] = yaw
-    foot = st.foot[a].copy()
-    side = np.where(foot == 0, 1.0, -1.0)
-    foothold = new_c + (side * foot_half_width)[:, None] * _left(d)
-    st.trail[a], st.trail_z[a] = st.stance[a], st.stance_z[a]
-    st.stance[a], st.stance_z[a] = new_c, new_z
-    queue.anchor[a] = new_c
-    st.foot[a] = 1 - foot
-    st.steps[a] += 1
-    st.energy[a] += plan.energy
-    st.climb[a] += np.maximum(H, 0.0)
-    st.stuck[a] = 0.0
-    start = st.stance_foot[a].copy()
-    target = np.column_stack([foothold, new_z])
-    st.stance_foot[a] = target
+    k = a.size
+    foot, side = np.empty(k, st.foot.dtype), np.empty(k)
+    foothold, start, target = np.empty((k, 2)), np.empty((k, 3)), np.empty((k, 3))
+    _advance(a, _f(L), _f(H), d, _f(t0), _f(duration), _f(yaw), _f(plan.energy),
+             _f(foot_half_width), st.stance, st.stance_z, st.pos0, st.pos1, st.z0, st.z1,
+             st.t0, st.t1, st.heading, st.yaw0, st.yaw1, st.trail, st.trail_z, st.foot,
+             st.stance_foot, queue.anchor, st.steps, st.distance, st.energy, st.climb,
+             st.stuck, foot, side, foothold, start, target)
     # stepped over: at most one longest step (1.05 leg lengths) along the direction
     stride = 1.05 * legs.of(a).length
     kind, on_obstacle = (terrain.footing(foothold, d, stride=stride) if threads is None else
@@ -87,8 +70,72 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
         agent=a, step=st.steps[a].copy(), start_time=t0, duration=duration, foot=foot,
         start=start, target=target, stance_centre=st.trail[a].copy(),
         heading=st.heading[a].copy(), length=L, rise=H, energy=plan.energy,
-        planner=pop.planner[a].astype(str),
-        group=np.asarray(pop.group_names, dtype=object)[pop.group[a]].astype(str),
+        planner=_names(pop.planner_names, pop.group[a]),
+        group=_names(pop.group_names, pop.group[a]),
         swing_bezier=swing_bezier(plan.swing, stance=st.trail[a], stance_z=st.trail_z[a],
                                   direction=d, lateral=side * foot_half_width),
         kind=kind, on_obstacle=on_obstacle, toe_out=turn.toe_out, spin=turn.spin)
+
+
+def _names(names: tuple[str, ...], group: np.ndarray) -> np.ndarray:
+    """The name of each row's group (k,) str: ``names`` (one per group) at ``group`` (k,)
+    (``Population.planner[a].astype(str)`` without gathering every agent's)."""
+    return np.asarray(names, dtype=object)[group].astype(str)
+
+
+def _f(x) -> np.ndarray:
+    """``x`` as a contiguous float array (one kernel signature)."""
+    return np.ascontiguousarray(x, dtype=float)
+
+
+@nb.njit(cache=True, nogil=True)
+def _advance(a, length, rise, d, t0, duration, yaw, energy, half_width, stance, stance_z,
+             pos0, pos1, z0, z1, s_t0, s_t1, heading, yaw0, yaw1, trail, trail_z, foot,
+             stance_foot, anchor, steps, distance, s_energy, climb, stuck, o_foot, o_side,
+             o_foothold, o_start, o_target):
+    """:func:`take_steps`' state update, row by row (the distinct agents ``a`` (k,)): the
+    new stance centre ``stance + length d`` and height ``stance_z + rise``, the body from
+    its position to the midpoint of the two feet, the feet swapped. Writes the swinging
+    foot ``o_foot`` (k,), its side ``o_side`` (+1 left, -1 right), its foothold
+    ``o_foothold`` (k, 2) [m], and the stance foot's foothold before (``o_start``) and
+    after (``o_target``) (k, 3) [m]. The same operations as the numpy formulation it
+    replaces (the body's distance ``sqrt(dx dx + dy dy)`` is ``np.linalg.norm``'s)."""
+    for r in range(a.size):
+        i = a[r]
+        cx = stance[i, 0] + length[r] * d[r, 0]
+        cy = stance[i, 1] + length[r] * d[r, 1]
+        cz = stance_z[i] + rise[r]
+        ex = 0.5 * (stance[i, 0] + cx)
+        ey = 0.5 * (stance[i, 1] + cy)
+        dx, dy = ex - pos1[i, 0], ey - pos1[i, 1]
+        distance[i] += np.sqrt(dx * dx + dy * dy)
+        pos0[i, 0], pos0[i, 1] = pos1[i, 0], pos1[i, 1]
+        z0[i] = z1[i]
+        pos1[i, 0], pos1[i, 1] = ex, ey
+        z1[i] = 0.5 * (stance_z[i] + cz)
+        s_t0[i] = t0[r]
+        s_t1[i] = t0[r] + duration[r]
+        heading[i] = np.arctan2(d[r, 1], d[r, 0])
+        yaw0[i] = yaw1[i]
+        yaw1[i] = yaw[r]
+        f = foot[i]
+        side = 1.0 if f == 0 else -1.0
+        w = side * half_width[r]
+        fx = cx + w * -d[r, 1]
+        fy = cy + w * d[r, 0]
+        trail[i, 0], trail[i, 1], trail_z[i] = stance[i, 0], stance[i, 1], stance_z[i]
+        stance[i, 0], stance[i, 1], stance_z[i] = cx, cy, cz
+        anchor[i, 0], anchor[i, 1] = cx, cy
+        foot[i] = 1 - f
+        steps[i] += 1
+        s_energy[i] += energy[r]
+        h = rise[r]
+        climb[i] += h if not h < 0.0 else 0.0  # np.maximum(h, 0.0), NaN and -0.0 kept
+        stuck[i] = 0.0
+        for c in range(3):
+            o_start[r, c] = stance_foot[i, c]
+        stance_foot[i, 0], stance_foot[i, 1], stance_foot[i, 2] = fx, fy, cz
+        o_target[r, 0], o_target[r, 1], o_target[r, 2] = fx, fy, cz
+        o_foot[r] = f
+        o_side[r] = side
+        o_foothold[r, 0], o_foothold[r, 1] = fx, fy

@@ -197,7 +197,8 @@ def next_steps(state, queue: PlanQueue, *, agents: np.ndarray, choice, footsteps
         queue, footsteps, agents=a, direction=d, stance=st.stance[a],
         stance_z=st.stance_z[a], trail=st.trail[a], leg=legs.index[a],
         speed=(population.free_speed if plan_speed is None else plan_speed)[a],
-        planner=population.planner[a], replan_turn_deg=params.replan_turn_deg,
+        planner=np.asarray(population.planner_names, dtype=object)[population.group[a]],
+        replan_turn_deg=params.replan_turn_deg,
         setting=None if setting is None else setting[a], threads=threads)
     ok = plan.move
     st.plans[a[planned]] += 1
