@@ -56,14 +56,15 @@ class PlannedSteps:
     from_cache: np.ndarray
 
 
-def _relative_profiles(arrays, stance_z: np.ndarray):
+def _relative_profiles(profiles, stance_z: np.ndarray):
     """The agents' profiles relative to their stance feet, concatenated.
 
     Parameters
     ----------
-    arrays : list of (s, z) pairs
+    profiles : (s (V,), z (V,), sizes (m,))
         Ground profiles along the local paths [m], s = 0 ``_BEHIND`` behind the stance
-        foot.
+        foot, concatenated (``Terrain.profiles_packed``; agent i's ``sizes[i]`` rows
+        follow agent i - 1's).
     stance_z : (m,)
         Heights of the stance footholds [m].
 
@@ -76,10 +77,11 @@ def _relative_profiles(arrays, stance_z: np.ndarray):
     bounds : (m + 1,) int
         Agent i's vertices are ``bounds[i]:bounds[i + 1]``.
     """
-    sizes = np.array([len(a[0]) for a in arrays])
-    agent = np.repeat(np.arange(len(arrays)), sizes)
-    s = np.concatenate([a[0] for a in arrays]) - _BEHIND
-    z = np.concatenate([a[1] for a in arrays]) - stance_z[agent]
+    s_rows, z_rows, sizes = profiles
+    m = sizes.size
+    agent = np.repeat(np.arange(m), sizes)
+    s = s_rows - _BEHIND
+    z = z_rows - stance_z[agent]
     inner = np.zeros(s.size, bool)
     if s.size > 2:
         ds0, ds1 = s[1:-1] - s[:-2], s[2:] - s[1:-1]
@@ -88,7 +90,7 @@ def _relative_profiles(arrays, stance_z: np.ndarray):
                        & (ds0 > 0) & (ds1 > 0)
                        & (np.abs(dz0 * ds1 - dz1 * ds0) <= 1e-9 * ds0 * ds1))
     keep = ~inner
-    bounds = np.concatenate([[0], np.cumsum(np.bincount(agent[keep], minlength=len(arrays)))])
+    bounds = np.concatenate([[0], np.cumsum(np.bincount(agent[keep], minlength=m))])
     return s[keep], z[keep], bounds
 
 
@@ -131,7 +133,9 @@ def _cache_keys(s, z, bounds, planner, leg, speed, trailing) -> list[bytes]:
     mat[agent[full], col[full]] = qs[full]
     mat[agent[full], (col + count[agent])[full]] = qz[full]
     mat[level, head.shape[1]] = qz[first[level]]
-    return [row[:w].tobytes() for row, w in zip(mat, width.tolist(), strict=True)]
+    row = mat.shape[1] * mat.itemsize  # each key: the first ``width`` items of its row
+    buf = mat.tobytes()
+    return [buf[i * row:i * row + w * mat.itemsize] for i, w in enumerate(width.tolist())]
 
 
 class _PlanStore:
@@ -230,16 +234,23 @@ class FootstepPlanner:
             self.configs.append(config)
         return self.configs.index(config)
 
-    def _codes(self, names: list[str]) -> np.ndarray:
-        """Stable integer codes (m,) of planner names (for the cache keys)."""
-        for name in set(names) - self._planner_codes.keys():
-            self._planner_codes[name] = len(self._planner_codes)
-        return np.array([self._planner_codes[name] for name in names], dtype=np.int64)
+    def _codes(self, names: np.ndarray, setting: np.ndarray) -> np.ndarray:
+        """Stable integer codes (m,) of the (planner name (m,) str, setting (m,) int)
+        pairs (for the cache keys; one code per distinct pair)."""
+        kinds, kind = np.unique(names, return_inverse=True)
+        width = int(setting.max()) + 1
+        pairs, which = np.unique(kind.astype(np.int64) * width + setting, return_inverse=True)
+        codes = np.empty(pairs.size, np.int64)
+        for j, p in enumerate(pairs.tolist()):
+            key = f"{kinds[p // width]}#{p % width}"
+            codes[j] = self._planner_codes.setdefault(key, len(self._planner_codes))
+        return codes[which.reshape(-1)]
 
-    def _profiles(self, stance: np.ndarray, direction: np.ndarray) -> list:
-        """The ground profiles (s, z) along the local paths of agents at ``stance`` (m, 2)
-        [m] heading along ``direction`` (m, 2): ``_BEHIND`` behind the stance foot to
-        ``lookahead`` ahead, or to where the path leaves the walkable area."""
+    def _profiles(self, stance: np.ndarray, direction: np.ndarray) -> tuple:
+        """The ground profiles along the local paths of agents at ``stance`` (m, 2) [m]
+        heading along ``direction`` (m, 2): ``_BEHIND`` behind the stance foot to
+        ``lookahead`` ahead, or to where the path leaves the walkable area; concatenated
+        as s, z (V,) [m] and the rows of each (m,) (``Terrain.profiles_packed``)."""
         m = stance.shape[0]
         ahead = np.full(m, self.lookahead)
         if self.clearance is not None:
@@ -254,9 +265,14 @@ class FootstepPlanner:
                 first, probe.size - 1)] - 0.1, self.lookahead), 0.3)
         lines = np.stack([stance - _BEHIND * direction, stance + ahead[:, None] * direction],
                          axis=1)  # (m, 2, 2): one straight local path per agent
+        if hasattr(self.terrain, "profiles_packed"):
+            return self.terrain.profiles_packed(lines)  # one batched terrain pass
         if hasattr(self.terrain, "profiles"):
-            return self.terrain.profiles(lines)  # one batched terrain pass
-        return [self.terrain.profile_arrays(line) for line in lines]
+            arrays = self.terrain.profiles(lines)
+        else:
+            arrays = [self.terrain.profile_arrays(line) for line in lines]
+        return (np.concatenate([a[0] for a in arrays]), np.concatenate([a[1] for a in arrays]),
+                np.array([len(a[0]) for a in arrays], dtype=np.int64))
 
     def plan(
         self,
@@ -309,14 +325,14 @@ class FootstepPlanner:
         speed_class = np.round(np.asarray(speed, float) / 0.05).astype(np.int64)
         speed = speed_class * 0.05
         if threads is None:
-            arrays = self._profiles(stance, direction)
+            profiles = self._profiles(stance, direction)
         else:  # row-independent: parts of the agents at once (numpy, the kernels and
-            # shapely release the GIL), the same profiles
-            arrays = threads.map(self._profiles, m, stance, direction)
-        s_all, z_all, bounds = _relative_profiles(arrays, np.asarray(stance_z, float))
-        names = [str(p) for p in planner]
+            # shapely release the GIL), the same profiles (joined: concatenated)
+            profiles = threads.map(self._profiles, m, stance, direction)
+        s_all, z_all, bounds = _relative_profiles(profiles, np.asarray(stance_z, float))
+        names = np.asarray(planner).astype(str)
         setting = np.zeros(m, np.int64) if setting is None else np.asarray(setting, np.int64)
-        codes = self._codes([f"{n}#{c}" for n, c in zip(names, setting.tolist(), strict=True)])
+        codes = self._codes(names, setting)
         keys = _cache_keys(s_all, z_all, bounds, codes, np.asarray(leg),
                            speed_class, np.round(trailing * 1000).astype(np.int64))
         rows = np.array([self._cache.get(k, -1) for k in keys], dtype=np.int64)
@@ -328,7 +344,8 @@ class FootstepPlanner:
 
             by_planner: dict[tuple[str, int], dict[bytes, int]] = {}
             for i in todo.tolist():  # the first agent of each new problem plans it
-                by_planner.setdefault((names[i], int(setting[i])), {}).setdefault(keys[i], i)
+                by_planner.setdefault((str(names[i]), int(setting[i])), {}).setdefault(
+                    keys[i], i)
             for (name, c), unique in by_planner.items():
                 config = self.configs[c]
                 first = list(unique.values())
