@@ -16,26 +16,37 @@ from crowdwalk.steps import StepBatch
 __all__ = ["take_steps", "swing_bezier"]
 
 
-def _left(d: np.ndarray) -> np.ndarray:
-    return np.stack([-d[..., 1], d[..., 0]], axis=-1)
-
-
 def swing_bezier(swing: np.ndarray, *, stance: np.ndarray, stance_z: np.ndarray,
                  direction: np.ndarray, lateral: np.ndarray) -> np.ndarray:
     """The planner's swing-ankle Bezier (k, 4, 2) in (s, z) relative to the stance ankle
     at ``stance`` (k, 2), ``stance_z`` (k,) [m], along ``direction`` (k, 2), offset
     ``lateral`` (k,) [m] to the left, as world xyz control points (k, 4, 3) [m] (rows of
     NaN without one)."""
-    d = direction
     bez = np.full((swing.shape[0], 4, 3), np.nan)
-    has = np.all(np.isfinite(swing), axis=(1, 2))
-    if has.any():
-        lat = lateral[has][:, None] * _left(d[has])
-        s_, z_ = swing[has, :, 0], swing[has, :, 1]
-        bez[has, :, :2] = (stance[has, None, :] + s_[..., None] * d[has, None, :]
-                           + lat[:, None, :])
-        bez[has, :, 2] = stance_z[has, None] + z_
+    f = np.ascontiguousarray
+    _bezier(f(swing, float), f(stance, float), f(stance_z, float), f(direction, float),
+            f(lateral, float), bez)
     return bez
+
+
+@nb.njit(cache=True, nogil=True)
+def _bezier(swing, stance, stance_z, d, lateral, bez):
+    """:func:`swing_bezier` row by row into ``bez`` (k, 4, 3) (NaN already): the rows
+    whose four control points are all finite, by the numpy formulation's operations."""
+    for r in range(swing.shape[0]):
+        has = True
+        for j in range(4):
+            for c in range(2):
+                if not np.isfinite(swing[r, j, c]):
+                    has = False
+        if not has:
+            continue
+        lx, ly = lateral[r] * -d[r, 1], lateral[r] * d[r, 0]  # lateral · left(d)
+        for j in range(4):
+            s_, z_ = swing[r, j, 0], swing[r, j, 1]
+            bez[r, j, 0] = stance[r, 0] + s_ * d[r, 0] + lx
+            bez[r, j, 1] = stance[r, 1] + s_ * d[r, 1] + ly
+            bez[r, j, 2] = stance_z[r] + z_
 
 
 def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,

@@ -66,12 +66,31 @@ class _Grid:
     c = ix · shape[1] + iy."""
 
     def __init__(self, now: np.ndarray, reach: float) -> None:
-        lo = now.min(axis=0) if now.size else np.zeros(2)
-        extent = (now.max(axis=0) - lo) if now.size else np.zeros(2)
+        lo, hi = _bounds(now) if now.size else (np.zeros(2), np.zeros(2))
+        extent = hi - lo
         self.cell = max(float(reach), float(extent.max()) / 1024.0, 1e-9)
         self.origin = lo
         self.shape = np.floor(extent / self.cell).astype(np.int64) + 1
         self.start, self.order = _bin(now, lo, self.cell, self.shape)
+
+
+@nb.njit(cache=True, nogil=True)
+def _bounds(now):
+    """``now.min(axis=0), now.max(axis=0)`` of the walkers at ``now`` (w, 2) (w > 0), in
+    one pass (numpy reduces a first axis of an (w, 2) array slowly); NaN if any is."""
+    lo, hi = np.empty(2), np.empty(2)
+    for c in range(2):
+        a, b, nan = np.inf, -np.inf, False
+        for i in range(now.shape[0]):
+            v = now[i, c]
+            if v != v:
+                nan = True
+            if v < a:
+                a = v
+            if v > b:
+                b = v
+        lo[c], hi[c] = (np.nan, np.nan) if nan else (a, b)
+    return lo, hi
 
 
 @nb.njit(cache=True, nogil=True)

@@ -3,7 +3,7 @@ replaced, bit for bit, on random states."""
 
 import numpy as np
 
-from crowdwalk.crowd.commit import _advance
+from crowdwalk.crowd.commit import _advance, swing_bezier
 from crowdwalk.crowd.state import AgentState
 
 
@@ -80,3 +80,34 @@ def test_advance_is_the_numpy_update_bit_for_bit():
         np.testing.assert_array_equal(anchor_ref, anchor_got, strict=True)
         for name, value in vars(ref).items():
             assert value.tobytes() == getattr(got, name).tobytes(), name
+
+
+def _numpy_bezier(swing, *, stance, stance_z, direction, lateral):
+    """swing_bezier as numpy arrays (crowdwalk before the kernel)."""
+    d = direction
+    bez = np.full((swing.shape[0], 4, 3), np.nan)
+    has = np.all(np.isfinite(swing), axis=(1, 2))
+    if has.any():
+        lat = lateral[has][:, None] * _left(d[has])
+        s_, z_ = swing[has, :, 0], swing[has, :, 1]
+        bez[has, :, :2] = (stance[has, None, :] + s_[..., None] * d[has, None, :]
+                           + lat[:, None, :])
+        bez[has, :, 2] = stance_z[has, None] + z_
+    return bez
+
+
+def test_swing_bezier_is_the_numpy_formulation_bit_for_bit():
+    rng = np.random.default_rng(3)
+    k = 400
+    swing = rng.normal(0.0, 0.4, (k, 4, 2))
+    swing[::7] = np.nan  # the planner gave none
+    swing[3, 2, 1] = np.inf
+    swing[5, 0, 0] = np.nan  # one point missing: no curve
+    ang = rng.uniform(-np.pi, np.pi, k)
+    args = dict(stance=rng.normal(0, 30, (k, 2)), stance_z=rng.normal(0, 2, k),
+                direction=np.column_stack([np.cos(ang), np.sin(ang)]),
+                lateral=rng.choice([-1.0, 1.0], k) * rng.uniform(0, 0.1, k))
+    want = _numpy_bezier(swing, **args)
+    got = swing_bezier(swing, **args)
+    assert np.isnan(got[5]).all() and np.isnan(got[3]).all() and np.isfinite(got[1]).all()
+    assert want.tobytes() == got.tobytes()

@@ -79,3 +79,17 @@ def test_grid_finds_the_nearest_with_ties_by_index_and_far_walkers():
         np.testing.assert_array_equal(found, _brute_force(now, me, 9, 1.2))
         assert (found < len(now)).sum(axis=1).min() == 0  # some find no one
         assert (found[:40] < len(now)).all(axis=1).any()  # and some a full list
+
+
+def test_grid_bounds_are_numpys_min_and_max():
+    from crowdwalk.crowd.neighbours import _bounds
+
+    rng = np.random.default_rng(5)
+    for w in (1, 2, 7, 1000):
+        now = rng.normal(0.0, 50.0, (w, 2))
+        lo, hi = _bounds(now)
+        assert lo.tobytes() == now.min(axis=0).tobytes()
+        assert hi.tobytes() == now.max(axis=0).tobytes()
+    now[10, 1] = np.nan
+    lo, hi = _bounds(now)
+    assert lo[0] == now[:, 0].min() and np.isnan(lo[1]) and np.isnan(hi[1])
