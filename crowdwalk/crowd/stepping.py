@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from crowdwalk.crowd.legs import LegColumns
@@ -119,12 +120,10 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
              > np.cos(np.radians(replan_turn_deg)))
     reuse = ((q < queue.size[a]) & along
              & (np.linalg.norm(stance - queue.anchor[a], axis=1) < 1e-9))
-    r = np.flatnonzero(reuse)
-    if r.size:
-        ar, qr = a[r], q[r]
-        plan.length[r], plan.rise[r] = queue.length[ar, qr], queue.rise[ar, qr]
-        plan.energy[r], plan.swing[r] = queue.energy[ar, qr], queue.swing[ar, qr]
-        queue.next[ar] += 1
+    if reuse.any():  # the queued steps, and the queues move on
+        _take_queued(np.ascontiguousarray(a, dtype=np.int64), q, reuse, queue.length,
+                     queue.rise, queue.energy, queue.swing, queue.next, plan.length,
+                     plan.rise, plan.energy, plan.swing)
     p = np.flatnonzero(~reuse)
     if p.size:
         ap = a[p]
@@ -134,15 +133,50 @@ def plan_or_reuse(queue: PlanQueue, footsteps, *, agents: np.ndarray,
                                  speed=speed[p], planner=planner[p], trailing=trailing,
                                  setting=None if setting is None else setting[p],
                                  threads=threads)
-        plan.move[p] = planned.ok
-        plan.length[p], plan.rise[p] = planned.step_length[:, 0], planned.step_height[:, 0]
-        plan.energy[p], plan.swing[p] = planned.energy[:, 0], planned.swing[:, 0]
-        queue.length[ap], queue.rise[ap] = planned.step_length, planned.step_height
-        queue.energy[ap], queue.swing[ap] = planned.energy, planned.swing
-        queue.size[ap] = np.where(planned.ok, planned.step_length.shape[1], 0)
-        queue.next[ap] = 1
-        queue.direction[ap] = d
+        f = np.ascontiguousarray
+        _queue_plans(p, f(ap, dtype=np.int64), f(planned.ok, dtype=bool),
+                     f(planned.step_length, dtype=float), f(planned.step_height, dtype=float),
+                     f(planned.energy, dtype=float), f(planned.swing, dtype=float),
+                     f(d, dtype=float), plan.move, plan.length, plan.rise, plan.energy,
+                     plan.swing, queue.length, queue.rise, queue.energy, queue.swing,
+                     queue.size, queue.next, queue.direction)
     return plan, ~reuse
+
+
+@nb.njit(cache=True, nogil=True)
+def _take_queued(a, q, reuse, q_length, q_rise, q_energy, q_swing, q_next, length, rise,
+                 energy, swing):
+    """Rows ``reuse`` (k,) of :func:`plan_or_reuse`: step ``q`` (k,) of agent ``a``'s
+    (k,) queue into the plan's rows, and the queue's next step one on (copies only)."""
+    for r in range(a.size):
+        if not reuse[r]:
+            continue
+        i, j = a[r], q[r]
+        length[r], rise[r], energy[r] = q_length[i, j], q_rise[i, j], q_energy[i, j]
+        swing[r] = q_swing[i, j]
+        q_next[i] += 1
+
+
+@nb.njit(cache=True, nogil=True)
+def _queue_plans(rows, agents, ok, sl, sh, en, sw, d, move, length, rise, energy, swing,
+                 q_length, q_rise, q_energy, q_swing, q_size, q_next, q_direction):
+    """The new plans (m rows; ``ok``, step lengths ``sl``, rises ``sh``, energies ``en``
+    (m, H), swings ``sw`` (m, H, 4, 2)) of ``agents`` (m,) along ``d`` (m, 2): their
+    first steps into the plan's ``rows`` (m,), the whole plans into the queues (a failed
+    plan's queue is empty); copies only."""
+    horizon = sl.shape[1]
+    for k in range(rows.size):
+        r, i = rows[k], agents[k]
+        move[r] = ok[k]
+        length[r], rise[r], energy[r] = sl[k, 0], sh[k, 0], en[k, 0]
+        swing[r] = sw[k, 0]
+        q_length[i] = sl[k]
+        q_rise[i] = sh[k]
+        q_energy[i] = en[k]
+        q_swing[i] = sw[k]
+        q_size[i] = horizon if ok[k] else 0
+        q_next[i] = 1
+        q_direction[i, 0], q_direction[i, 1] = d[k, 0], d[k, 1]
 
 
 def fallback_energy(length: np.ndarray, rise: np.ndarray, *, legs: LegColumns,
