@@ -160,6 +160,46 @@ class _PlanStore:
         self.size += 1
         return row
 
+    def add_plans(self, plans: list) -> np.ndarray:
+        """Append the steps of the planners' ``plans`` (:func:`_steps_of` of each); their
+        rows (P,). Plans of at least H steps with swing curves and energies go in as
+        whole arrays (the same values: ``np.diff`` and the subtraction per element),
+        failed plans as empty rows, any other one by one."""
+        h = self.sl.shape[1]
+        while self.size + len(plans) > self.ok.shape[0]:
+            for name in ("ok", "sl", "sh", "swing", "energy"):
+                old = getattr(self, name)
+                setattr(self, name, np.concatenate([old, np.zeros_like(old)]))
+        rows = np.arange(self.size, self.size + len(plans))
+        self.size += len(plans)
+        whole, other = [], []
+        for j, p in enumerate(plans):
+            if getattr(p, "status", "ok") != "ok" or len(p.step_lengths) == 0:
+                continue  # (False, zeros, NaN swings, zeros) as _steps_of gives
+            ctrl, energy = getattr(p, "swing_controls", None), getattr(p, "E", None)
+            if (len(p.step_lengths) >= h and ctrl is not None and len(ctrl) >= h
+                    and energy is not None and np.size(energy) >= h):
+                whole.append(j)
+            else:
+                other.append(j)
+        self.ok[rows], self.sl[rows], self.sh[rows], self.energy[rows] = False, 0.0, 0.0, 0.0
+        self.swing[rows] = np.nan
+        for j in other:
+            r = rows[j]
+            self.ok[r], self.sl[r], self.sh[r], self.swing[r], self.energy[r] = _steps_of(
+                plans[j], h)
+        if whole:
+            w, ps = rows[whole], [plans[j] for j in whole]
+            fs = np.stack([np.asarray(p.footholds_s, float)[:h] for p in ps])
+            fz = np.stack([np.asarray(p.footholds_z, float)[:h + 1] for p in ps])
+            ctrl = np.stack([np.asarray(p.swing_controls, float)[:h] for p in ps])
+            self.ok[w] = True
+            self.sl[w] = np.stack([np.asarray(p.step_lengths, float)[:h] for p in ps])
+            self.sh[w] = fz[:, 1:] - fz[:, :-1]
+            self.swing[w] = ctrl - np.stack([fs, fz[:, :-1]], axis=-1)[:, :, None, :]
+            self.energy[w] = np.stack([_step_energies(p)[:h] for p in ps])
+        return rows
+
     def take(self, rows: np.ndarray) -> tuple:
         """(ok, sl, sh, swing, energy) of the plans at ``rows`` (m,) (copies)."""
         return (self.ok[rows], self.sl[rows], self.sh[rows], self.swing[rows],
@@ -370,8 +410,8 @@ class FootstepPlanner:
                                        trailing=[-0.5 * legs[k].length for k in retry])
                     for k, p in zip(retry, again, strict=True):
                         plans[k] = p
-                for i, plan in zip(first, plans, strict=True):
-                    self._cache[keys[i]] = self._store.add(_steps_of(plan, self.horizon))
+                for i, row in zip(first, self._store.add_plans(plans).tolist(), strict=True):
+                    self._cache[keys[i]] = row
             rows[todo] = [self._cache[keys[i]] for i in todo.tolist()]
         cached = np.ones(m, bool)
         cached[todo] = False

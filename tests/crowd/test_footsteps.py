@@ -84,3 +84,25 @@ def test_profiles_found_in_threads_give_the_same_plans(monkeypatch):
     one, split = runs
     for name in ("ok", "step_length", "step_height", "swing", "energy", "from_cache"):
         np.testing.assert_array_equal(getattr(one, name), getattr(split, name))
+
+
+def test_plans_stored_as_whole_arrays_equal_the_plans_stored_one_by_one():
+    from crowdwalk.crowd.footsteps import _PlanStore, _steps_of
+    from planners import plan_batch
+
+    grounds = [GroundProfile.flat(6.0, 0.0, -1.0),
+               GroundProfile.stairs(0.17, 0.3, 4, first_edge=0.8),
+               GroundProfile(np.array([-1.0, 0.5, 0.5, 3.0]), np.array([0.0, 0.0, 0.12, 0.12])),
+               GroundProfile(np.array([-1.0, 0.4, 0.4, 9.0]), np.array([0.0, 0.0, 2.0, 2.0]))]
+    legs = [LEGS[0], LEGS[1], LEGS[0], LEGS[1]]
+    for config in (CONFIG, PlannerConfig(n_steps=2, min_step_ratio=0.15)):
+        plans = plan_batch(grounds * 30, legs * 30, [1.3, 1.1, 1.4, 1.2] * 30,
+                           planner="best_first", config=config, trailing=[-0.6] * 120)
+        assert not all(p.ok for p in plans)  # the 2 m wall
+        one, many = _PlanStore(3), _PlanStore(3)
+        many.add_plans(plans[:5])
+        rows = [one.add(_steps_of(p, 3)) for p in plans[:5] + plans]
+        assert many.add_plans(plans).tolist() == rows[5:]
+        assert one.size == many.size == 125
+        for a, b in zip(one.take(np.arange(125)), many.take(np.arange(125)), strict=True):
+            assert a.tobytes() == b.tobytes()
