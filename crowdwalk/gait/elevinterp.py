@@ -176,6 +176,13 @@ def _step_of_kernel(stance, swing, thigh, shank, ankle_h, heel, toe, out):  # pr
             out[a, 1] = sy + toe[a] * s - ankle_h[a] * c
 
 
+def _flat_rows(a: np.ndarray, shape: tuple) -> np.ndarray:
+    """``a`` broadcast to ``shape``, C-contiguous (no broadcast where it has the shape)."""
+    if a.shape == shape:
+        return np.ascontiguousarray(a)
+    return np.ascontiguousarray(np.broadcast_to(a, shape))
+
+
 def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     """Step length and height a pair of leg silhouettes produces (Eq. 10, extended).
 
@@ -208,9 +215,8 @@ def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     dims = [np.asarray(_dimension(leg, k), dtype=float) for k in LEG_FIELDS]
     if stance.shape[-1] >= 3 and swing.shape[-1] >= 3:  # the code below, compiled
         shape = np.broadcast_shapes(stance.shape[:-1], swing.shape[:-1], *(d.shape for d in dims))
-        flat = [np.ascontiguousarray(np.broadcast_to(a[..., :3], shape + (3,))).reshape(-1, 3)
-                for a in (stance, swing)]
-        flat += [np.ascontiguousarray(np.broadcast_to(d, shape)).reshape(-1) for d in dims]
+        flat = [_flat_rows(a[..., :3], shape + (3,)).reshape(-1, 3) for a in (stance, swing)]
+        flat += [_flat_rows(d, shape).reshape(-1) for d in dims]
         out = np.empty((flat[0].shape[0], 2))
         _step_of_kernel(*flat, out)
         return out.reshape(shape + (2,))

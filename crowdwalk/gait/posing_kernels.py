@@ -114,3 +114,41 @@ def upper_body(local, r_pelvis, yaw_angle, sway, tilt, heading, arm_out, swing, 
             _mm(ab, m, upper)
             _tmm(trunk, upper, local[r, shoulder[s]])
             _elementary(elbow[r, s], 2, 0, local[r, elbow_joint[s]])
+
+
+@_jit
+def stance_foot(yaw, slope, pitch, ball, heel_offset, ball_offset, ankle_height
+                ):  # pragma: no cover - compiled
+    """``crowdwalk.gait.foot.stance_foot_pose`` of k feet, numpy's values: foot rotations
+    (k, 3, 3) Rz(yaw) Ry(−pitch), ankles (k, 3) [m] (the pivot, heel or ball, plus the
+    rotated pivot→ankle offset, summed as numpy's ``einsum("kab,kb->ka")`` sums: (b0 +
+    b2) + b1) and toe angles (k,) [rad]. Angles (k,) [rad], ball (k, 3) [m], dimensions
+    (k,) [m]."""
+    k = yaw.shape[0]
+    r_foot, ankle, toe = np.empty((k, 3, 3)), np.empty((k, 3)), np.empty(k)
+    rz, ry = np.empty((3, 3)), np.empty((3, 3))
+    pivot, local = np.empty(3), np.empty(3)
+    for r in range(k):
+        _elementary(yaw[r], 0, 1, rz)
+        _elementary(-pitch[r], 2, 0, ry)
+        _mm(rz, ry, r_foot[r])
+        if pitch[r] >= slope[r]:  # on the heel: foot.heel(body)
+            cp = np.cos(slope[r])
+            d0, d1, d2 = cp * np.cos(yaw[r]), cp * np.sin(yaw[r]), np.sin(slope[r])
+            hb = heel_offset[r] + ball_offset[r]
+            pivot[0] = ball[r, 0] - hb * d0
+            pivot[1] = ball[r, 1] - hb * d1
+            pivot[2] = ball[r, 2] - hb * d2
+            local[0] = heel_offset[r]
+            toe[r] = 0.0
+        else:
+            pivot[0], pivot[1], pivot[2] = ball[r, 0], ball[r, 1], ball[r, 2]
+            local[0] = -ball_offset[r]
+            toe[r] = pitch[r] - slope[r]
+        local[1] = 0.0
+        local[2] = ankle_height[r]
+        m = r_foot[r]
+        for a in range(3):
+            ankle[r, a] = pivot[a] + ((m[a, 0] * local[0] + m[a, 2] * local[2])
+                                      + m[a, 1] * local[1])
+    return r_foot, ankle, toe
