@@ -206,8 +206,14 @@ def _sample_kernel(curves, t, rows, out):  # pragma: no cover - compiled
         u = (t[a] % 1.0) * n
         i1 = int(np.floor(u))
         s = u - float(i1)
-        i0, i2, i3 = (i1 - 1) % n, (i1 + 1) % n, (i1 + 2) % n
-        i1 = i1 % n
+        if n >= 3 and 0 <= i1 <= n:  # the common case without integer divisions
+            i0 = i1 - 1 if i1 > 0 else i1 - 1 + n
+            i2 = i1 + 1 if i1 + 1 < n else i1 + 1 - n
+            i3 = i1 + 2 if i1 + 2 < n else i1 + 2 - n
+            i1 = i1 if i1 < n else i1 - n
+        else:
+            i0, i2, i3 = (i1 - 1) % n, (i1 + 1) % n, (i1 + 2) % n
+            i1 = i1 % n
         r = rows[a]
         s2 = s * s
         s3 = s2 * s
