@@ -152,3 +152,25 @@ def stance_foot(yaw, slope, pitch, ball, heel_offset, ball_offset, ankle_height
             ankle[r, a] = pivot[a] + ((m[a, 0] * local[0] + m[a, 2] * local[2])
                                       + m[a, 1] * local[1])
     return r_foot, ankle, toe
+
+
+@_jit
+def _smoothstep_kernel(x, out):  # pragma: no cover - compiled
+    for i in range(x.size):
+        v = x[i]
+        v = v if (np.isnan(v) or v > 0.0) else 0.0  # np.clip(v, 0.0, 1.0)
+        v = v if (np.isnan(v) or v < 1.0) else 1.0
+        out[i] = v * v * (3.0 - 2.0 * v)
+
+
+def smoothstep(x) -> np.ndarray:
+    """``np.clip(x, 0, 1)`` as s, then s² (3 − 2s), elementwise [1]; the numpy code's
+    values (a float array of any shape, or what numpy gives for anything else)."""
+    x = np.asarray(x)
+    if x.dtype != np.float64 or x.ndim == 0:
+        x = np.clip(x, 0.0, 1.0)
+        return x * x * (3.0 - 2.0 * x)
+    flat = np.ascontiguousarray(x).reshape(-1)
+    out = np.empty(flat.size)
+    _smoothstep_kernel(flat, out)
+    return out.reshape(x.shape)
