@@ -51,7 +51,7 @@ from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.joints import assemble_joints
-from crowdwalk.gait.posing_kernels import pelvis_rotations, upper_body
+from crowdwalk.gait.posing_kernels import pelvis_rotations, shifted_stance_leg, upper_body
 
 __all__ = [
     "GaitStyle",
@@ -600,6 +600,14 @@ def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thi
 def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
     in the sagittal plane: two-link IK from the ankle, knee forward."""
+    k = len(body)
+    if k:  # the numpy code below, compiled (its values)
+        def f(a, shape):
+            return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), shape))
+
+        return shifted_stance_leg(f(body.thigh, (k,)), f(body.shank, (k,)),
+                                  f(phi_shank, (k,)), f(phi_thigh, (k,)), f(heading, (k,)),
+                                  f(offset, (k, 3)))
     ch, sh = np.cos(heading), np.sin(heading)
     l1, l2 = body.thigh, body.shank
     # Data hip relative to the ankle in sagittal coordinates (forward, up).

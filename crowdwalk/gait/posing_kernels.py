@@ -174,3 +174,34 @@ def smoothstep(x) -> np.ndarray:
     out = np.empty(flat.size)
     _smoothstep_kernel(flat, out)
     return out.reshape(x.shape)
+
+
+@_jit
+def shifted_stance_leg(thigh, shank, phi_shank, phi_thigh, heading, offset
+                       ):  # pragma: no cover - compiled
+    """``elevwalker._shifted_stance_leg``: shank and thigh elevations (k,), (k,) [rad]
+    that move the stance hip by ``offset`` (k, 3) [m] (sagittal two-link IK from the
+    ankle), the numpy code's operations per element."""
+    k = thigh.shape[0]
+    out_shank, out_thigh = np.empty(k), np.empty(k)
+    for r in range(k):
+        ch, sh = np.cos(heading[r]), np.sin(heading[r])
+        l1, l2 = thigh[r], shank[r]
+        fwd = -l2 * np.sin(phi_shank[r]) - l1 * np.sin(phi_thigh[r])
+        up = l2 * np.cos(phi_shank[r]) + l1 * np.cos(phi_thigh[r])
+        fwd = fwd + offset[r, 0] * ch + offset[r, 1] * sh
+        up = up + offset[r, 2]
+        dist = np.hypot(fwd, up)
+        lo, hi = np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2)
+        dist = dist if (np.isnan(dist) or dist > lo) else lo  # np.clip
+        dist = dist if (np.isnan(dist) or dist < hi) else hi
+        line = np.arctan2(-fwd, up)
+        c_hip = (l1 * l1 + dist * dist - l2 * l2) / (2 * l1 * dist)
+        c_hip = c_hip if (np.isnan(c_hip) or c_hip > -1.0) else -1.0
+        c_hip = c_hip if (np.isnan(c_hip) or c_hip < 1.0) else 1.0
+        c_ankle = (l2 * l2 + dist * dist - l1 * l1) / (2 * l2 * dist)
+        c_ankle = c_ankle if (np.isnan(c_ankle) or c_ankle > -1.0) else -1.0
+        c_ankle = c_ankle if (np.isnan(c_ankle) or c_ankle < 1.0) else 1.0
+        out_shank[r] = line - np.arccos(c_ankle)
+        out_thigh[r] = line + np.arccos(c_hip)
+    return out_shank, out_thigh
