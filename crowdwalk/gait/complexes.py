@@ -30,8 +30,8 @@ _EPS = 1e-6  # forward-difference step [rad]
 #: Fewer rows per thread are solved in one call [-]: the solves are row-independent and
 #: release the GIL, so parts of a frame's walkers are solved at once in the process's row
 #: threads (:func:`crowdwalk.workers.row_threads`), bit for bit one call's result; a part
-#: costs ~2.5 µs per row against ~50 µs to hand it to a thread.
-MIN_POSE_ROWS = 64
+#: costs ~2.5 µs per row against 50-100 µs (loaded machine) to hand it to a thread.
+MIN_POSE_ROWS = 128
 _CHORDS = 2  # chord steps with the previous frame's Jacobian
 # The per-agent helpers and the solver run without numba's reference-counted runtime
 # (``_nrt=False``): with it every array view handed from one compiled function to the
@@ -361,7 +361,9 @@ def _swing_gn(r_pelvis, hip_sw, thigh, shank, heading, phi_knee, phi_thigh, norm
 
 def _f(a, shape=None) -> np.ndarray:
     arr = np.ascontiguousarray(a, dtype=np.float64)
-    return arr if shape is None else np.ascontiguousarray(np.broadcast_to(arr, shape))
+    if shape is None or arr.shape == shape:
+        return arr
+    return np.ascontiguousarray(np.broadcast_to(arr, shape))
 
 
 def _jacobian(jac, k: int, m: int) -> np.ndarray:

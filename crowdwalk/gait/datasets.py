@@ -240,8 +240,8 @@ def _sample_fast(curves: np.ndarray, t: np.ndarray, rows) -> np.ndarray | None:
         rows = np.arange(curves.shape[0]) if rows is None else np.asarray(rows)
         if rows.dtype.kind not in "iu":
             return None
-        tb, rb = np.broadcast_arrays(t, rows)
-        shape, tt, rr = tb.shape, tb.reshape(-1), rb.reshape(-1).astype(np.intp)
+        tb, rb = (t, rows) if t.shape == rows.shape else np.broadcast_arrays(t, rows)
+        shape, tt, rr = tb.shape, tb.reshape(-1), np.ascontiguousarray(rb.reshape(-1), np.intp)
         if rr.size and (rr.min() < -curves.shape[0] or rr.max() >= curves.shape[0]):
             return None
     out = np.empty((tt.size, 4))

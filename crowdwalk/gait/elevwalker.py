@@ -51,7 +51,12 @@ from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.joints import assemble_joints
-from crowdwalk.gait.posing_kernels import pelvis_rotations, shifted_stance_leg, upper_body
+from crowdwalk.gait.posing_kernels import (
+    as_rows,
+    pelvis_rotations,
+    shifted_stance_leg,
+    upper_body,
+)
 
 __all__ = [
     "GaitStyle",
@@ -77,7 +82,7 @@ _ELBOWS = np.array([JOINT["l_elbow"], JOINT["r_elbow"]])
 
 def _vector(values, k: int) -> np.ndarray:
     """``values`` (scalar or (k,)) as a contiguous float (k,) array for the kernels."""
-    return np.ascontiguousarray(np.broadcast_to(np.asarray(values, dtype=float), (k,)))
+    return as_rows(values, (k,))
 
 
 @dataclass(frozen=True)
@@ -602,9 +607,7 @@ def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     in the sagittal plane: two-link IK from the ankle, knee forward."""
     k = len(body)
     if k:  # the numpy code below, compiled (its values)
-        def f(a, shape):
-            return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), shape))
-
+        f = as_rows
         return shifted_stance_leg(f(body.thigh, (k,)), f(body.shank, (k,)),
                                   f(phi_shank, (k,)), f(phi_thigh, (k,)), f(heading, (k,)),
                                   f(offset, (k, 3)))

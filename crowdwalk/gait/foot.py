@@ -99,10 +99,8 @@ def stance_foot_pose(body: Body, foot: StanceFoot, pitch: np.ndarray):
     """Foot orientation, ankle position and toe angle from the foot–floor model (§4.1)."""
     k = len(body)
     if k and np.ndim(pitch) == 1:  # the code below, compiled (numpy's values)
+        from crowdwalk.gait.posing_kernels import as_rows as f
         from crowdwalk.gait.posing_kernels import stance_foot
-
-        def f(a, shape):
-            return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), shape))
 
         return stance_foot(f(foot.yaw, (k,)), f(foot.slope, (k,)), f(pitch, (k,)),
                            f(foot.ball, (k, 3)), f(body.heel_offset, (k,)),

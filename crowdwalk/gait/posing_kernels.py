@@ -18,9 +18,19 @@ from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-__all__ = ["pelvis_rotations", "upper_body"]
+__all__ = ["as_rows", "pelvis_rotations", "shifted_stance_leg", "smoothstep", "stance_foot",
+           "upper_body"]
 
 _jit = nb.njit(cache=True, nogil=True)
+
+
+def as_rows(values, shape: tuple) -> np.ndarray:
+    """``values`` (a scalar or an array broadcastable to ``shape``) as a C-contiguous
+    float64 array of ``shape`` for the kernels (itself where it is one already)."""
+    if (isinstance(values, np.ndarray) and values.shape == shape
+            and values.dtype == np.float64 and values.flags.c_contiguous):
+        return values
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(values, dtype=float), shape))
 
 
 @intrinsic
