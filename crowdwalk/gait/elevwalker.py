@@ -54,6 +54,7 @@ from crowdwalk.gait.joints import assemble_joints
 from crowdwalk.gait.posing_kernels import (
     as_rows,
     pelvis_rotations,
+    rows_finite,
     shifted_stance_leg,
     upper_body,
 )
@@ -528,7 +529,7 @@ def elevwalker_pose(
     contact[rows, st_row] = True
     contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
     converged = ok_ankle & ok_hip & ok_knee_st & ok_knee_sw & ok_foot_sw
-    converged &= np.isfinite(positions).all(axis=(1, 2)) & np.isfinite(local).all(axis=(1, 2, 3))
+    converged &= rows_finite(positions, local)  # every joint position and rotation finite
     return WalkerPose(
         root_position=root,
         root_rotation=r_pelvis,

@@ -215,3 +215,24 @@ def shifted_stance_leg(thigh, shank, phi_shank, phi_thigh, heading, offset
         out_shank[r] = line - np.arccos(c_ankle)
         out_thigh[r] = line + np.arccos(c_hip)
     return out_shank, out_thigh
+
+
+@_jit
+def rows_finite(positions, local):  # pragma: no cover - compiled
+    """(k,) bool: every entry of row r of ``positions`` (k, J, 3) and ``local`` (k, J, 3,
+    3) is finite (``np.isfinite(...).all(axis=...)`` of both, and-ed)."""
+    k = positions.shape[0]
+    out = np.ones(k, np.bool_)
+    for r in range(k):
+        ok = True
+        for v in positions[r].flat:
+            if not np.isfinite(v):
+                ok = False
+                break
+        if ok:
+            for v in local[r].flat:
+                if not np.isfinite(v):
+                    ok = False
+                    break
+        out[r] = ok
+    return out
