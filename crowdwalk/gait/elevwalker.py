@@ -549,8 +549,7 @@ def pelvis_shapes(style: GaitStyle, phase: np.ndarray) -> tuple[np.ndarray, np.n
     if style.pelvis_from_data:
         from crowdwalk.gait.datasets import pelvis_motion
 
-        motion = pelvis_motion()
-        return motion.list_shape(phase), motion.rotation_shape(phase)
+        return pelvis_motion().shapes(phase)
     return np.sin(2.0 * np.pi * phase), np.cos(2.0 * np.pi * phase)
 
 
