@@ -36,7 +36,7 @@ from itertools import count as _count
 import numpy as np
 
 __all__ = ["Workers", "WorkerError", "RowThreads", "available_cores", "row_threads",
-           "split_rows", "worker_count", "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS",
+           "set_row_threads", "split_rows", "worker_count", "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS",
            "MIN_THREAD_ROWS"]
 
 #: A run that writes poses and has fewer walkers stays in one process (workers cost ~2 s
@@ -135,6 +135,20 @@ def row_threads() -> RowThreads:
         if _ROW_THREADS is None:
             _ROW_THREADS = RowThreads(1 if mp.current_process().daemon else available_cores())
         return _ROW_THREADS
+
+
+def set_row_threads(count: int) -> None:
+    """Make this process's :class:`RowThreads` (:func:`row_threads`) ``count`` threads: a
+    worker process that poses (:mod:`crowdwalk.gait.remote`) is a daemon, which would
+    get one, and runs the gait engine's compiled solves on parts of a frame's walkers at
+    once."""
+    global _ROW_THREADS
+    with _ROW_LOCK:
+        if _ROW_THREADS is not None and _ROW_THREADS.count == max(1, int(count)):
+            return
+        old, _ROW_THREADS = _ROW_THREADS, RowThreads(count)
+    if old is not None:
+        old.close()
 
 
 class _Handle:

@@ -79,6 +79,7 @@ from crowdwalk.gait.foot import (
     stance_foot_pose,
     wrap_angle,
 )
+from crowdwalk.gait.posing_kernels import smoothstep
 from crowdwalk.steps import StepBatch
 
 __all__ = ["StepCommand", "PoseFrame", "Animator", "GroundHeight"]
@@ -114,8 +115,7 @@ _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + s
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x)
+    return smoothstep(x)  # x clipped to [0, 1], x² (3 − 2x): compiled (posing_kernels)
 
 
 def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:

@@ -206,8 +206,14 @@ def _sample_kernel(curves, t, rows, out):  # pragma: no cover - compiled
         u = (t[a] % 1.0) * n
         i1 = int(np.floor(u))
         s = u - float(i1)
-        i0, i2, i3 = (i1 - 1) % n, (i1 + 1) % n, (i1 + 2) % n
-        i1 = i1 % n
+        if n >= 3 and 0 <= i1 <= n:  # the common case without integer divisions
+            i0 = i1 - 1 if i1 > 0 else i1 - 1 + n
+            i2 = i1 + 1 if i1 + 1 < n else i1 + 1 - n
+            i3 = i1 + 2 if i1 + 2 < n else i1 + 2 - n
+            i1 = i1 if i1 < n else i1 - n
+        else:
+            i0, i2, i3 = (i1 - 1) % n, (i1 + 1) % n, (i1 + 2) % n
+            i1 = i1 % n
         r = rows[a]
         s2 = s * s
         s3 = s2 * s
@@ -234,8 +240,8 @@ def _sample_fast(curves: np.ndarray, t: np.ndarray, rows) -> np.ndarray | None:
         rows = np.arange(curves.shape[0]) if rows is None else np.asarray(rows)
         if rows.dtype.kind not in "iu":
             return None
-        tb, rb = np.broadcast_arrays(t, rows)
-        shape, tt, rr = tb.shape, tb.reshape(-1), rb.reshape(-1).astype(np.intp)
+        tb, rb = (t, rows) if t.shape == rows.shape else np.broadcast_arrays(t, rows)
+        shape, tt, rr = tb.shape, tb.reshape(-1), np.ascontiguousarray(rb.reshape(-1), np.intp)
         if rr.size and (rr.min() < -curves.shape[0] or rr.max() >= curves.shape[0]):
             return None
     out = np.empty((tt.size, 4))
@@ -254,6 +260,22 @@ def _series_kernel(coef, k, t, out):  # pragma: no cover - compiled
             term = coef[2 * h] * np.cos(x) + coef[2 * h + 1] * np.sin(x)
             acc = term if h == 0 else acc + term
         out[a] = acc
+
+
+@nb.njit(cache=True, nogil=True)
+def _series2_kernel(coef_a, coef_b, k, t, out_a, out_b):  # pragma: no cover - compiled
+    """:func:`_series_kernel` of two coefficient sets over the same harmonics and times,
+    each cosine and sine evaluated once (the same values as two calls)."""
+    for a in range(t.shape[0]):
+        acc_a = acc_b = 0.0
+        for h in range(k.shape[0]):
+            x = 2 * np.pi * k[h] * t[a]
+            c, s = np.cos(x), np.sin(x)
+            term_a = coef_a[2 * h] * c + coef_a[2 * h + 1] * s
+            term_b = coef_b[2 * h] * c + coef_b[2 * h + 1] * s
+            acc_a = term_a if h == 0 else acc_a + term_a
+            acc_b = term_b if h == 0 else acc_b + term_b
+        out_a[a], out_b[a] = acc_a, acc_b
 
 
 #: How the stair cycles, which do not close, were made periodic (``load_datasets``):
@@ -364,6 +386,21 @@ class PelvisMotion:
     def rotation_shape(self, t) -> np.ndarray:
         """Pelvic rotation at stride times t, + own side forward, peak 1 [1]."""
         return self._series(self.rotation_coefficients, self.harmonics, t)
+
+    def shapes(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """(:meth:`list_shape`, :meth:`rotation_shape`) at stride times t, the harmonics
+        evaluated once for both (the same values)."""
+        t = np.asarray(t, dtype=float)
+        la, ro = self.list_coefficients, self.rotation_coefficients
+        k = np.asarray(self.harmonics, dtype=float)
+        if not (t.ndim and la.dtype == ro.dtype == np.float64 and la.ndim == ro.ndim == 1
+                and k.size and la.shape[0] == ro.shape[0] == 2 * k.size):
+            return self.list_shape(t), self.rotation_shape(t)
+        flat = np.ascontiguousarray(t).reshape(-1)
+        out_a, out_b = np.empty(flat.size), np.empty(flat.size)
+        _series2_kernel(np.ascontiguousarray(la), np.ascontiguousarray(ro), k, flat, out_a,
+                        out_b)
+        return out_a.reshape(t.shape), out_b.reshape(t.shape)
 
 
 @cache

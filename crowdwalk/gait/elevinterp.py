@@ -176,6 +176,13 @@ def _step_of_kernel(stance, swing, thigh, shank, ankle_h, heel, toe, out):  # pr
             out[a, 1] = sy + toe[a] * s - ankle_h[a] * c
 
 
+def _flat_rows(a: np.ndarray, shape: tuple) -> np.ndarray:
+    """``a`` broadcast to ``shape``, C-contiguous (no broadcast where it has the shape)."""
+    if a.shape == shape:
+        return np.ascontiguousarray(a)
+    return np.ascontiguousarray(np.broadcast_to(a, shape))
+
+
 def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     """Step length and height a pair of leg silhouettes produces (Eq. 10, extended).
 
@@ -208,9 +215,8 @@ def step_of(stance: np.ndarray, swing: np.ndarray, leg: LegLike) -> np.ndarray:
     dims = [np.asarray(_dimension(leg, k), dtype=float) for k in LEG_FIELDS]
     if stance.shape[-1] >= 3 and swing.shape[-1] >= 3:  # the code below, compiled
         shape = np.broadcast_shapes(stance.shape[:-1], swing.shape[:-1], *(d.shape for d in dims))
-        flat = [np.ascontiguousarray(np.broadcast_to(a[..., :3], shape + (3,))).reshape(-1, 3)
-                for a in (stance, swing)]
-        flat += [np.ascontiguousarray(np.broadcast_to(d, shape)).reshape(-1) for d in dims]
+        flat = [_flat_rows(a[..., :3], shape + (3,)).reshape(-1, 3) for a in (stance, swing)]
+        flat += [_flat_rows(d, shape).reshape(-1) for d in dims]
         out = np.empty((flat[0].shape[0], 2))
         _step_of_kernel(*flat, out)
         return out.reshape(shape + (2,))
@@ -952,6 +958,16 @@ def lift_swing_toe(angles: np.ndarray, leg: LegLike, stance_fraction: np.ndarray
     half = n // 2
     t = (np.arange(half) / n)[None, :]  # the stance leg's t; the swing leg is at t + 0.5
     t_off = np.asarray(stance_fraction, dtype=float)[:, None] - 0.5
+    if k and out.ndim == 3 and out.shape[2] == 4:  # the code below, compiled (its values)
+        def f(a):
+            return np.ascontiguousarray(a[:, 0])
+
+        _lift_swing_toe_kernel(out, f(thigh), f(shank), f(ankle_h), f(heel), f(ball), f(toe),
+                               f(clearance), f(t_off), f(np.broadcast_to(np.asarray(
+                                   hip_drop, dtype=float).reshape(-1, 1), (k, 1))),
+                               np.ascontiguousarray(t[0]), np.sin(2.0 * np.pi * t[0]),
+                               _MAX_RISE)
+        return out
     u = np.clip((t - t_off) / np.maximum(0.5 - t_off, 1e-6), 0.0, 1.0)  # through swing
     window = np.where(t >= t_off, np.sin(np.pi * u) ** 2, 0.0)
     middle = (u > 1.0 / 3.0) & (u < 2.0 / 3.0)
@@ -977,6 +993,71 @@ def lift_swing_toe(angles: np.ndarray, leg: LegLike, stance_fraction: np.ndarray
         out[:, half:2 * half, 2] += delta[:, None] * window
         out[:, half:2 * half, 1] -= delta[:, None] * window
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def _clip(x, lo, hi):
+    """``np.clip``'s value for one float (NaN kept; ties to the bound)."""
+    y = x if (np.isnan(x) or x > lo) else lo
+    return y if (np.isnan(y) or y < hi) else hi
+
+
+@nb.njit(cache=True, nogil=True)
+def _lift_swing_toe_kernel(out, thigh, shank, ankle_h, heel, ball, toe, clearance, t_off,
+                           hip_drop, t, sin_2pi_t, max_rise):  # pragma: no cover - compiled
+    """:func:`lift_swing_toe`'s numpy code on ``out`` (k, N, 4) in place, the same
+    operations in the same order per element (dimensions (k,) [m], t and sin 2πt (N/2,));
+    the three passes stop together, as the batched code's ``np.any`` does."""
+    k, n = out.shape[0], out.shape[1]
+    half = n // 2
+    window, hip = np.empty((k, half)), np.empty((k, half))
+    middle = np.empty((k, half), np.bool_)
+    delta = np.empty(k)
+    for r in range(k):
+        span = max(0.5 - t_off[r], 1e-6)
+        for j in range(half):
+            u = _clip((t[j] - t_off[r]) / span, 0.0, 1.0)
+            if t[j] >= t_off[r]:
+                w = np.sin(np.pi * u)
+                window[r, j] = w * w
+            else:
+                window[r, j] = 0.0
+            middle[r, j] = (u > 1.0 / 3.0) & (u < 2.0 / 3.0)
+            drop = hip_drop[r] * sin_2pi_t[j]
+            f = out[r, j, 0]
+            c, s_ = np.cos(f), np.sin(f)
+            lead = -ball[r] * s_ if f <= 0.0 else heel[r] * s_
+            hip[r, j] = (lead + ankle_h[r] * c + shank[r] * np.cos(out[r, j, 1])
+                         + thigh[r] * np.cos(out[r, j, 2]) - drop)
+    for _ in range(3):
+        more = False
+        for r in range(k):
+            best = -np.inf
+            nan = False
+            for j in range(half):
+                sw0, sw1, sw2 = out[r, half + j, 0], out[r, half + j, 1], out[r, half + j, 2]
+                ankle = hip[r, j] - thigh[r] * np.cos(sw2) - shank[r] * np.cos(sw1)
+                g, h = np.cos(sw0), np.sin(sw0)
+                low = min(min(-heel[r] * h, ball[r] * h), toe[r] * h)
+                z = low - ankle_h[r] * g + ankle
+                rate = thigh[r] * np.sin(sw2) - shank[r] * np.sin(sw1)
+                if middle[r, j] and z < clearance[r] and rate > 0.05:
+                    need = (clearance[r] - z) / max(rate * window[r, j], 1e-6)
+                else:
+                    need = 0.0
+                if np.isnan(need):
+                    nan = True
+                elif need > best:
+                    best = need
+            delta[r] = _clip(np.nan if nan else best, 0.0, max_rise)
+            more |= delta[r] > 1e-6
+        if not more:
+            break
+        for r in range(k):
+            for j in range(half):
+                step = delta[r] * window[r, j]
+                out[r, half + j, 2] += step
+                out[r, half + j, 1] -= step
 
 
 def _blend_step(space: _ShapeSpace, simplex: np.ndarray, weights: np.ndarray,

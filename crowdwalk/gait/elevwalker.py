@@ -45,15 +45,19 @@ from crowdwalk.body import (
     Body,
     forward_kinematics,
     mirrored_axis,
-    rotation_x,
-    rotation_y,
-    rotation_z,
 )
 from crowdwalk.errors import invalid
 from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.joints import assemble_joints
+from crowdwalk.gait.posing_kernels import (
+    as_rows,
+    pelvis_rotations,
+    rows_finite,
+    shifted_stance_leg,
+    upper_body,
+)
 
 __all__ = [
     "GaitStyle",
@@ -73,6 +77,13 @@ __all__ = [
 # Skew ankle axes per side (row 0 left, row 1 right), unit vectors in the parent frame.
 _TC_AXES = np.stack([TALOCRURAL_AXIS, mirrored_axis(TALOCRURAL_AXIS)])
 _SUB_AXES = np.stack([SUBTALAR_AXIS, mirrored_axis(SUBTALAR_AXIS)])
+_SHOULDERS = np.array([JOINT["l_shoulder"], JOINT["r_shoulder"]])
+_ELBOWS = np.array([JOINT["l_elbow"], JOINT["r_elbow"]])
+
+
+def _vector(values, k: int) -> np.ndarray:
+    """``values`` (scalar or (k,)) as a contiguous float (k,) array for the kernels."""
+    return as_rows(values, (k,))
 
 
 @dataclass(frozen=True)
@@ -464,7 +475,7 @@ def elevwalker_pose(
         lst = lst * np.asarray(list_scale, dtype=float)
     tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
-    r_pelvis = rotation_z(heading + rotation) @ rotation_x(lst) @ rotation_y(tilt)
+    r_pelvis = pelvis_rotations(_vector(heading + rotation, k), _vector(lst, k), _vector(tilt, k))
     y_pelvis = r_pelvis[:, :, 1]
     root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
     hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
@@ -518,7 +529,7 @@ def elevwalker_pose(
     contact[rows, st_row] = True
     contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
     converged = ok_ankle & ok_hip & ok_knee_st & ok_knee_sw & ok_foot_sw
-    converged &= np.isfinite(positions).all(axis=(1, 2)) & np.isfinite(local).all(axis=(1, 2, 3))
+    converged &= rows_finite(positions, local)  # every joint position and rotation finite
     return WalkerPose(
         root_position=root,
         root_rotation=r_pelvis,
@@ -538,8 +549,7 @@ def pelvis_shapes(style: GaitStyle, phase: np.ndarray) -> tuple[np.ndarray, np.n
     if style.pelvis_from_data:
         from crowdwalk.gait.datasets import pelvis_motion
 
-        motion = pelvis_motion()
-        return motion.list_shape(phase), motion.rotation_shape(phase)
+        return pelvis_motion().shapes(phase)
     return np.sin(2.0 * np.pi * phase), np.cos(2.0 * np.pi * phase)
 
 
@@ -577,21 +587,30 @@ def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thi
     else:
         shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
     sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
-    yaw = rotation_z(heading + shoulder)
-    trunk = yaw @ rotation_x(sway) @ rotation_y(tilt)
-    local[:, JOINT["vl5"]] = np.swapaxes(r_pelvis, 1, 2) @ trunk
-    local[:, JOINT["skullbase"]] = np.swapaxes(trunk, 1, 2) @ rotation_z(heading)
-    for side, thigh, sign in (("l", thigh_right, 1.0), ("r", thigh_left, -1.0)):
+    k = local.shape[0]
+    arm_out, swing, elbow = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
+    for s, (thigh, sign) in enumerate(((thigh_right, 1.0), (thigh_left, -1.0))):  # l, r
         signal = np.clip((thigh - THIGH_MID) / THIGH_HALF, -1.0, 1.0)
-        upper = yaw @ rotation_x(sign * a.arm_out) @ rotation_y(-a.arm_swing * signal)
-        local[:, JOINT[f"{side}_shoulder"]] = np.swapaxes(trunk, 1, 2) @ upper
-        elbow = a.elbow_min + (a.elbow_max - a.elbow_min) * 0.5 * (signal + 1.0)
-        local[:, JOINT[f"{side}_elbow"]] = rotation_y(-elbow)
+        arm_out[:, s] = sign * a.arm_out
+        swing[:, s] = -a.arm_swing * signal
+        elbow[:, s] = -(a.elbow_min + (a.elbow_max - a.elbow_min) * 0.5 * (signal + 1.0))
+    # trunk = Rz(heading + shoulder) Rx(sway) Ry(tilt); vl5 = r_pelvisᵀ trunk; skullbase =
+    # trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
+    # signal); elbows Ry(-elbow): compiled, numpy's values (posing_kernels)
+    upper_body(local, np.ascontiguousarray(r_pelvis), _vector(heading + shoulder, k),
+               _vector(sway, k), _vector(tilt, k), _vector(heading, k), arm_out, swing, elbow,
+               JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
 
 
 def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
     in the sagittal plane: two-link IK from the ankle, knee forward."""
+    k = len(body)
+    if k:  # the numpy code below, compiled (its values)
+        f = as_rows
+        return shifted_stance_leg(f(body.thigh, (k,)), f(body.shank, (k,)),
+                                  f(phi_shank, (k,)), f(phi_thigh, (k,)), f(heading, (k,)),
+                                  f(offset, (k, 3)))
     ch, sh = np.cos(heading), np.sin(heading)
     l1, l2 = body.thigh, body.shank
     # Data hip relative to the ankle in sagittal coordinates (forward, up).

@@ -97,6 +97,14 @@ class StanceFoot:
 
 def stance_foot_pose(body: Body, foot: StanceFoot, pitch: np.ndarray):
     """Foot orientation, ankle position and toe angle from the foot–floor model (§4.1)."""
+    k = len(body)
+    if k and np.ndim(pitch) == 1:  # the code below, compiled (numpy's values)
+        from crowdwalk.gait.posing_kernels import as_rows as f
+        from crowdwalk.gait.posing_kernels import stance_foot
+
+        return stance_foot(f(foot.yaw, (k,)), f(foot.slope, (k,)), f(pitch, (k,)),
+                           f(foot.ball, (k, 3)), f(body.heel_offset, (k,)),
+                           f(body.ball_offset, (k,)), f(body.ankle_height, (k,)))
     r_foot = rotation_z(foot.yaw) @ rotation_y(-pitch)
     on_heel = pitch >= foot.slope
     k = len(body)

@@ -14,7 +14,14 @@ import numba as nb
 import numpy as np
 
 from crowdwalk.body import JOINT, LEG_JOINTS
-from crowdwalk.gait.complexes import _matmul, _rodrigues, _times_rotation_y, _wrap
+from crowdwalk.gait.complexes import (
+    MIN_POSE_ROWS,
+    _matmul,
+    _rodrigues,
+    _times_rotation_y,
+    _wrap,
+)
+from crowdwalk.workers import row_threads
 
 __all__ = ["assemble_joints"]
 
@@ -210,10 +217,13 @@ def assemble_joints(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st,
     ik = use is not None
     use = np.zeros(k, np.bool_) if use is None else f(use, dtype=np.bool_)
     goal = np.zeros((k, 3)) if goal is None else f(goal, dtype=float)
-    return _assemble(f(left, dtype=np.bool_), f(phase, dtype=float), f(heading, dtype=float),
-                     f(np.broadcast_to(stance_fraction, (k,)), dtype=float), f(r_pelvis),
-                     f(r_thigh_st), f(knee_st), f(tc_st), f(sub_st), f(x_ankle), f(toe_st),
-                     f(hip_sw), f(r_thigh_sw), f(knee_sw), f(r_shank_sw), f(tc_sw),
-                     f(phi_sw, dtype=float), f(phi_st, dtype=float), f(thigh), f(shank), ik,
-                     use, goal, f(np.broadcast_to(toe_given, (k,)), dtype=float),
-                     float(arm_swing), float(elbow_flexion), int(n_joints))  # fmt: skip
+    return row_threads().map(
+        _assemble, k, f(left, dtype=np.bool_), f(phase, dtype=float), f(heading, dtype=float),
+        f(np.broadcast_to(stance_fraction, (k,)), dtype=float), f(r_pelvis),
+        f(r_thigh_st), f(knee_st), f(tc_st), f(sub_st), f(x_ankle), f(toe_st),
+        f(hip_sw), f(r_thigh_sw), f(knee_sw), f(r_shank_sw), f(tc_sw),
+        f(phi_sw, dtype=float), f(phi_st, dtype=float), f(thigh), f(shank), ik,
+        use, goal, f(np.broadcast_to(toe_given, (k,)), dtype=float),
+        float(arm_swing), float(elbow_flexion), int(n_joints),
+        min_rows=MIN_POSE_ROWS,
+    )  # fmt: skip

@@ -21,7 +21,7 @@ import numpy as np
 
 from crowdwalk.gait.engine import GaitEngine, PoseFrame
 from crowdwalk.steps import StepBatch
-from crowdwalk.workers import Workers
+from crowdwalk.workers import Workers, available_cores, set_row_threads
 
 __all__ = ["RemoteEngine"]
 
@@ -44,6 +44,9 @@ class RemoteEngine:
     def __init__(self, factory: Callable[[], GaitEngine], workers: Workers,
                  worker: int = 0) -> None:
         self.workers, self.worker = workers, worker
+        # the worker is a daemon process (one row thread by default): its engine's
+        # compiled solves run on parts of a frame's walkers in a thread per core
+        workers.send(worker, None, set_row_threads, available_cores())
         workers.keep(_KEY, factory, build=True, worker=worker)
         self._skeleton = None
 

@@ -66,9 +66,29 @@ def _in_bbox(xy: np.ndarray, bbox) -> np.ndarray:
     return (x >= bbox[0]) & (x <= bbox[2]) & (y >= bbox[1]) & (y <= bbox[3])
 
 
+_BOXES: dict[int, tuple[Polygon, bool]] = {}  # id(polygon) -> (polygon, it is its bbox)
+
+
+def _is_box(poly: Polygon, bbox) -> bool:
+    """Whether ``poly`` is the axis-aligned rectangle ``bbox`` (no holes, four corners):
+    then a point is on it (closed) exactly when it is in the closed bbox, which is what
+    GEOS's exact point-in-polygon test gives for axis-aligned edges."""
+    known = _BOXES.get(id(poly))
+    if known is not None and known[0] is poly:
+        return known[1]
+    corners = {(bbox[0], bbox[1]), (bbox[2], bbox[1]), (bbox[2], bbox[3]), (bbox[0], bbox[3])}
+    ring = [tuple(c) for c in shapely.get_coordinates(poly.exterior)]
+    box = (len(poly.interiors) == 0 and len(ring) == 5 and ring[0] == ring[-1]
+           and set(ring[:-1]) == corners and len(corners) == 4)
+    if len(_BOXES) > 4096:
+        _BOXES.clear()
+    _BOXES[id(poly)] = (poly, box)  # the polygon is kept: its id stays its own
+    return box
+
+
 def _covers_polygon(poly: Polygon, bbox, xy: np.ndarray) -> np.ndarray:
     mask = _in_bbox(xy, bbox)
-    if mask.any():
+    if mask.any() and not _is_box(poly, bbox):
         sub = xy[mask]
         mask[mask] = shapely.intersects_xy(poly, sub[:, 0], sub[:, 1])
     return mask

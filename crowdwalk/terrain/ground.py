@@ -168,6 +168,11 @@ class _FeatureGrid:
         return points_of
 
 
+#: With at most this many features :meth:`Terrain._by_owner` compares the owners with each
+#: feature instead of sorting them (the same groups in the same order) [-].
+_FEW_FEATURES = 16
+
+
 @dataclass(frozen=True, eq=False)
 class Terrain:
     """A flat base plane over ``extent`` plus features composed in override order.
@@ -236,9 +241,15 @@ class Terrain:
                 own[idx[f.covers(xy[idx])]] = i
         return own
 
-    @staticmethod
-    def _by_owner(own: np.ndarray):
-        """(feature index, point indices) for every feature that owns points."""
+    def _by_owner(self, own: np.ndarray):
+        """(feature index, point indices) for every feature that owns points, in feature
+        order, the indices ascending."""
+        if len(self.features) <= _FEW_FEATURES:  # a comparison per feature: no sort
+            for f in range(len(self.features)):
+                k = np.flatnonzero(own == f)
+                if len(k):
+                    yield f, k
+            return
         idx = np.flatnonzero(own >= 0)
         if len(idx) == 0:
             return
