@@ -1245,11 +1245,11 @@ class Animator:
     def _pin_ball(self, a: np.ndarray, phase: np.ndarray, walked,
                   toe_fix: np.ndarray) -> np.ndarray | None:
         """``GaitStyle.pin_ball``: corrections (k, 3) [m] of the pinned push-off ankle's goal
-        that put the trailing foot's ball where the pin put it (None: none needed), the
-        walk ``walked`` re-solved with them (in place). The swing talocrural turns the foot
-        about a skew axis and the subtalar stays neutral, so a foot pitched while yawed
-        away from ψ (a turn) rolls and its ball moves sideways off the pinned ankle (up to
-        19 mm at the corner); each round moves the goal by the ball's error."""
+        that put the trailing foot's ball horizontally where the pin put it (None: none
+        needed), the walk ``walked`` re-solved with them (in place). The swing talocrural
+        turns the foot about a skew axis and the subtalar stays neutral, so a foot pitched
+        while yawed away from ψ (a turn) rolls and its ball moves sideways off the pinned
+        ankle (up to 19 mm at the corner); each round moves the goal by the ball's error."""
         tau = 2.0 * phase
         pinned = np.flatnonzero(self._swing.has_trail[a] & (tau < self._swing.toe_off[a]))
         if pinned.size == 0:
@@ -1260,6 +1260,7 @@ class Animator:
         fix = np.zeros((a.size, 3))
         for _ in range(_PIN_ROUNDS):
             err = walked.positions[pinned, ball_joint] - want
+            err[:, 2] = 0.0  # horizontal: over a riser the lift raises the pin on purpose
             off = np.linalg.norm(err, axis=1) > _PIN_TOLERANCE
             if not off.any():
                 break
