@@ -1257,10 +1257,17 @@ class Animator:
         ap = a[pinned]
         want = self._pinned_foot(ap, phase[pinned], self._legs(ap, phase[pinned])[1])[2]
         ball_joint = LEG_JOINTS[np.where(self._step.stance_left[ap], 1, 0), 4]
+        # horizontal: over a riser the lift raises the pin on purpose
+        first = walked.positions[pinned, ball_joint] - want
+        first[:, 2] = 0.0
+        # all of it until half-way to toe-off, none at toe-off (the swing's offset starts
+        # from the uncorrected pin): the ball is up on the straightening toes by then
+        x = tau[pinned] / np.maximum(self._swing.toe_off[ap], 1e-9)
+        want = want + _smoothstep(2.0 * x - 1.0)[:, None] * first
         fix = np.zeros((a.size, 3))
         for _ in range(_PIN_ROUNDS):
             err = walked.positions[pinned, ball_joint] - want
-            err[:, 2] = 0.0  # horizontal: over a riser the lift raises the pin on purpose
+            err[:, 2] = 0.0
             off = np.linalg.norm(err, axis=1) > _PIN_TOLERANCE
             if not off.any():
                 break
