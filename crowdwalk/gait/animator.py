@@ -13,7 +13,11 @@ Around the walker the Animator adds what a crowd needs:
   on the swing leg); then the data-driven swing ankle is pulled, with IK, from there to
   where the heel strikes the commanded foothold: offsets measured once per step (walker
   evaluated at toe-off and at the end) blended with a smoothstep. The landing foot is
-  the next stance foot, so it neither slides nor jumps.
+  the next stance foot, so it neither slides nor jumps. In a turn the pinned ankle's
+  goal is corrected until the trailing ball stays put (``GaitStyle.pin_ball``), and a
+  toe-off velocity jump above 2 m/s is partly carried into the swing
+  (``GaitStyle.toe_off_c1``; docs/architecture.md "Toe-off hand-over and the trailing
+  ball in turns").
 - **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
   Bezier swing curve and the data-driven swing foot would come within 2 mm of the ground
   between toe-off and landing (stair nosings, blocks), the swing ankle follows the
