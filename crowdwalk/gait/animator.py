@@ -121,7 +121,7 @@ _TOE_OFF_KEEP = 2.0  # ... and leaves a velocity jump up to this [m/s] (level wa
 _TOE_OFF_PEAK = 3.94  # max |h''(u)| of its shape (_toe_off_shape)
 _TOE_OFF_DPHASE = 0.005  # stance-phase interval of its velocity differences [1]
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
-_PIN_TOLERANCE = 0.001  # ... while its ball is farther than this from the pin's [m]
+_PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:
