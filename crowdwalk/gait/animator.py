@@ -13,7 +13,11 @@ Around the walker the Animator adds what a crowd needs:
   on the swing leg); then the data-driven swing ankle is pulled, with IK, from there to
   where the heel strikes the commanded foothold: offsets measured once per step (walker
   evaluated at toe-off and at the end) blended with a smoothstep. The landing foot is
-  the next stance foot, so it neither slides nor jumps.
+  the next stance foot, so it neither slides nor jumps. In a turn the pinned ankle's
+  goal is corrected until the trailing ball stays put (``GaitStyle.pin_ball``), and a
+  toe-off velocity jump above 2 m/s is partly carried into the swing
+  (``GaitStyle.toe_off_c1``; docs/architecture.md "Toe-off hand-over and the trailing
+  ball in turns").
 - **Swing-foot clearance (issue item 6).** When the planner supplies a collision-free
   Bezier swing curve and the data-driven swing foot would come within 2 mm of the ground
   between toe-off and landing (stair nosings, blocks), the swing ankle follows the
@@ -112,10 +116,23 @@ _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
 _LEVEL_RISE = 0.02  # steps rising or falling less than this are level [m]
 _YAW_ROUNDS = 2  # corrections of the swing foot's yaw per frame
 _REACH = 0.995  # largest hip–ankle distance at landing, fraction of thigh + shank
+_TOE_OFF_BLEND = 0.7  # the toe-off velocity hand-over lasts this fraction of the swing
+_TOE_OFF_ACCEL = 25.0  # ... adds at most this acceleration [m/s²] (chosen on the park)
+_TOE_OFF_KEEP = 2.0  # ... and leaves a velocity jump up to this [m/s] (level walkers: 1.2-1.8)
+_TOE_OFF_PEAK = 3.94  # max |h''(u)| of its shape (_toe_off_shape)
+_TOE_OFF_DPHASE = 0.005  # stance-phase interval of its velocity differences [1]
+_PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
+_PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 
 
 def _smoothstep(x: np.ndarray) -> np.ndarray:
     return smoothstep(x)  # x clipped to [0, 1], x² (3 − 2x): compiled (posing_kernels)
+
+
+def _toe_off_shape(u: np.ndarray) -> np.ndarray:
+    """The toe-off hand-over's shape h(u) (k,), u ∈ [0, 1] (k,): h(0) = 0, h'(0) = 1, and
+    h, h', h'' zero at u = 1 (quintic; h''(0) = 0: no acceleration added at either end)."""
+    return u * (1.0 - u) ** 3 * (1.0 + 3.0 * u)
 
 
 def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -307,6 +324,7 @@ class _SwingState:
     hip_vel: np.ndarray  # (n, 3) root velocity jump the offset starts with [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
     join_long: np.ndarray  # (n,) bool, hip_fix blends out over the whole step (clamped_join)
+    toe_vel: np.ndarray  # (n, 3) pinned ankle's velocity less the data's at toe-off [m/s]
 
     @classmethod
     def zeros(cls, n: int) -> _SwingState:
@@ -314,7 +332,7 @@ class _SwingState:
                    np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool),
                    np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool))
+                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool), np.zeros((n, 3)))
 
 
 @dataclass(eq=False)
@@ -424,7 +442,7 @@ class Animator:
         self._last = _LastPose.zeros(n, nj)
         self._trail_memo: _TrailMemo | None = None  # set while a frame is posed
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
-                      "lifted": 0, "lift_steps": 0, "yaw_fixes": 0}  # fmt: skip
+                      "lifted": 0, "lift_steps": 0, "yaw_fixes": 0, "pin_fixes": 0}  # fmt: skip
 
     # -- public -----------------------------------------------------------------------
     @property
@@ -587,6 +605,7 @@ class Animator:
         sw.hip_fix[a] = 0.0
         sw.hip_vel[a] = 0.0
         sw.hip_drop[a] = 0.0
+        sw.toe_vel[a] = 0.0
         sw.use_bezier[a] = False
         sw.lift_need[a] = 0.0
         self._warm_start_swap(a, had)
@@ -682,6 +701,8 @@ class Animator:
         # its ball, pitched by the data; then the ankle joins the data smoothly.
         pin = self._pinned_ankle(a, toe_off_phase, self._legs(a, toe_off_phase)[1])[0]
         sw.d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
+        if self.style.toe_off_c1:
+            self._toe_off_velocity(a, had, toe_off_phase, pin, tc)
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
@@ -695,6 +716,35 @@ class Animator:
                            0.0)
         sw.hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
         sw.d1[a] = ankle_land - ankle1 - sw.hip_drop[a]
+
+    def _toe_off_velocity(self, a: np.ndarray, had: np.ndarray, toe_off_phase: np.ndarray,
+                          pin: np.ndarray, ankle_joint: np.ndarray) -> None:
+        """``GaitStyle.toe_off_c1``: the horizontal velocity (k, 3) [m/s] the swing ankle's
+        offset starts with at toe-off: the pinned push-off ankle's less the data's swing
+        ankle's there (one-sided differences over ``_TOE_OFF_DPHASE`` of stance phase;
+        ``pin`` (k, 3) the pinned ankle at toe-off), less ``_TOE_OFF_KEEP`` of it and at
+        most what the hand-over carries within ``_TOE_OFF_ACCEL``."""
+        j = np.flatnonzero(had & (self._swing.toe_off[a] > 0.0))
+        if j.size == 0:
+            return
+        aj, p = a[j], toe_off_phase[j]
+        dt = 2.0 * _TOE_OFF_DPHASE * self._step.duration[aj]
+        after = self._walk(aj, p + _TOE_OFF_DPHASE, corrected=True)
+        # (the corrected pose starts from the pinned ankle: ankle0 + d0)
+        v_data = (after.positions[np.arange(j.size), ankle_joint[j]] - pin[j]) / dt[:, None]
+        before = p - _TOE_OFF_DPHASE
+        pin_before = self._pinned_ankle(aj, before, self._legs(aj, before)[1])[0]
+        v_pin = (pin[j] - pin_before) / dt[:, None]
+        dv = v_pin - v_data
+        dv[:, 2] = 0.0  # horizontal: the data's faster rise is the swing's clearance
+        size = np.maximum(np.linalg.norm(dv, axis=1), 1e-9)
+        # the part of the jump above _TOE_OFF_KEEP, and only what the hand-over can carry
+        # within the acceleration it may add (on short swings the whole difference would
+        # add more than the jump it removes)
+        beta = _TOE_OFF_BLEND * (1.0 - self._swing.toe_off[aj]) * self._step.duration[aj]
+        carry = np.minimum(np.maximum(size - _TOE_OFF_KEEP, 0.0),
+                           _TOE_OFF_ACCEL * beta / _TOE_OFF_PEAK)
+        self._swing.toe_vel[aj] = dv * (carry / size)[:, None]
 
     def _uneven(self, cmd: StepCommand, body: Body, swing_from: np.ndarray) -> np.ndarray:
         """(m,) bool: steps over uneven ground — something above the line from the
@@ -846,7 +896,10 @@ class Animator:
             self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
                                                 toe_fix=toe_fix[fix]))
             self.stats["yaw_fixes"] += fix.size
-        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix)
+        pin_fix = None
+        if self.style.pin_ball:
+            pin_fix = self._pin_ball(a, phase, walked, toe_fix)
+        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix, pin_fix)
         self.stats["lifted"] += int(lifted)
         return walked
 
@@ -1031,10 +1084,12 @@ class Animator:
             getattr(walked.warm, name)[rows] = getattr(again.warm, name)
 
     def _walk(self, a: np.ndarray, phase: np.ndarray, corrected: bool,
-              lift: np.ndarray | None = None, toe_fix: np.ndarray | None = None):  # fmt: skip
+              lift: np.ndarray | None = None, toe_fix: np.ndarray | None = None,
+              pin_fix: np.ndarray | None = None):  # fmt: skip
         """ElevWalker for agents a (k,) at stance phases (k,), with the step corrections
         (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal, a correction
-        ``toe_fix`` (k,) [rad] of the swing foot's toe-out)."""
+        ``toe_fix`` (k,) [rad] of the swing foot's toe-out, a correction ``pin_fix`` (k, 3)
+        [m] of the pinned push-off ankle's goal)."""
         body = self.body.take(a)
         st, sw = self._legs(a, phase)  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
@@ -1060,6 +1115,13 @@ class Animator:
             s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
             swing = np.maximum(1.0 - t_off, 1e-9)
+            if self.style.toe_off_c1:
+                # C¹ at toe-off: T β h(u), u = (τ − toe-off) / β, starts with the velocity
+                # the data lack and is gone, at rest, after β of the step
+                beta = _TOE_OFF_BLEND * swing
+                u = np.clip((tau - t_off) / beta, 0.0, 1.0)
+                offset += self._swing.toe_vel[a] * (self._step.duration[a] * beta
+                                                     * _toe_off_shape(u))[:, None]
             ramp = (_smoothstep((tau - t_off) / (_BEZIER_IN * swing))
                     * _smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
             blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
@@ -1070,6 +1132,8 @@ class Animator:
             if pinned.any():
                 goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
                                                                 sw[pinned])  # fmt: skip
+                if pin_fix is not None:
+                    goal[pinned] += pin_fix[pinned]
             envelope = self._lift_envelope(a, tau)
             if envelope is not None:
                 lift = envelope if lift is None else lift + envelope
@@ -1178,7 +1242,49 @@ class Animator:
         return out
 
     def _pinned_ankle(self, a: np.ndarray, phase: np.ndarray, swing_angles: np.ndarray):
-        """Ankle (k, 3) [m] and toe angle (k,) [rad] of the trailing foot in push-off.
+        """Ankle (k, 3) [m] and toe angle (k,) [rad] of the trailing foot in push-off
+        (:meth:`_pinned_foot`)."""
+        return self._pinned_foot(a, phase, swing_angles)[:2]
+
+    def _pin_ball(self, a: np.ndarray, phase: np.ndarray, walked,
+                  toe_fix: np.ndarray) -> np.ndarray | None:
+        """``GaitStyle.pin_ball``: corrections (k, 3) [m] of the pinned push-off ankle's goal
+        that put the trailing foot's ball horizontally where the pin put it (None: none
+        needed), the walk ``walked`` re-solved with them (in place). The swing talocrural
+        turns the foot about a skew axis and the subtalar stays neutral, so a foot pitched
+        while yawed away from ψ (a turn) rolls and its ball moves sideways off the pinned
+        ankle (up to 19 mm at the corner); each round moves the goal by the ball's error."""
+        tau = 2.0 * phase
+        pinned = np.flatnonzero(self._swing.has_trail[a] & (tau < self._swing.toe_off[a]))
+        if pinned.size == 0:
+            return None
+        ap = a[pinned]
+        want = self._pinned_foot(ap, phase[pinned], self._legs(ap, phase[pinned])[1])[2]
+        ball_joint = LEG_JOINTS[np.where(self._step.stance_left[ap], 1, 0), 4]
+        # horizontal: over a riser the lift raises the pin on purpose
+        first = walked.positions[pinned, ball_joint] - want
+        first[:, 2] = 0.0
+        # all of it until half-way to toe-off, none at toe-off (the swing's offset starts
+        # from the uncorrected pin): the ball is up on the straightening toes by then
+        x = tau[pinned] / np.maximum(self._swing.toe_off[ap], 1e-9)
+        want = want + _smoothstep(2.0 * x - 1.0)[:, None] * first
+        fix = np.zeros((a.size, 3))
+        for _ in range(_PIN_ROUNDS):
+            err = walked.positions[pinned, ball_joint] - want
+            err[:, 2] = 0.0
+            off = np.linalg.norm(err, axis=1) > _PIN_TOLERANCE
+            if not off.any():
+                break
+            rows = pinned[off]
+            fix[rows] -= err[off]
+            self._merge(walked, rows, self._walk(a[rows], phase[rows], corrected=True,
+                                                 toe_fix=toe_fix[rows], pin_fix=fix[rows]))
+            self.stats["pin_fixes"] += rows.size
+        return fix
+
+    def _pinned_foot(self, a: np.ndarray, phase: np.ndarray, swing_angles: np.ndarray):
+        """Ankle (k, 3) [m], toe angle (k,) [rad] and ball (k, 3) [m] of the trailing foot
+        in push-off.
 
         The foot keeps the swing data's elevation and its toe tip stays where it stood;
         the toes straighten from lying flat (at the step's start: the §4.1 stance model
@@ -1204,7 +1310,7 @@ class Animator:
                          + up * (body.ball_offset * s_ - body.ankle_height * c)[:, None])
         ball_to_tip = toe_len[:, None] * (flat * np.cos(toe_pitch)[:, None]
                                           + up * np.sin(toe_pitch)[:, None])  # fmt: skip
-        return tip - ball_to_tip - ankle_to_ball, toe_angle
+        return tip - ball_to_tip - ankle_to_ball, toe_angle, tip - ball_to_tip
 
     def _swing_sole(self, a: np.ndarray, walked) -> np.ndarray:
         """Points (k, q, 3) [m] along the swing foot's sole of agents a (k,): heel → ball
@@ -1248,7 +1354,8 @@ class Animator:
         return depth
 
     def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked,
-                         toe_fix: np.ndarray | None = None):
+                         toe_fix: np.ndarray | None = None,
+                         pin_fix: np.ndarray | None = None):
         """Re-solve agents whose swing sole (heel to toe tip, sampled) dips below the
         ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
         is checked again and raised further (the swing leg's IK does not translate the
@@ -1262,7 +1369,8 @@ class Animator:
         for _ in range(_LIFT_ROUNDS):
             lift[sink] += depth[sink] + _LIFT_MARGIN
             again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink],
-                               toe_fix=None if toe_fix is None else toe_fix[sink])
+                               toe_fix=None if toe_fix is None else toe_fix[sink],
+                               pin_fix=None if pin_fix is None else pin_fix[sink])
             self._merge(walked, sink, again)
             depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]

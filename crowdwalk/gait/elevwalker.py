@@ -154,6 +154,18 @@ class GaitStyle:
         pulled onto the target by the swing IK, 10–30 cm on the park's short steps) the
         root's join offset is blended out over the whole step instead of its first half
         (an extension: docs/architecture.md "Step crossfade"); False: half the step.
+    toe_off_c1 : bool
+        At toe-off the swing ankle's offset starts with the horizontal velocity the
+        pinned push-off ankle has and the data's swing ankle lacks, less 2 m/s and at
+        most what 25 m/s² carries over 0.7 of the swing, and is gone at rest by then
+        (an extension: docs/architecture.md "Toe-off hand-over"); False: C⁰ only, the
+        ankle jumps to the data's velocity (1.2–1.8 m/s faster at level walkers, up to
+        3.4 m/s on the uneven park's short steps).
+    pin_ball : bool
+        The pinned push-off ankle's goal is corrected until the trailing foot's ball is
+        where the pin put it (a turned foot rolls about the skew talocrural axis and its
+        ball slid up to 19 mm at the corner; an extension: docs/architecture.md "Toe-off
+        hand-over"); False: the goal as the pin computes it.
     """
 
     step_width: float = 0.05
@@ -172,6 +184,8 @@ class GaitStyle:
     lift_swing: bool = True
     step_crossfade: bool = True
     clamped_join: bool = True
+    toe_off_c1: bool = True
+    pin_ball: bool = True
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):

@@ -17,6 +17,7 @@ from crowdwalk.body import (
 from crowdwalk.errors import InputError
 from crowdwalk.gait.animator import Animator, StepCommand
 from crowdwalk.gait.elevwalker import GaitStyle, foot_points
+from crowdwalk.style import Style
 
 BLOCK = (0.30, 0.45, 0.10)  # x from, x to, height [m]
 
@@ -567,3 +568,93 @@ def test_the_root_rejoins_the_data_smoothly_after_a_clamped_step():
 
     assert worst_after_clamped(GaitStyle()) < 0.8 * worst_after_clamped(
         GaitStyle(clamped_join=False))
+
+
+def _toe_off_velocity_jumps(style, sl=0.676, duration=0.508, steps=3):
+    """|Δ horizontal swing-ankle velocity| [m/s] across each toe-off of a level walk
+    (1.75 m body, 1.33 m/s), from ankle positions 0.5–4.5 ms either side of it, and the
+    ankle's path (list of (8, 3) [m]) from toe-off to the landing."""
+    animator = Animator(Body.from_heights([1.75]), ground=_flat, style=style)
+    jumps, paths = [], []
+    for s in range(steps):
+        y = 0.045 if s % 2 == 0 else -0.045
+        t0 = s * duration
+        foot = 1 if s % 2 == 0 else 0
+        animator.command(_command([0], t0, foot, [[s * sl, y, 0.0]],
+                                  [[(s + 1) * sl, -y, 0.0]], duration=duration))
+        for f in range(1, 6):  # frames up to the toe-off (warm starts, as in a run)
+            animator.pose(t0 + f * 0.02)
+        if s == 0:
+            continue
+        t_off = t0 + animator._swing.toe_off[0] * duration
+        ankle = [animator.pose(t_off + d).positions[0, LEG_JOINTS[foot, 2], :2]
+                 for d in (-0.0045, -0.0005, 0.0005, 0.0045)]
+        jumps.append(np.linalg.norm((ankle[3] - ankle[2]) - (ankle[1] - ankle[0])) / 0.004)
+        paths.append(np.array([animator.pose(t).positions[0, LEG_JOINTS[foot, 2]]
+                               for t in np.linspace(t_off, t0 + duration, 8)]))
+    return np.array(jumps), paths
+
+
+def test_the_swing_ankle_leaves_toe_off_as_the_pinned_push_off_moved_it(monkeypatch):
+    """Until toe-off the trailing ankle is pinned on the toe tip (0.8 m/s forward at
+    1.33 m/s); the data's swing ankle is already at 2.2 m/s there, so following it jumps
+    the velocity (3.4 m/s on the uneven park's 0.403 s steps: its foot spikes).
+    ``toe_off_c1`` starts the swing with the part of the jump above ``_TOE_OFF_KEEP``
+    carried by an offset; with nothing kept the jump is gone, and a walker whose jump
+    is below it walks as without the switch."""
+    import crowdwalk.gait.animator as animator_module
+
+    kept, kept_paths = _toe_off_velocity_jumps(GaitStyle())
+    off, off_paths = _toe_off_velocity_jumps(GaitStyle(toe_off_c1=False))
+    assert np.all(off > 1.0) and np.all(off < animator_module._TOE_OFF_KEEP)
+    for a, b in zip(kept_paths, off_paths, strict=True):
+        assert np.abs(a - b).max() < 1e-9
+    monkeypatch.setattr(animator_module, "_TOE_OFF_KEEP", 0.0)
+    carried, _ = _toe_off_velocity_jumps(GaitStyle())
+    assert np.all(carried < 0.2)
+
+
+def _push_off_ball_slide(style, turn_deg=25.0, steps=4, sl=0.71, duration=0.456, width=0.1):
+    """Largest horizontal move [m] of the trailing foot's ball, from where it stood at the
+    end of its stance to its toe-off (while within 5 mm of that), on a walk whose every
+    step turns by ``turn_deg`` (1.75 m body with the crowd's KLAW attributes at 1.56 m/s)."""
+    animator = Animator(Body.from_heights([1.75]), ground=_flat, style=style,
+                        attributes=Style.default(np.array([1.75]), np.array([1.56])))
+    turn = np.radians(turn_deg)
+    half = 0.5 * width
+    foot_at = np.array([0.0, half, 0.0])
+    worst = 0.0
+    for s in range(steps):
+        heading = s * turn
+        d = np.array([np.cos(heading), np.sin(heading), 0.0])
+        n = np.array([-d[1], d[0], 0.0])
+        side = -1.0 if s % 2 == 0 else 1.0  # the swing foot's side of the path
+        centre = foot_at + half * (1.0 if s % 2 == 0 else -1.0) * n
+        target = centre + sl * d + half * side * n
+        foot = 1 if s % 2 == 0 else 0
+        t0 = duration * s
+        # the foot that will trail, as the step before leaves it (its stance foot)
+        before = animator.pose(t0 - 1e-4).positions[0, LEG_JOINTS[foot, 4]] if s else None
+        animator.command(_command([0], t0, foot, [foot_at], [target], duration=duration,
+                                  heading=heading))  # fmt: skip
+        t_off = t0 + duration * animator._swing.toe_off[0]
+        balls = np.array([animator.pose(t).positions[0, LEG_JOINTS[foot, 4]]
+                          for t in np.linspace(t0, t_off, 12)])
+        if s:
+            low = balls[:, 2] < before[2] + 0.005
+            worst = max(worst, np.linalg.norm(balls[low, :2] - before[:2], axis=1).max())
+        for f in range(1, 6):
+            animator.pose(t_off + f * (t0 + duration - t_off) / 6)
+        foot_at = target
+    return worst
+
+
+def test_the_trailing_ball_stays_where_it_stood_in_a_turn():
+    """After a turn the trailing foot is yawed away from ψ; the swing talocrural pitches
+    it about a skew axis and it rolls, so its ball slid sideways off the pinned ankle
+    (the corner's heel slides of 10-19 mm). ``pin_ball`` moves the ankle's goal until the
+    ball is where the pin put it."""
+    import crowdwalk.gait.animator as animator_module
+
+    assert _push_off_ball_slide(GaitStyle()) < animator_module._PIN_TOLERANCE + 0.0005
+    assert _push_off_ball_slide(GaitStyle(pin_ball=False)) > 0.008
