@@ -112,7 +112,10 @@ class CrowdParams:
         default): full ring within Weidmann ± 0.15 at all seven densities, counterflow
         trips 1.58 / 1.55 / 1.55 / 3.41 / 1.67 × the free walk (seed 4 gridlocks),
         doors with ``headway_free_margin`` 1.0 as with 2.0 (docs/architecture.md,
-        "Headway leader's lateral rule").
+        "Headway leader's lateral rule"). 1.75 with ``headway_route_lane``,
+        ``headway_same_time``, ``headway_overtake`` (session 15, "S175"): ring 7 / 7 and
+        free speed 0.980–1.000 — chosen among 1.5 / 1.75 / 2.0 on those two cases, so
+        tuned on Weidmann; checked on SFPE's corridor speeds (RMS 0.081 m/s).
     headway_free_margin : float, optional
         With ``"headway"``: walkers inside an opening zone (corridors at most
         ``opening_width`` wide, minus the rooms, grown by this margin [m]) follow
