@@ -112,7 +112,10 @@ class CrowdParams:
         default): full ring within Weidmann ± 0.15 at all seven densities, counterflow
         trips 1.58 / 1.55 / 1.55 / 3.41 / 1.67 × the free walk (seed 4 gridlocks),
         doors with ``headway_free_margin`` 1.0 as with 2.0 (docs/architecture.md,
-        "Headway leader's lateral rule").
+        "Headway leader's lateral rule"). 1.75 with ``headway_route_lane``,
+        ``headway_same_time``, ``headway_overtake`` (session 15, "S175"): ring 7 / 7 and
+        free speed 0.980–1.000 — chosen among 1.5 / 1.75 / 2.0 on those two cases, so
+        tuned on Weidmann; checked on SFPE's corridor speeds (RMS 0.081 m/s).
     headway_free_margin : float, optional
         With ``"headway"``: walkers inside an opening zone (corridors at most
         ``opening_width`` wide, minus the rooms, grown by this margin [m]) follow
@@ -141,6 +144,39 @@ class CrowdParams:
         It lets walkers overtake: with C0 + ``line_up`` RiMEA 7's 1.6 m/s group ×0.886
         → ×0.992 and lone walkers 0.814 → 0.999 of their free speed at worst
         (docs/architecture.md, "C0 + line_up through the whole verify").
+    headway_overtake : bool
+        With ``"headway"``: steering scores each candidate direction at the step the
+        model allows along it, as ``headway_steer``, but counting only the leaders the
+        model follows (same-way walkers), not oncoming ones (``headway_steer`` counted
+        every neighbour). Session 15, with C0 + ``line_up``: RiMEA 7 ×0.998 / 0.994 /
+        0.992, free speed 0.999–1.000, RiMEA 10 120 / 120, counterflow 1.71 / 1.61 /
+        1.46 / 1.46 / 1.73 × the free walk (``headway_steer`` 1.77 / 1.63 / 1.51 / 1.49 /
+        1.64); the ring fails at 1.25 /m² (1.10 m/s, Weidmann 0.92): a step a little off
+        the line leaves the leader's narrow lane and walks free.
+    headway_route_lane : bool
+        With ``"headway"``: the leader is the nearest followed walker ahead along the
+        route direction whose centre is within the lane of the line parallel to the
+        route through the step's end (the nominal step along the candidate direction),
+        and Seyfried's relation limits the speed along the route only (a step across or
+        back is not limited): the headway of the lane the walker steps into, not of
+        the step's own line (Seyfried et al. 2005's relation is one-dimensional, along
+        the file). Measured (docs/architecture.md, "Overtaking under the headway
+        model"): in the 2 × 50 counterflow the step-line headway slowed side steps to
+        0.6 of the free speed (a walker stepping towards its neighbour in the next file
+        followed it at 0.5 m).
+    headway_same_time : bool
+        With a gap model scoring directions (``headway_overtake``, ``headway_steer``):
+        each direction is scored at what its allowed speed covers in one step at the
+        *free* cadence, so that directions compare by speed. Scored by step length a
+        walker 1.3 m behind a slower one kept behind it (a slow step is also a longer
+        one in time: at 1.03 against 1.56 m/s the step is 0.6 against 0.74 m), free
+        speed 0.814 at worst.
+    headway_overtake_open_lanes : bool
+        With ``headway_overtake``: a walker whose lane runs into a wall
+        (:func:`crowdwalk.crowd.routing.lane_runs_into_wall`: a door or bend ahead off
+        its axis) does not overtake (there is no side lane), so the queue in front of a
+        door is not fanned out (0.8 m door with overtaking and the route lane 1.11 →
+        1.25 /s, full, seeds 4–6).
     lane_keep : bool
         Where a walker's lane runs into a wall (a door ahead off its axis), aim at the
         same side of the opening as far off its axis as fits, instead of at its centre
@@ -205,6 +241,10 @@ class CrowdParams:
     headway_lane: float = 2.0
     headway_same_way: Literal["heading", "route"] = "heading"
     headway_steer: bool = False
+    headway_overtake: bool = False
+    headway_route_lane: bool = False
+    headway_same_time: bool = False
+    headway_overtake_open_lanes: bool = False
     headway_free_margin: float | None = None
     lane_keep: bool = False
     line_up: bool = False

@@ -314,6 +314,18 @@ def _first_clear(target: np.ndarray, blind: np.ndarray, b: np.ndarray, candidate
     blind[b[found]] = False
 
 
+def lane_runs_into_wall(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
+                        xy: np.ndarray, radius: np.ndarray, clearance, params) -> np.ndarray:
+    """(k,) bool: the walkers at ``xy`` whose lane (parallel to the route,
+    ``target_distance`` ahead, as :func:`steering_targets` lays it) runs into a wall at its
+    end or halfway, closer than the walker's ``radius`` [m] (a door or bend ahead off the
+    walker's axis)."""
+    on_route = table.point_at(route, progress)
+    ahead = table.point_at(route, progress + params.target_distance)
+    target = xy + (ahead - on_route) + params.centre_pull * (on_route - xy)
+    return (clearance(target) < radius) | (clearance(0.5 * (target + xy)) < radius)
+
+
 def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
                      xy: np.ndarray, heading: np.ndarray, radius: np.ndarray, clearance,
                      params) -> tuple[np.ndarray, np.ndarray]:

@@ -42,7 +42,7 @@ from crowdwalk.crowd.events import EventTimeline
 from crowdwalk.crowd.holding import WaitingAreas
 from crowdwalk.crowd.neighbours import gather_neighbours
 from crowdwalk.crowd.params import CrowdParams
-from crowdwalk.crowd.routing import route_progress, steering_targets
+from crowdwalk.crowd.routing import lane_runs_into_wall, route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.shape import BodyShape
 from crowdwalk.crowd.spawning import free_to_spawn, place
@@ -285,9 +285,11 @@ class CrowdSimulation:
                                                      self.shortest_step),
                               stair_rise=self.params.stair_rise)
 
-    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs) -> GapSteps | None:
+    def _gap_steps(self, idx: np.ndarray, pos: np.ndarray, nbs,
+                   walled: np.ndarray | None = None) -> GapSteps | None:
         """The gap speed model's steps for the deciders ``idx`` at ``pos`` (k, 2) [m]
-        among ``nbs`` (None for ``speed_model="free"``)."""
+        among ``nbs`` (None for ``speed_model="free"``); ``walled`` (k,) bool: deciders
+        whose lane runs into a wall, who do not overtake (``headway_overtake_open_lanes``)."""
         prm = self.params
         if prm.speed_model == "free" or not nbs.valid.shape[1]:
             return None
@@ -309,15 +311,25 @@ class CrowdSimulation:
                 followed = nbs.valid & (np.einsum("kmj,kj->km", e[nbs.agent], e[idx]) > -0.5)
             elif nbs.heading is not None:
                 followed = nbs.valid & (np.cos(nbs.heading - h[:, None]) > 0.0)
-            scored = nbs.valid
+            # headway_overtake: candidate directions are scored at the step the model
+            # allows counting only the leaders it follows (oncoming walkers are not)
+            scored = followed if prm.headway_overtake else nbs.valid
+            if walled is not None:  # no side lane to overtake in where the lane ends
+                scored = scored & ~walled[:, None]
             if self.free_zone is not None:  # in and near openings: walk into free space
                 free_here = self.free_zone.inside(pos)[:, None]
                 followed &= ~free_here
                 # nor does headway_steer score directions there at a headway step
                 scored = scored & ~free_here
             lane = prm.headway_lane * self.shape.bound[idx]
+            lane_dir = shift = None
+            if prm.headway_route_lane:  # the route lane the step goes into
+                lane_dir = (e if prm.headway_same_way == "route"
+                            else self._route_directions())[idx]
+                shift = self.nominal_step[idx]
             return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, scored, followed,
-                            free, leg, prm.headway_time, lane=lane)
+                            free, leg, prm.headway_time, lane=lane,
+                            lane_direction=lane_dir, shift=shift)
         return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                         free, leg, prm.contact_time_gap)
 
@@ -391,13 +403,21 @@ class CrowdSimulation:
                                 count=prm.neighbours, reach=prm.neighbour_range,
                                 threads=self.threads)
         outline = self.shape.packed(idx)
-        gap = self._gap_steps(idx, pos, nbs)
+        walled = None
+        if prm.speed_model == "headway" and prm.headway_overtake_open_lanes:
+            walled = self.threads.map(
+                partial(lane_runs_into_wall, table, clearance=self.clearance, params=prm),
+                idx.size, route=st.route[idx], progress=st.progress[idx], xy=pos,
+                radius=self.radius[idx])
+        gap = self._gap_steps(idx, pos, nbs, walled)
         rows = dict(
             heading=st.heading[idx], radius=self.radius[idx],
             route_direction=route_dir, target=target, nominal_step=self.nominal_step[idx],
             neighbours=nbs, speed=self.pop.free_speed[idx], stuck=st.stuck[idx],
             step_time=self.min_step_time[idx], lag=t - te, shape=outline, yaw=st.yaw1[idx],
-            gap=gap if prm.speed_model == "contact_gap" or prm.headway_steer else None,
+            gap=gap if (prm.speed_model == "contact_gap" or prm.headway_steer
+                        or prm.headway_overtake) else None,
+            score_same_time=prm.headway_same_time,
             **self._opening_scales(pos))
         if self._steer_on:  # worker processes (given, not posing); the field goes once
             choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],

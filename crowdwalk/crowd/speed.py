@@ -120,7 +120,9 @@ def contact_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np
 
 def headway_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.ndarray,
                   others: np.ndarray, others_radius: np.ndarray, valid: np.ndarray,
-                  free_speed: np.ndarray, time_gap: float, lane: np.ndarray) -> np.ndarray:
+                  free_speed: np.ndarray, time_gap: float, lane: np.ndarray,
+                  lane_direction: np.ndarray | None = None,
+                  shift: np.ndarray | None = None) -> np.ndarray:
     """Speed [m/s] from the required length of Seyfried et al. (2005, "The fundamental
     diagram of pedestrian movement revisited", J. Stat. Mech. P10002): in single file a
     walker moving at v needs d = a + b v of line, a = 0.36 m and b = 1.06 s (their linear
@@ -130,17 +132,43 @@ def headway_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.nda
     lies within ``lane`` (k,) [m] of that line, and a = r_i + r_j, the two radii (0.36 m
     for two 1.71 m persons: the same standstill spacing). A neighbour further off the
     line is not followed: only the hard swept-body test keeps the two apart.
-    ``time_gap`` is b. Shapes as :func:`contact_gap_speed`.
+    ``time_gap`` is b. Shapes as :func:`contact_gap_speed`. ``lane_direction`` (k, 2)
+    and ``shift`` (k,) [m] given: the leader is sought in the route lane the step goes
+    into (:func:`_route_lane_headway`).
     """
     d = direction if direction.ndim == 3 else direction[:, None, :]
     rel = (others - position[:, None, :])[:, None, :, :]  # (k, 1, m, 2)
+    need = (radius[:, None] + others_radius)[:, None, :]
+    if lane_direction is not None:
+        return _route_lane_headway(d, rel, need, valid, free_speed, time_gap, lane,
+                                   lane_direction, shift, direction.ndim)
     along = np.einsum("kcmj,kcj->kcm", rel, d)
     lateral = rel[..., 0] * d[:, :, None, 1] - rel[..., 1] * d[:, :, None, 0]
-    need = (radius[:, None] + others_radius)[:, None, :]
     ahead = valid[:, None, :] & (along > 0) & (np.abs(lateral) < lane[:, None, None])
     gap = np.where(ahead, along - need, np.inf).min(axis=2)  # (k, C)
     v = np.minimum(free_speed[:, None], np.maximum(gap, 0.0) / time_gap)
     return v if direction.ndim == 3 else v[:, 0]
+
+
+def _route_lane_headway(d, rel, need, valid, free_speed, time_gap, lane, e, shift, ndim):
+    """:func:`headway_speed` in the route lane the step goes into (``headway_route_lane``):
+    the leader is the nearest neighbour ahead along the route direction ``e`` (k, 2)
+    whose centre is within ``lane`` of the line parallel to ``e`` through the step's end
+    (``shift`` (k,) [m] along each candidate ``d`` (k, C, 2)), and Seyfried's relation
+    limits the speed along ``e`` only: v = min(v0, ((s − a) / b) / (d · e)), free for a
+    step across or back (d · e ≤ 0)."""
+    along = np.einsum("kcmj,kj->kcm", rel, e)  # (k, 1, m)
+    lateral = rel[..., 0] * e[:, None, None, 1] - rel[..., 1] * e[:, None, None, 0]
+    end = shift[:, None] * (d[..., 0] * e[:, None, 1] - d[..., 1] * e[:, None, 0])  # (k, C)
+    ahead = (valid[:, None, :] & (along > 0)
+             & (np.abs(lateral - end[:, :, None]) < lane[:, None, None]))
+    gap = np.where(ahead, along - need, np.inf).min(axis=2)  # (k, C)
+    forward = np.einsum("kcj,kj->kc", d, e)
+    v_e = np.maximum(gap, 0.0) / time_gap
+    v = np.where(forward > 1e-3, np.minimum(free_speed[:, None],
+                                            v_e / np.maximum(forward, 1e-3)),
+                 free_speed[:, None])
+    return v if ndim == 3 else v[:, 0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -164,6 +192,9 @@ class GapSteps:
         :func:`contact_gap_speed` (else :func:`time_gap_speed`, one direction each).
     lane : (m,) float, optional
         Given: :func:`headway_speed` with this lateral extent [m].
+    lane_direction, shift : (m, 2), (m,), optional
+        Given (with ``lane``): the route-lane headway (unit route directions, and how far
+        along a step the lane is taken [m]).
     """
 
     position: np.ndarray
@@ -177,21 +208,30 @@ class GapSteps:
     time_gap: float
     contact: bool = True
     lane: np.ndarray | None = None
+    lane_direction: np.ndarray | None = None
+    shift: np.ndarray | None = None
 
-    def along(self, direction: np.ndarray, *, everyone: bool = False
-              ) -> tuple[np.ndarray, np.ndarray]:
+    def along(self, direction: np.ndarray, *, everyone: bool = False,
+              same_time: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Speed [m/s] and longest step [m] along unit ``direction`` (m, 2) or (m, C, 2),
         each (m,) or (m, C): the step is what that speed covers in one step at the
         normal-mode cadence for it (WBDS relation), unlimited at the free speed.
-        ``everyone``: count every neighbour, not only the followed ones."""
+        ``everyone``: count every neighbour, not only the followed ones. ``same_time``:
+        what that speed covers in one step at the cadence of the free speed instead (so
+        that directions compare by speed, not by step length: a slower step is also a
+        longer one in time)."""
         speed = contact_gap_speed if self.contact else time_gap_speed
         extra = {}
         if self.lane is not None:
-            speed, extra = headway_speed, {"lane": self.lane}
+            speed, extra = headway_speed, {"lane": self.lane,
+                                           "lane_direction": self.lane_direction,
+                                           "shift": self.shift}
         v = speed(position=self.position, direction=direction, radius=self.radius,
                   others=self.others, others_radius=self.others_radius,
                   valid=self.valid if everyone else self.followed,
                   free_speed=self.free_speed, time_gap=self.time_gap, **extra)
         col = (slice(None),) + (None,) * (v.ndim - 1)
-        short = v / normal_mode.step_frequency(np.maximum(v, 0.1), self.leg_length[col])
+        pace = (np.broadcast_to(self.free_speed[col], v.shape) if same_time
+                else np.maximum(v, 0.1))
+        short = v / normal_mode.step_frequency(pace, self.leg_length[col])
         return v, np.where(v < self.free_speed[col], short, np.inf)

@@ -246,6 +246,7 @@ def choose_steps(
     gap: GapSteps | None = None,
     wall_scale: np.ndarray | None = None,
     personal_scale: np.ndarray | None = None,
+    score_same_time: bool = False,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -299,6 +300,10 @@ def choose_steps(
     personal_scale : (m,), optional
         Factor on the neighbour repulsion (not the anticipation of oncoming walkers) per
         agent, the same way; None: 1.
+    score_same_time : bool
+        With ``gap``: each direction is scored at the distance its allowed speed covers
+        in one step at the free cadence (``GapSteps.along(same_time=True)``), so that
+        directions compare by speed (``CrowdParams.headway_same_time``).
 
     Returns
     -------
@@ -337,7 +342,7 @@ def choose_steps(
         float(np.deg2rad(25.0) + 1e-9), bool(prm.keep_facing), np.deg2rad(prm.twists_deg))
     # the utility at the end point of the preferred (or longest clear) step
     cap = np.full(free.shape, np.inf) if gap is None else f(
-        gap.along(dirs, everyone=True)[1], float)
+        gap.along(dirs, everyone=True, same_time=score_same_time)[1], float)
     ones = np.ones(m)
     weights = np.array([prm.personal_weight, prm.personal_range, prm.soft_neighbours,
                         prm.anticipation, prm.oncoming_neighbours, prm.wall_weight,
