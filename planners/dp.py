@@ -15,9 +15,16 @@ import numba as nb
 import numpy as np
 
 from planners.lattice import StepTables, Structure, run_parts
-from planners.lattice_kernel import swing_at
+from planners.lattice_kernel import eval_pending_step, swing_at
 
-__all__ = ["DPWork", "cheapest", "dp_one", "dp_scratch"]
+__all__ = ["DPWork", "cheapest", "dp_one", "dp_scratch", "settle", "settle_scratch"]
+
+#: Slack of the bounded DP's test (:func:`settle`) [row units]: far above the rounding of
+#: sums of a few rows, far below the differences that decide anything.
+SETTLE_SLACK = 1e-7
+#: Rounds of :func:`settle` that evaluate the least path over the footholds before the
+#: bound is applied (each tightens the values and may give a legal configuration's sum).
+SETTLE_ROUNDS = 2
 
 
 class DPWork(NamedTuple):
@@ -224,3 +231,133 @@ def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value,
         jp = choice[k - 1, m_cur, j_cur]
         m_cur, j_cur = m_cur - j_cur, jp
     return best < np.inf, states, transitions
+
+
+@nb.njit(cache=True, nogil=True)
+def settle_scratch(Nn, n):
+    """The work arrays of :func:`settle`: node values forward and backward (Nn,), the
+    step into each node (Nn,), a configuration and its steps (n,)."""
+    return (np.empty(Nn), np.empty(Nn), np.zeros(Nn, dtype=np.int64),
+            np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64))
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _swings_legal(sw, a, q, swing_off, strides):
+    """Whether every swing of configuration ``q`` (n,) of agent ``a`` is legal (read
+    through :func:`~planners.lattice_kernel.swing_at`, up to the first illegal one)."""
+    m_prev2, j_prev = 0, 0
+    ok = True
+    for k in range(q.size):
+        swing = swing_off[k] + m_prev2 * strides[k] + q[k] + (j_prev if k > 0 else 0)
+        if ok and not swing_at(sw, a, swing):
+            ok = False
+        if k > 0:
+            m_prev2 += j_prev
+        j_prev = q[k]
+    return ok
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _row_of(mode, centre, lam, j, c, progress):
+    """A DP row entry of a step of cost ``c``: mode 0 the nearest-legal criterion
+    ``|j - centre| + 1e-7 c``, mode 1 Dinkelbach's ``c - lam progress``, rounded to 1e-10
+    as the callers round them (non-decreasing in ``c``)."""
+    if mode == 0:
+        return np.rint((abs(j - centre) + 1e-7 * c) * 1e10) / 1e10
+    return np.rint((c - lam * progress) * 1e10) / 1e10
+
+
+@nb.njit(cache=True, nogil=True)
+def settle(sp, sw, a, row, mode, centre, lam, step_j, progress, J, step_off, swing_off,
+           strides, ub, F, H, pred, q, path):
+    """Evaluate the deferred steps of agent ``a`` that the next :func:`dp_one` pass over
+    ``row`` (Ns,) may use, so that the pass over the evaluated steps alone (a deferred
+    step is not legal) gives the result of a pass over every step.
+
+    ``row`` holds the pass's entries of the evaluated steps (:func:`_row_of` of their
+    cost); a deferred step gets the entry of its cost's lower bound (``cost_lb``) and is
+    taken as legal, an illegal step +inf. Over the footholds alone (no swings: a lower
+    bound of every configuration), the least path is found forward (``F``); up to
+    :data:`SETTLE_ROUNDS` times its deferred steps are evaluated and the values found
+    again from the shallowest depth that changed. Where a path so evaluated is legal
+    (steps and swings) its sum, in the DP's order, bounds the pass's least total from
+    above, as does ``ub`` (the sum of a legal configuration, or +inf). Then every
+    deferred step whose least path through it (``F`` to its stance, its entry, ``H``
+    from its landing to the end) is within :data:`SETTLE_SLACK` of that bound is
+    evaluated: each step left lies on no configuration of the least total nor on any
+    way to a state of one, so the pass's values, ties and result are those of a pass
+    over every step. ``sp``: :attr:`~planners.lattice.StepTables.steps`; ``F``, ``H``,
+    ``pred``, ``q``, ``path``: :func:`settle_scratch`. Updates ``row``.
+    """
+    pending, legal, cost_lb = sp[0], sp[1], sp[2]
+    step_stance, step_front, cost = sp[12], sp[13], sp[26]
+    Ns = row.size
+    Nn = F.size
+    n = q.size
+    deferred = False
+    for t in range(Ns):  # (an illegal step's entry: +inf, which dp_one never reads)
+        if pending[a, t]:
+            row[t] = _row_of(mode, centre, lam, step_j[t], cost_lb[a, t], progress[a, t])
+            deferred = True
+        elif not legal[a, t]:
+            row[t] = np.inf
+    if not deferred:
+        return
+    last0 = Nn - ((J - 1) * n + 1)
+    F[:] = np.inf
+    F[1] = 0.0
+    first = 0  # the depth (0-based) from which the values must be found again
+    for _ in range(SETTLE_ROUNDS + 1):
+        F[step_front[step_off[first]]:] = np.inf  # the nodes of that depth and deeper
+        for t in range(step_off[first], Ns):  # steps are ordered by depth
+            v = F[step_stance[t]] + row[t]
+            fr = step_front[t]
+            if v < F[fr]:
+                F[fr] = v
+                pred[fr] = t
+        end = -1
+        best = np.inf
+        for v in range(last0, Nn):
+            if F[v] < best:
+                best, end = F[v], v
+        if end < 0:
+            return  # no configuration is legal even with every deferred step legal
+        if _ == SETTLE_ROUNDS:
+            break
+        # the least path: its deferred steps evaluated; where it is then legal, its sum
+        # (in the DP's order) bounds the least total from above
+        first = n
+        v, k = end, n
+        while v != 1:
+            t = pred[v]
+            k -= 1
+            path[k] = t
+            q[k] = step_j[t]
+            if pending[a, t]:
+                eval_pending_step(sp, a, t)
+                row[t] = (_row_of(mode, centre, lam, step_j[t], cost[a, t], progress[a, t])
+                          if legal[a, t] else np.inf)
+                first = k
+            v = step_stance[t]
+        total = 0.0
+        for k in range(n):
+            total = total + row[path[k]]
+        if total < ub and _swings_legal(sw, a, q, swing_off, strides):
+            ub = total
+        if first == n:
+            break  # the least path was evaluated: the values stand
+    H[:] = np.inf
+    H[last0:] = 0.0
+    for t in range(Ns - 1, -1, -1):
+        v = row[t] + H[step_front[t]]
+        st = step_stance[t]
+        if v < H[st]:
+            H[st] = v
+    limit = ub + SETTLE_SLACK * (1.0 + abs(ub))
+    for t in range(Ns):
+        if pending[a, t]:
+            through = F[step_stance[t]] + row[t] + H[step_front[t]]
+            if through <= limit and through < np.inf:
+                eval_pending_step(sp, a, t)
+                row[t] = (_row_of(mode, centre, lam, step_j[t], cost[a, t], progress[a, t])
+                          if legal[a, t] else np.inf)

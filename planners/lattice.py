@@ -28,6 +28,7 @@ from planners.lattice_kernel import (
     Lattice,
     build_agents,
     build_pending,
+    build_pending_steps,
     complete_agents,
     prepare_agents,
 )
@@ -82,6 +83,12 @@ LAZY = frozenset({"best_first", "fixed"})
 #: the curves the pruned tables hold are never read. Empty: every curve up front (the
 #: same plans).
 DEFER_SWINGS = frozenset({"optimal", "best_first_multistart"})
+#: The planners whose tables, evaluated up front, leave the steps that need key frames
+#: (neither level nor hopeless) to be evaluated where the search reads them
+#: (``build_tables(..., defer_steps=True)``; :func:`planners.lattice_kernel.step_at`):
+#: their DP passes first evaluate only the steps that a lower bound of the cost cannot
+#: rule out (:func:`planners.dp.settle`). Empty: every step up front (the same plans).
+DEFER_STEPS = frozenset({"optimal"})
 
 
 @dataclass(frozen=True, eq=False)
@@ -249,7 +256,8 @@ class TableWork:
     ----------
     steps : ndarray of int
         Lattice steps whose legality and energy were evaluated (those a legal sequence
-        of steps from the start can take, see :data:`PRUNE`).
+        of steps from the start can take, see :data:`PRUNE`; with deferred steps, those
+        that need no key frame and those a search read).
     key_frames : ndarray of int
         Steps whose key frames were solved by inverse kinematics (the others are level
         steps on level ground, looked up in the per-leg cache).
@@ -320,6 +328,19 @@ class StepTables:
         :attr:`swings` (deferred swings, ``build_tables(..., defer_swings=True)``; all
         False otherwise). ``swing_ok``, ``controls`` and ``rounds`` hold the curves built
         so far; :meth:`complete` builds the rest.
+    step_pending : ndarray of bool, shape (A, Ns)
+        Steps not evaluated yet, evaluated where a search's kernel reads them through
+        :attr:`steps` (deferred steps, ``build_tables(..., defer_steps=True)``; all False
+        otherwise): their ``Ej``, ``E``, ``cost`` and the knee's reach are not known yet
+        (``E``, ``cost`` +inf, ``step_reason`` 0, ``legal`` False).
+    legal : ndarray of bool, shape (A, Ns)
+        Legal steps among those evaluated (``step_reason == 0`` and not pending; tables
+        evaluated up front).
+    cost_lb : ndarray, shape (A, Ns)
+        With deferred steps: a lower bound of ``cost`` (the step's energy with Ej = 0;
+        ``cost`` itself where evaluated; +inf where unused).
+    defer_steps : bool
+        The tables were built with deferred steps.
     """
 
     struct: Structure
@@ -347,11 +368,37 @@ class StepTables:
     lattice: Lattice
     lazy: bool
     pending: np.ndarray
+    step_pending: np.ndarray
+    legal: np.ndarray
+    cost_lb: np.ndarray
+    defer_steps: bool
 
     @property
     def deferred(self) -> bool:
-        """Whether some swing curves are still to be built where a search reads them."""
-        return bool(self.pending.any())
+        """Whether some swing curves or steps are still to be evaluated where a search
+        reads them."""
+        return bool(self.pending.any() or self.step_pending.any())
+
+    @cached_property
+    def steps(self) -> tuple:
+        """What the searches' kernels read deferred steps through
+        (:func:`~planners.lattice_kernel.step_at`; the arrays of
+        :data:`~planners.lattice_kernel.STEP_CONTEXT`; one thread per agent, as
+        :attr:`swings`)."""
+        L = self.lattice
+        return (self.step_pending, self.legal, self.cost_lb, L.prof_s, L.prof_z, L.bounds,
+                L.slope, L.base, L.legs, L.consts, L.node_s, L.node_z, L.step_stance,
+                L.step_front, L.step_depth, L.length, L.rise, L.terminal, L.fparams,
+                L.iparams, L.weights, L.speeds, L.normal, L.Ej, L.E, L.reason, L.cost,
+                L.work, self._leg_cache[0], self._leg_cache[1])
+
+    @cached_property
+    def _leg_cache(self) -> tuple:
+        """The legs at K1 and K1' that deferred steps share (per agent and foothold:
+        stance thigh, shank, reachable; next swing thigh, shank, reachable) and whether
+        each is known (:func:`~planners.lattice_kernel.eval_pending_step`)."""
+        shape = self.node_s.shape if self.defer_steps else (1, 1)
+        return np.empty(shape + (6,)), np.zeros(shape + (2,), dtype=np.bool_)
 
     @cached_property
     def swings(self) -> tuple:
@@ -385,13 +432,11 @@ class StepTables:
 
     @property
     def step_legal(self) -> np.ndarray:
-        """Legal steps (A, Ns), bool (evaluated so far, for lazy tables; cached for
-        tables evaluated up front)."""
+        """Legal steps (A, Ns), bool (evaluated so far, for lazy tables and deferred
+        steps; cached for tables evaluated up front)."""
         if self.lazy:
             return self.step_reason == 0
-        if "_legal" not in self.__dict__:
-            object.__setattr__(self, "_legal", self.step_reason == 0)
-        return self.__dict__["_legal"]
+        return self.legal
 
     def prepare(self) -> None:
         """What the lazy kernels need of every agent before they evaluate an entry
@@ -409,6 +454,8 @@ class StepTables:
             self.prepare()
             run_parts(complete_agents, agents.size, self.lattice, agents)
         elif agents.size:
+            if self.defer_steps:
+                run_parts(build_pending_steps, agents.size, self.steps, agents)
             self.build_pending(agents)
 
     def evaluate(self, agents: np.ndarray, configs: np.ndarray):
@@ -474,7 +521,7 @@ def _constants(config: PlannerConfig, st: Structure) -> tuple:
 
 def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None,
                  origins: np.ndarray, config: PlannerConfig, lazy: bool = False,
-                 defer_swings: bool = False) -> StepTables:
+                 defer_swings: bool = False, defer_steps: bool = False) -> StepTables:
     """Step tables of every agent: evaluated up front, or (``lazy``) left for the
     searches to evaluate where they read them.
 
@@ -498,6 +545,12 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         With the tables up front (not ``lazy``): leave the swing curves that need the
         §5.2 adjustment unbuilt (``pending``) for the searches to build where they read
         them (:data:`DEFER_SWINGS`); the values read are those built up front.
+    defer_steps : bool
+        With the tables up front (not ``lazy``): leave the steps that need key frames
+        unevaluated (``step_pending``; ``legal`` False, ``cost_lb`` a lower bound of the
+        cost) for the searches to evaluate where they read them (:data:`DEFER_STEPS`);
+        the values read are those evaluated up front. Their stance-reachability
+        (:data:`PRUNE`) takes a deferred step as legal.
 
     Notes
     -----
@@ -551,7 +604,9 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
     tables = StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, L.node_s, L.node_z,
                         L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,
                         L.controls, L.rounds, config, L.cost, L.progress, L.terminal, L.far,
-                        lattice, lazy, zeros((A, Np), dtype=np.bool_))
+                        lattice, lazy, zeros((A, Np), dtype=np.bool_),
+                        zeros((A, Ns), dtype=np.bool_), zeros((A, Ns), dtype=np.bool_),
+                        np.full((A, Ns), np.inf), bool(defer_steps and not lazy))
     t0 = stages.add("arrays", t0)
     if lazy:
         tables.prepare()
@@ -566,7 +621,10 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
                   L.node_z, L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.cost,
                   L.progress, L.terminal, L.far, L.swing_ok, L.controls, L.rounds, L.work,
                   bool(defer_swings), tables.pending, L.r_start, L.r_count, L.r_levels,
-                  L.r_table, L.r_vcum)
+                  L.r_table, L.r_vcum, tables.defer_steps, tables.step_pending,
+                  tables.legal, tables.cost_lb, L.slope, L.consts)
+        if not tables.defer_steps:  # (deferred steps: the kernels keep it)
+            np.equal(L.reason, 0, out=tables.legal)
         np.not_equal(L.reason, int(Reason.UNREACHED), out=L.step_done)
         np.greater_equal(L.rounds, 0, out=L.swing_done)
     stages.add("kernel", t0)

@@ -26,7 +26,8 @@ from planners.energy import EV_PEAK_CM
 from planners.kinematics import key_frame, key_frame_from, leg_constants, next_swing_leg, stance_leg
 from planners.swing import _cell, adjust_one
 
-__all__ = ["Lattice", "SWING_CONTEXT", "build_agents", "build_pending", "build_swing",
+__all__ = ["Lattice", "STEP_CONTEXT", "SWING_CONTEXT", "build_agents", "build_pending",
+           "build_pending_steps", "build_swing", "eval_pending_step", "step_at",
            "complete", "complete_agents",
            "config_efficiency", "config_legal", "efficiency_one", "eval_step", "eval_swing",
            "inline", "prepare",
@@ -763,7 +764,8 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
                  progress, terminal, far, swing_ok, controls, rounds, work, defer, pending,
-                 r_start, r_count, r_levels, r_table, r_vcum, part, parts):
+                 r_start, r_count, r_levels, r_table, r_vcum, defer_steps, step_pending,
+                 legal, cost_lb, slope_out, consts_out, part, parts):
     """Fill every table of every ``parts``-th agent from ``part`` (see
     :func:`planners.lattice.build_tables`, which runs it on every core through
     :func:`planners.lattice.run_parts`).
@@ -792,7 +794,8 @@ def build_agents(prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, norm
                swing_front, swing_stride, pair_first, pair_second, pair_valid, basis, influence,
                fparams, iparams, weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
                progress, terminal, far, swing_ok, controls, rounds, work, defer, pending,
-               r_start, r_count, r_levels, r_table, r_vcum)
+               r_start, r_count, r_levels, r_table, r_vcum, defer_steps, step_pending, legal,
+               cost_lb, slope_out, consts_out)
 
 
 @_jit
@@ -803,7 +806,8 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
                  pair_first, pair_second, pair_valid, basis, influence, fparams, iparams,
                  weights, node_s, node_z, length, rise, En, Ev, Ej, E, reason, cost,
                  progress, terminal, far, swing_ok, controls, rounds, work, defer, pending,
-                 r_start_out, r_count_out, r_levels_out, r_table_out, r_vcum_out):
+                 r_start_out, r_count_out, r_levels_out, r_table_out, r_vcum_out,
+                 defer_steps, step_pending, legal, cost_lb, slope_out, consts_out):
     """Every table of agent ``a`` (see :func:`build_agents`)."""
     Nn = node_depth.size
     Ns = step_stance.size
@@ -839,6 +843,10 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     leg = legs[a]
     heel_off, toe_off, ankle = leg[3], leg[4], leg[5]
     constants = leg_constants(leg[0], leg[1], toe_off, ankle, pelvis, cos_knee)
+    if defer_steps:  # what step_at needs to evaluate a deferred step
+        slope_out[bounds[a]:bounds[a + 1]] = slope
+        for i in range(7):
+            consts_out[a, i] = constants[i]
     b0 = base[a]
     # nodes: footholds relative to the stance foot, heights, support
     support = np.zeros(Nn, dtype=np.int64)
@@ -905,13 +913,25 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
             Ej[a, t], E[a, t], cost[a, t] = ej, np.inf, np.inf
             reason[a, t] = _UNREACHED
             continue
-        evaluated += 1
         highest = _span_from(s, z, slope, b0 + ss, node_right[st_v], node_left[st_v],
                              b0 + fs, node_right[fr_v])[0]
         nominal = lo[a] + delta[a] * step_j[t]
         level = r == 0 and highest == zs and abs(L - nominal) <= 1e-12
         hopeless = support[fr_v] != 0 or abs(r) > max_rise
         reachable = flat_reach[a, step_j[t]]
+        if defer_steps and not level and not hopeless:
+            # deferred step: its key frames (Ej and the knee's reach) left to step_at;
+            # a lower bound of its cost (Ej >= 0) for the bounded DP, and legal so far
+            en, ev, et = _energy(L, r, 0.0, speeds[a], normal[a], weights)
+            En[a, t], Ev[a, t], Ej[a, t], E[a, t] = en, ev, 0.0, np.inf
+            reason[a, t] = 0
+            reach[fr_v] = True
+            cost[a, t] = np.inf
+            cost_lb[a, t] = et + terminal[a, fr_v] if final else et
+            step_pending[a, t] = True
+            legal[a, t] = False
+            continue
+        evaluated += 1
         if not level and not hopeless:
             summit = highest + ankle + lift
             if not k1_done[st_v]:
@@ -946,6 +966,9 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
         if flags == 0:
             reach[fr_v] = True
         cost[a, t] = et + terminal[a, fr_v] if final else et
+        if defer_steps:
+            cost_lb[a, t] = cost[a, t]
+            legal[a, t] = flags == 0
     # swings: only pairs some legal sequence of steps can use
     behind = (-trailing[a] - lo[a]) / delta[a]
     on_grid = (abs(behind - np.rint(behind)) < 1e-9 and behind > -0.5
@@ -1105,3 +1128,91 @@ def _bit_length(c):
         c >>= 1
         k += 1
     return k
+
+
+# Deferred steps: the steps of the up-front tables that need key frames (neither level nor
+# hopeless), evaluated where a search first reads them. ``cost_lb`` holds a lower bound of
+# each step's cost (its Eq. 4 energy with Ej = 0: Ej sums joint rotations, never
+# negative; the exact cost where evaluated), for the bounded DP (planners.dp.settle). The
+# searches read a step's legality through step_at and the context tuple of
+# StepTables.steps (these arrays, in this order), compiled without numba's runtime.
+STEP_CONTEXT = ("step_pending", "legal", "cost_lb", "prof_s", "prof_z", "bounds", "slope",
+                "base", "legs", "consts", "node_s", "node_z", "step_stance", "step_front",
+                "step_depth", "length", "rise", "terminal", "fparams", "iparams", "weights",
+                "speeds", "normal", "Ej", "E", "reason", "cost", "work", "leg_cache",
+                "leg_done")
+
+
+@_leaf
+def step_at(sp, a, t):
+    """Whether step ``t`` of agent ``a`` is legal, from the context ``sp``
+    (:data:`STEP_CONTEXT`): ``legal``, the step evaluated first where it is pending."""
+    if sp[0][a, t]:
+        eval_pending_step(sp, a, t)
+    return sp[1][a, t]
+
+
+@_leaf
+def eval_pending_step(sp, a, t):
+    """Evaluate the deferred step ``t`` of agent ``a`` as :func:`build_agents` evaluates
+    it up front (the same arithmetic: :func:`key_frame` is :func:`key_frame_from` of
+    its stance and next-swing legs, :func:`_span` is :func:`_span_from`), and count
+    it. A deferred step is neither level nor hopeless (support and rise are legal)."""
+    (pending, legal, cost_lb, prof_s, prof_z, bounds, slope, base, legs, consts, node_s,
+     node_z, step_stance, step_front, step_depth, length, rise, terminal, fparams,
+     iparams, weights, speeds, normal, Ej, E, reason, cost, work, leg_cache, leg_done) = sp
+    pending[a, t] = False
+    lift = 0.75 * fparams[4]
+    b, e_ = bounds[a], bounds[a + 1]
+    s, z, sl = prof_s[b:e_], prof_z[b:e_], slope[b:e_]
+    b0 = base[a]
+    leg = legs[a]
+    ankle = leg[5]
+    st_v, fr_v = step_stance[t], step_front[t]
+    ss, fs = node_s[a, st_v], node_s[a, fr_v]
+    zs, zf = node_z[a, st_v], node_z[a, fr_v]
+    highest = _span(s, z, sl, b0 + ss, b0 + fs)[0]
+    c = consts[a]
+    constants = (c[0], c[1], c[2], c[3], c[4], c[5], c[6])
+    # key_frame, its stance leg at K1 kept per stance foothold and its next swing leg at
+    # K1' per landing foothold where that is the higher one (as build_agents shares them)
+    cache = leg_cache[a]
+    if not leg_done[a, st_v, 0]:
+        cache[st_v, 0], cache[st_v, 1], ok1 = stance_leg(ss, zs, leg[0], leg[1], ankle,
+                                                         constants)
+        cache[st_v, 2] = 1.0 if ok1 else 0.0
+        leg_done[a, st_v, 0] = True
+    s1 = (cache[st_v, 0], cache[st_v, 1], cache[st_v, 2] > 0)
+    zs_a, zf_a = zs + ankle, zf + ankle
+    if zs_a <= zf_a:
+        if not leg_done[a, fr_v, 1]:
+            cache[fr_v, 3], cache[fr_v, 4], ok4 = next_swing_leg(
+                fs, zf_a, zf_a, leg[0], leg[1], ankle + lift, constants)
+            cache[fr_v, 5] = 1.0 if ok4 else 0.0
+            leg_done[a, fr_v, 1] = True
+        s4 = (cache[fr_v, 3], cache[fr_v, 4], cache[fr_v, 5] > 0)
+    else:
+        s4 = next_swing_leg(fs, zf_a, zs_a, leg[0], leg[1], ankle + lift, constants)
+    th, ca, reachable = key_frame_from(ss, zs, fs, zf, ss, highest + ankle + lift, leg[0],
+                                       leg[1], leg[4], ankle, constants, s1, s4)
+    ej = weights[6] * th + weights[7] * ca
+    _, _, et = _energy(length[a, t], rise[a, t], ej, speeds[a], normal[a], weights)
+    Ej[a, t], E[a, t] = ej, et
+    reason[a, t] = 0 if reachable else _KNEE_REACH
+    legal[a, t] = reachable
+    final = iparams[1] > 0 and step_depth[t] == step_depth[step_depth.size - 1]
+    cost[a, t] = et + terminal[a, fr_v] if final else et
+    cost_lb[a, t] = cost[a, t]
+    work[a, 0] += 1
+    work[a, 4] += 1
+
+
+@_jit
+def build_pending_steps(sp, agents, part, parts):
+    """Every deferred step of every ``parts``-th agent in ``agents`` from ``part``
+    (:func:`planners.lattice.run_parts`)."""
+    for i in range(part, agents.size, parts):
+        a = agents[i]
+        for t in range(sp[0].shape[1]):
+            if sp[0][a, t]:
+                eval_pending_step(sp, a, t)

@@ -253,7 +253,8 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
                               None if trailing is None else trailing[sl], origins[sl], config,
                               lazy=lattice.PRUNE and planner in lattice.LAZY,
-                              defer_swings=planner in lattice.DEFER_SWINGS)
+                              defer_swings=planner in lattice.DEFER_SWINGS,
+                              defer_steps=planner in lattice.DEFER_STEPS)
         t1 = time.perf_counter()
         result = _SEARCHES[planner](tables)
         t2 = stages.add("search", t1)

@@ -203,12 +203,14 @@ def test_batches_larger_than_a_chunk(leg):
 def test_pruning_does_not_change_the_optimum(leg, profile):
     import planners.lattice as lattice
 
-    pruned = plan(profile, leg, 1.34, "optimal")
-    lattice.PRUNE = False
+    deferred, lattice.DEFER_STEPS = lattice.DEFER_STEPS, frozenset()  # every step read
     try:
+        pruned = plan(profile, leg, 1.34, "optimal")
+        lattice.PRUNE = False
         full = plan(profile, leg, 1.34, "optimal")
     finally:
         lattice.PRUNE = True
+        lattice.DEFER_STEPS = deferred
     assert pruned.status == full.status
     assert _to_reach(pruned) == pytest.approx(_to_reach(full), rel=1e-12)
     assert pruned.stats["swing_curves"] <= full.stats["swing_curves"]
