@@ -277,6 +277,21 @@ def test_stacked_straight_lines_equal_the_list_of_polylines(lines):
         assert np.array_equal(s, s1) and np.array_equal(z, z1)
 
 
+@FAST
+@given(lines=st.lists(st.tuples(st.floats(-15, 15), st.floats(-15, 15), st.floats(-15, 15),
+                                st.floats(-15, 15)), min_size=1, max_size=8),
+       every=st.integers(1, 4))
+def test_packed_profiles_are_the_profiles_concatenated(lines, every):
+    ter = demo_terrain()
+    stacked = np.array(lines).reshape(-1, 2, 2)
+    stacked[::every, 1] = stacked[::every, 0]  # some lines are a single point
+    s, z, sizes = ter.profiles_packed(stacked)
+    each = ter.profiles(stacked)
+    assert sizes.tolist() == [len(p[0]) for p in each]
+    assert np.array_equal(s, np.concatenate([p[0] for p in each]))
+    assert np.array_equal(z, np.concatenate([p[1] for p in each]))
+
+
 @settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 10_000), n_blocks=st.integers(17, 60))
 def test_many_features_grid_index_matches_plain_override(seed, n_blocks):

@@ -314,16 +314,26 @@ def _first_clear(target: np.ndarray, blind: np.ndarray, b: np.ndarray, candidate
     blind[b[found]] = False
 
 
+def _lane(table: RouteTable, route, progress, xy, radius, clearance, params):
+    """The lane target of :func:`steering_targets`: the route's points at and
+    ``target_distance`` ahead of ``progress`` (k, 2) [m], the target (k, 2) [m] parallel
+    to the route pulled towards its centre line, and (k,) bool whether the lane runs into
+    a wall (the ``clearance`` at the target or halfway below ``radius``)."""
+    on_route = table.point_at(route, progress)
+    ahead = table.point_at(route, progress + params.target_distance)
+    target = xy + (ahead - on_route) + params.centre_pull * (on_route - xy)
+    blind = clearance(target) < radius
+    blind |= clearance(0.5 * (target + xy)) < radius
+    return ahead, target, blind
+
+
 def lane_runs_into_wall(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
                         xy: np.ndarray, radius: np.ndarray, clearance, params) -> np.ndarray:
     """(k,) bool: the walkers at ``xy`` whose lane (parallel to the route,
     ``target_distance`` ahead, as :func:`steering_targets` lays it) runs into a wall at its
     end or halfway, closer than the walker's ``radius`` [m] (a door or bend ahead off the
     walker's axis)."""
-    on_route = table.point_at(route, progress)
-    ahead = table.point_at(route, progress + params.target_distance)
-    target = xy + (ahead - on_route) + params.centre_pull * (on_route - xy)
-    return (clearance(target) < radius) | (clearance(0.5 * (target + xy)) < radius)
+    return _lane(table, route, progress, xy, radius, clearance, params)[2]
 
 
 def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
@@ -337,11 +347,7 @@ def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarr
     ``clearance`` at the target or halfway is below the agent's ``radius``): then they
     head for the centre line. An agent at its target keeps its ``heading`` [rad].
     """
-    on_route = table.point_at(route, progress)
-    ahead = table.point_at(route, progress + params.target_distance)
-    target = xy + (ahead - on_route) + params.centre_pull * (on_route - xy)
-    blind = clearance(target) < radius
-    blind |= clearance(0.5 * (target + xy)) < radius
+    ahead, target, blind = _lane(table, route, progress, xy, radius, clearance, params)
     b = np.flatnonzero(blind)
     if b.size and params.lane_keep:
         # the lane ahead as far off the centre line as fits: a walker approaching a door

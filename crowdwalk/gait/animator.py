@@ -125,10 +125,6 @@ _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 
 
-def _smoothstep(x: np.ndarray) -> np.ndarray:
-    return smoothstep(x)  # x clipped to [0, 1], x² (3 − 2x): compiled (posing_kernels)
-
-
 def _toe_off_shape(u: np.ndarray) -> np.ndarray:
     """The toe-off hand-over's shape h(u) (k,), u ∈ [0, 1] (k,): h(0) = 0, h'(0) = 1, and
     h, h', h'' zero at u = 1 (quintic; h''(0) = 0: no acceleration added at either end)."""
@@ -925,7 +921,7 @@ class Animator:
         rows = np.tile(a, 2)
         legs = sample(self._step.angles, t, rows=rows)
         if self.style.step_crossfade:
-            w = np.tile(_smoothstep(2.0 * phase), 2)[:, None]
+            w = np.tile(smoothstep(2.0 * phase), 2)[:, None]
             before = sample(self._step.prev_angles, t, rows=rows)
             legs = before + w * (legs - before)
         return legs[:k], legs[k:]
@@ -939,14 +935,14 @@ class Animator:
             return new
         before = self._step.prev_angles[a]
         grid = np.arange(new.shape[1]) / new.shape[1]
-        w = _smoothstep(2.0 * grid)[None, :, None]
+        w = smoothstep(2.0 * grid)[None, :, None]
         return before + w * (new - before)
 
     def _spin_progress(self, a: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """How much of its spin turn (k,) [0, 1] the stance foot of agents a has made at
         step phases tau (k,): none until the heel is up, all by the step's end."""
         t0 = self._step.spin_start[a]
-        return _smoothstep((tau - t0) / np.maximum(1.0 - t0, 1e-9))
+        return smoothstep((tau - t0) / np.maximum(1.0 - t0, 1e-9))
 
     def _heading(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         """ψ (k,) [rad] at stance phases (k,): from the previous heading to the commanded
@@ -954,7 +950,7 @@ class Animator:
         tau = 2.0 * phase
         spin = self._stance.spin[a]
         turn = wrap_angle(self._step.psi1[a] - self._step.psi0[a])
-        return (self._step.psi0[a] + (turn - spin) * _smoothstep(tau)
+        return (self._step.psi0[a] + (turn - spin) * smoothstep(tau)
                 + spin * self._spin_progress(a, tau))
 
     def _contact(self, body: Body, heel_xy: np.ndarray, z: np.ndarray, yaw: np.ndarray):
@@ -1051,7 +1047,7 @@ class Animator:
         held = np.clip(side_sw * wrap_angle(self._swing.trail_yaw[a] - psi), -_MAX_TOE_START,
                        _MAX_TOE_START)
         toe0 = np.where(self._swing.has_trail[a], held, self._stance.toe_start[a])
-        return toe0 + (toe1 - toe0) * _smoothstep((tau - t_off) / np.maximum(1.0 - t_off,
+        return toe0 + (toe1 - toe0) * smoothstep((tau - t_off) / np.maximum(1.0 - t_off,
                                                                               1e-9))
 
     def _swing_yaw_fix(self, a: np.ndarray, phase: np.ndarray, walked) -> np.ndarray:
@@ -1070,7 +1066,7 @@ class Animator:
         # it is for the trailing foot on the ground, and fades out over the early swing
         err *= np.clip((np.hypot(along[:, 0], along[:, 1]) - 0.5) / 0.2, 0.0, 1.0)
         t_off = self._swing.toe_off[a]
-        err *= self._swing.has_trail[a] * (1.0 - _smoothstep((2.0 * phase - t_off) / 0.4))
+        err *= self._swing.has_trail[a] * (1.0 - smoothstep((2.0 * phase - t_off) / 0.4))
         return -side_sw * err
 
     @staticmethod
@@ -1112,7 +1108,7 @@ class Animator:
         offset = target = blend = goal = toes = None
         if corrected:
             t_off = self._swing.toe_off[a]
-            s = _smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
+            s = smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
             offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
             swing = np.maximum(1.0 - t_off, 1e-9)
             if self.style.toe_off_c1:
@@ -1122,8 +1118,8 @@ class Animator:
                 u = np.clip((tau - t_off) / beta, 0.0, 1.0)
                 offset += self._swing.toe_vel[a] * (self._step.duration[a] * beta
                                                      * _toe_off_shape(u))[:, None]
-            ramp = (_smoothstep((tau - t_off) / (_BEZIER_IN * swing))
-                    * _smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
+            ramp = (smoothstep((tau - t_off) / (_BEZIER_IN * swing))
+                    * smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
             blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
             target = _bezier(self._swing.bezier[a], tau)
             pinned = self._swing.has_trail[a] & (tau < t_off)
@@ -1146,19 +1142,19 @@ class Animator:
             # after a clamped step (its landing pulled onto the target by IK) the offset
             # is the landing's correction and is blended out over the whole step
             over = np.where(self._swing.join_long[a], _HIP_BLEND_CLAMPED, _HIP_BLEND)
-            hip_fix = self._swing.hip_fix[a] * (1.0 - _smoothstep(tau / over))[:, None]
+            hip_fix = self._swing.hip_fix[a] * (1.0 - smoothstep(tau / over))[:, None]
             # C¹ term: T b x (1 - x)² (x = τ / b) has the velocity jump as d/dt at t0
             x = np.clip(tau / _HIP_BLEND, 0.0, 1.0)
             hip_fix += self._swing.hip_vel[a] * (self._step.duration[a] * _HIP_BLEND
                                                   * x * (1.0 - x) ** 2)[:, None]
-            hip_fix += self._swing.hip_drop[a] * _smoothstep((tau - 0.4) / 0.6)[:, None]
+            hip_fix += self._swing.hip_drop[a] * smoothstep((tau - 0.4) / 0.6)[:, None]
             trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))
             if trailing.size:
                 hip_fix[trailing] += self._trailing_root(a[trailing], phase[trailing])
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
         # a walk starts from standing: the pelvis is level and lists in over the first step
-        list_scale = np.where(self._step.first[a], _smoothstep(tau), 1.0)
+        list_scale = np.where(self._step.first[a], smoothstep(tau), 1.0)
         toe_out = self._swing_toe(a, tau, psi)
         if toe_fix is not None:
             toe_out = toe_out + toe_fix
@@ -1206,13 +1202,13 @@ class Animator:
             body, self._step.stance_left[a], phase, st, sw, psi, foot, self._swing_toe(a, tau, psi),
             warm, self.style, self._step.stance_fraction[a],
             attributes=None if self.attributes is None else self.attributes.take(a),
-            list_scale=np.where(self._step.first[a], _smoothstep(tau), 1.0),
+            list_scale=np.where(self._step.first[a], smoothstep(tau), 1.0),
         )  # fmt: skip
         swing_ankle = free.positions[np.arange(k), LEG_JOINTS[np.where(
             self._step.stance_left[a], 1, 0)][:, 2]]
         gap = self._pinned_ankle(a, phase, sw)[0] - swing_ankle
         fwd = np.stack([np.cos(psi), np.sin(psi), np.zeros(k)], axis=1)
-        w = _smoothstep(tau / np.maximum(self._swing.toe_off[a], 1e-9))
+        w = smoothstep(tau / np.maximum(self._swing.toe_off[a], 1e-9))
         ahead = (1.0 - w) * np.sum(gap * fwd, axis=1)
         # along the circle about the stance ankle: the stance leg pivots, its knee stays
         st_leg = LEG_JOINTS[np.where(self._step.stance_left[a], 0, 1)]
@@ -1232,11 +1228,11 @@ class Animator:
         if rows.size == 0:
             return None
         x = np.abs(tau[rows, None] - _LIFT_GRID[None, :]) / _LIFT_WIDTH
-        bump = 1.0 - _smoothstep(x)
+        bump = 1.0 - smoothstep(x)
         # zero at the step's ends: the trailing foot leaves, and the landing foot
         # arrives, where the stance feet are (the per-frame pass covers what remains)
         t = tau[rows]
-        ends = _smoothstep(t / _LIFT_WIDTH) * _smoothstep((1.0 - t) / _LIFT_LAND)
+        ends = smoothstep(t / _LIFT_WIDTH) * smoothstep((1.0 - t) / _LIFT_LAND)
         out = np.zeros(a.size)
         out[rows] = (need[rows] * bump).max(axis=1) * ends
         return out
@@ -1267,7 +1263,7 @@ class Animator:
         # all of it until half-way to toe-off, none at toe-off (the swing's offset starts
         # from the uncorrected pin): the ball is up on the straightening toes by then
         x = tau[pinned] / np.maximum(self._swing.toe_off[ap], 1e-9)
-        want = want + _smoothstep(2.0 * x - 1.0)[:, None] * first
+        want = want + smoothstep(2.0 * x - 1.0)[:, None] * first
         fix = np.zeros((a.size, 3))
         for _ in range(_PIN_ROUNDS):
             err = walked.positions[pinned, ball_joint] - want
@@ -1302,7 +1298,7 @@ class Animator:
         along = direction(yaw, slope)
         toe_len = body.toe_offset - body.ball_offset
         tip = self._swing.trail_ball[a] + toe_len[:, None] * along
-        w = _smoothstep(2.0 * phase / np.maximum(self._swing.toe_off[a], 1e-9))
+        w = smoothstep(2.0 * phase / np.maximum(self._swing.toe_off[a], 1e-9))
         toe_angle = (1.0 - w) * np.minimum(pitch - slope, 0.0)
         toe_pitch = pitch - toe_angle
         c, s_ = np.cos(pitch), np.sin(pitch)

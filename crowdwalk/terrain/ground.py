@@ -343,41 +343,38 @@ class Terrain:
         for all of them): a list of (s, z) pairs [m]. ``polylines`` is a sequence of
         (k, 2) arrays [m], or an (m, 2, 2) array of straight lines (prepared without a
         Python loop)."""
-        s_rows, z_rows, bounds, out = self._profile_rows(polylines)
-        for li in range(len(out)):
-            if out[li] is None:
-                out[li] = (s_rows[bounds[li]:bounds[li + 1]], z_rows[bounds[li]:bounds[li + 1]])
+        s, z, bounds, singles = self._profile_rows(polylines)
+        out = [(s[i:j], z[i:j]) for i, j in zip(bounds[:-1], bounds[1:], strict=True)]
+        for li, z1 in singles.items():
+            out[li] = (np.zeros(1), z1)
         return out
 
     def profiles_packed(self, polylines) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`profiles` concatenated: s and z (V,) [m] of every profile in turn and the
         number of rows of each (m,) (line i's rows follow lines 0..i-1's), without a
         Python loop over the lines."""
-        s_rows, z_rows, bounds, out = self._profile_rows(polylines)
-        singles = [li for li, v in enumerate(out) if v is not None]
-        if not singles:
-            return s_rows, z_rows, np.diff(bounds)
-        for li in range(len(out)):  # lines of one point: their one row in place
-            if out[li] is None:
-                out[li] = (s_rows[bounds[li]:bounds[li + 1]], z_rows[bounds[li]:bounds[li + 1]])
-        return (np.concatenate([v[0] for v in out]), np.concatenate([v[1] for v in out]),
-                np.array([len(v[0]) for v in out], dtype=np.int64))
+        s, z, bounds, singles = self._profile_rows(polylines)
+        sizes = np.diff(bounds)
+        if singles:  # lines of one point (no rows of their own): their one row in place
+            at = np.fromiter(singles, np.int64)  # ascending
+            s = np.insert(s, bounds[at], 0.0)
+            z = np.insert(z, bounds[at], np.concatenate(list(singles.values())))
+            sizes[at] = 1
+        return s, z, sizes
 
     def _profile_rows(self, polylines):
-        """The rows of :meth:`profiles`: s, z (V,) [m], each line's bounds (m + 1,) into
-        them, and the list of profiles with the one-point lines' filled in (None for the
-        others)."""
+        """The rows of :meth:`profiles` but the one-point lines': s, z (V,) [m], each
+        line's bounds (m + 1,) into them, and {line: its height (1,) [m]} of the lines of
+        one point (no rows), ascending."""
         if isinstance(polylines, np.ndarray) and polylines.shape[1:] == (2, 2):
             lines = polylines.astype(float, copy=False)  # m straight lines, stacked
             a, b, line_of, s_seg0, singles = _straight_segments(lines)
         else:
             lines = [_points(pl, "Terrain", "polyline") for pl in polylines]
             a, b, line_of, s_seg0, singles = _polyline_segments(lines)
-        out: list = [None] * len(lines)
-        for li, pt in singles.items():
-            out[li] = (np.zeros(1), self.height(pt))
+        heights = {li: self.height(pt) for li, pt in singles.items()}
         if a.size == 0:
-            return np.zeros(0), np.zeros(0), np.zeros(len(lines) + 1, np.int64), out
+            return np.zeros(0), np.zeros(0), np.zeros(len(lines) + 1, np.int64), heights
         seg_len = np.linalg.norm(b - a, axis=1)
         m = len(a)
         index = self._breaks
@@ -411,7 +408,7 @@ class Terrain:
         step = same_line & np.concatenate([[False], np.abs(np.diff(s_rows)) <= 1e-12])
         s_rows[step] = s_rows[np.flatnonzero(step) - 1]
         bounds = np.searchsorted(row_line, np.arange(len(lines) + 1))
-        return s_rows, z_rows, bounds, out
+        return s_rows, z_rows, bounds, heights
 
     def profile(self, polyline):
         """Ground profile along ``polyline`` (k, 2) [m] as a ``planners.GroundProfile``
