@@ -71,6 +71,7 @@ import numpy as np
 
 from crowdwalk.body import JOINT_NAMES, LEG_JOINTS, PARENTS, Body, matrix_to_quaternion
 from crowdwalk.errors import invalid
+from crowdwalk.gait import animator_kernels as ak
 from crowdwalk.gait.datasets import sample
 from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
 from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose, pelvis_shapes
@@ -132,10 +133,21 @@ def _toe_off_shape(u: np.ndarray) -> np.ndarray:
 
 
 def _bezier(ctrl: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Cubic Bezier points (k, 3) of control points (k, 4, 3) at parameters tau (k,)."""
-    u = 1.0 - tau
-    w = np.stack([u**3, 3 * u * u * tau, 3 * u * tau * tau, tau**3], axis=1)
-    return np.einsum("kc,kcd->kd", w, ctrl)
+    """Cubic Bezier points (k, 3) of control points (k, 4, 3) at parameters tau (k,)
+    (compiled: ``animator_kernels.bezier_points``)."""
+    tau = _floats(tau)
+    return ak.bezier_points(np.ascontiguousarray(ctrl, dtype=float), tau, (1.0 - tau)**3,
+                            tau**3)
+
+
+def _rows(a: np.ndarray) -> np.ndarray:
+    """Agent indices (k,) as the kernels take them (intp)."""
+    return np.asarray(a, dtype=np.intp)
+
+
+def _floats(x) -> np.ndarray:
+    """(k,) float64, C-contiguous, for the kernels."""
+    return np.ascontiguousarray(x, dtype=np.float64)
 
 
 def _spin_start(body: Body, angles: np.ndarray, yaw_off: np.ndarray,
@@ -916,15 +928,8 @@ class Animator:
         step's: at the heel strike that opens the step the legs are where the previous
         dataset left them (its Eq. 10 step is the one the feet span), at the one that
         ends it they follow the step's own dataset (whose Eq. 10 step is this one)."""
-        k = a.size
-        t = np.concatenate([phase, phase + 0.5])
-        rows = np.tile(a, 2)
-        legs = sample(self._step.angles, t, rows=rows)
-        if self.style.step_crossfade:
-            w = np.tile(smoothstep(2.0 * phase), 2)[:, None]
-            before = sample(self._step.prev_angles, t, rows=rows)
-            legs = before + w * (legs - before)
-        return legs[:k], legs[k:]
+        return ak.crossfade_legs(self._step.angles, self._step.prev_angles, _rows(a),
+                                 _floats(phase), bool(self.style.step_crossfade))
 
     def _stance_curves(self, a: np.ndarray) -> np.ndarray:
         """(k, S, 4) [rad]: the step's dataset as the stance leg of agents a follows it
@@ -947,11 +952,9 @@ class Animator:
     def _heading(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         """ψ (k,) [rad] at stance phases (k,): from the previous heading to the commanded
         one over the step (§4.4); the part a spin turn makes turns with the spin."""
-        tau = 2.0 * phase
-        spin = self._stance.spin[a]
-        turn = wrap_angle(self._step.psi1[a] - self._step.psi0[a])
-        return (self._step.psi0[a] + (turn - spin) * smoothstep(tau)
-                + spin * self._spin_progress(a, tau))
+        step = self._step
+        return ak.headings(step.psi0, step.psi1, self._stance.spin, step.spin_start, _rows(a),
+                           _floats(phase))
 
     def _contact(self, body: Body, heel_xy: np.ndarray, z: np.ndarray, yaw: np.ndarray):
         """How a foot with its heel at ``heel_xy`` (m, 2) [m] and ``yaw`` (m,) [rad] rests
@@ -1042,13 +1045,10 @@ class Animator:
         """The swing foot's toe-out (k,) [rad] of agents a at step phases tau, heading psi:
         the trailing foot keeps its world yaw while pinned in push-off (its toe-out
         follows ψ), then turns to the commanded toe-out over the swing."""
-        toe1, t_off = self._stance.toe_out[a], self._swing.toe_off[a]
-        side_sw = np.where(self._step.stance_left[a], -1.0, 1.0)
-        held = np.clip(side_sw * wrap_angle(self._swing.trail_yaw[a] - psi), -_MAX_TOE_START,
-                       _MAX_TOE_START)
-        toe0 = np.where(self._swing.has_trail[a], held, self._stance.toe_start[a])
-        return toe0 + (toe1 - toe0) * smoothstep((tau - t_off) / np.maximum(1.0 - t_off,
-                                                                              1e-9))
+        sw = self._swing
+        return ak.swing_toes(self._stance.toe_out, sw.toe_off, self._step.stance_left,
+                             sw.trail_yaw, sw.has_trail, self._stance.toe_start, _rows(a),
+                             _floats(tau), _floats(psi), _MAX_TOE_START)
 
     def _swing_yaw_fix(self, a: np.ndarray, phase: np.ndarray, walked) -> np.ndarray:
         """Toe-out corrections (k,) [rad] that turn the trailing foot of agents a, pinned
@@ -1105,26 +1105,24 @@ class Animator:
             slope = foot.slope.copy()
             slope[spinning] = np.minimum(sub.slope, p_max)
             foot = StanceFoot(foot.ball, foot.yaw, slope)
-        offset = target = blend = goal = toes = None
+        offset = target = blend = goal = toes = hip_fix = None
         if corrected:
-            t_off = self._swing.toe_off[a]
-            s = smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
-            offset = (1.0 - s) * self._swing.d0[a] + s * self._swing.d1[a]
-            swing = np.maximum(1.0 - t_off, 1e-9)
-            if self.style.toe_off_c1:
-                # C¹ at toe-off: T β h(u), u = (τ − toe-off) / β, starts with the velocity
-                # the data lack and is gone, at rest, after β of the step
-                beta = _TOE_OFF_BLEND * swing
-                u = np.clip((tau - t_off) / beta, 0.0, 1.0)
-                offset += self._swing.toe_vel[a] * (self._step.duration[a] * beta
-                                                     * _toe_off_shape(u))[:, None]
-            ramp = (smoothstep((tau - t_off) / (_BEZIER_IN * swing))
-                    * smoothstep((1.0 - tau) / (_BEZIER_OUT * swing)))
-            blend = np.where(self._swing.use_bezier[a], ramp, 0.0)
+            # ak.corrections: the swing offset blended from toe-off to the landing, with
+            # toe_off_c1 its C¹ hand-over T β h(u), u = (τ − toe-off) / β (starts with the
+            # velocity the data lack, gone at rest after β of the step); the Bezier's
+            # blend; the push-off pin (toes rigid after toe-off); the stance hip's offset,
+            # blended out over half the step, or the whole step after a clamped one (its
+            # landing pulled onto the target by IK), with the C¹ term T b x (1 - x)²
+            # (x = τ / b: the velocity jump as d/dt at t0) and the drop toward the landing
+            sw_, rows, tau_ = self._swing, _rows(a), _floats(tau)
+            u = ak.toe_off_progress(rows, tau_, sw_.toe_off, _TOE_OFF_BLEND)
+            offset, blend, pinned, toes, hip_fix = ak.corrections(
+                rows, tau_, sw_.toe_off, sw_.d0, sw_.d1, sw_.toe_vel, self._step.duration,
+                sw_.use_bezier, sw_.has_trail, sw_.join_long, sw_.hip_fix, sw_.hip_vel,
+                sw_.hip_drop, bool(self.style.toe_off_c1), u, (1.0 - u)**3, _TOE_OFF_BLEND,
+                _BEZIER_IN, _BEZIER_OUT, _HIP_BLEND, _HIP_BLEND_CLAMPED)
             target = _bezier(self._swing.bezier[a], tau)
-            pinned = self._swing.has_trail[a] & (tau < t_off)
             goal = np.full((a.size, 3), np.nan)
-            toes = np.where(self._swing.has_trail[a], 0.0, np.nan)  # rigid after toe-off
             if pinned.any():
                 goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
                                                                 sw[pinned])  # fmt: skip
@@ -1137,17 +1135,7 @@ class Animator:
                 offset[:, 2] += lift
                 target[:, 2] += lift
                 goal[:, 2] += lift
-        hip_fix = None
         if corrected:
-            # after a clamped step (its landing pulled onto the target by IK) the offset
-            # is the landing's correction and is blended out over the whole step
-            over = np.where(self._swing.join_long[a], _HIP_BLEND_CLAMPED, _HIP_BLEND)
-            hip_fix = self._swing.hip_fix[a] * (1.0 - smoothstep(tau / over))[:, None]
-            # C¹ term: T b x (1 - x)² (x = τ / b) has the velocity jump as d/dt at t0
-            x = np.clip(tau / _HIP_BLEND, 0.0, 1.0)
-            hip_fix += self._swing.hip_vel[a] * (self._step.duration[a] * _HIP_BLEND
-                                                  * x * (1.0 - x) ** 2)[:, None]
-            hip_fix += self._swing.hip_drop[a] * smoothstep((tau - 0.4) / 0.6)[:, None]
             trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))
             if trailing.size:
                 hip_fix[trailing] += self._trailing_root(a[trailing], phase[trailing])

@@ -1,0 +1,130 @@
+"""The Animator's compiled walk terms (crowdwalk.gait.animator_kernels) give the numpy code
+they replaced bit for bit (docs/architecture.md, "Posing speed")."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from crowdwalk.gait import animator_kernels as ak
+from crowdwalk.gait.datasets import sample
+from crowdwalk.gait.foot import wrap_angle
+from crowdwalk.gait.posing_kernels import smoothstep
+
+RNG = np.random.default_rng(17)
+N, K = 60, 4000  # agents, rows asked (agents repeated, as the Animator's re-walks do)
+
+
+def _phases(k: int, hi: float) -> np.ndarray:
+    """Uniform phases with the ends, their neighbours and exact grid points mixed in."""
+    x = RNG.uniform(0.0, hi, k)
+    x[:40] = np.array([0.0, hi, np.nextafter(hi, 0), 1e-300, 0.25, 0.5 - 1e-6, 0.01, 0.1] * 5)
+    return x
+
+
+def _agents(k: int) -> np.ndarray:
+    return RNG.integers(0, N, k).astype(np.intp)
+
+
+def _same(got, want):
+    got, want = np.asarray(got), np.asarray(want)
+    assert got.shape == want.shape and got.dtype == want.dtype
+    assert np.array_equal(got, want, equal_nan=True)
+
+
+def test_crossfade_legs_is_the_numpy_code():
+    angles, prev = RNG.normal(size=(N, 100, 4)), RNG.normal(size=(N, 100, 4))
+    a, phase = _agents(K), _phases(K, 0.5)
+    for crossfade in (True, False):
+        # Animator._legs before pose17
+        t = np.concatenate([phase, phase + 0.5])
+        rows = np.tile(a, 2)
+        legs = sample(angles, t, rows=rows)
+        if crossfade:
+            w = np.tile(smoothstep(2.0 * phase), 2)[:, None]
+            before = sample(prev, t, rows=rows)
+            legs = before + w * (legs - before)
+        st, sw = ak.crossfade_legs(angles, prev, a, phase, crossfade)
+        _same(st, legs[:K])
+        _same(sw, legs[K:])
+
+
+def test_headings_are_the_numpy_code():
+    psi0, psi1 = RNG.uniform(-4, 4, N), RNG.uniform(-4, 4, N)
+    spin = np.where(RNG.random(N) < 0.5, 0.0, RNG.uniform(-1, 1, N))
+    spin_start = RNG.choice([0.0, 0.3, 1.0, 0.6], N)
+    a, phase = _agents(K), _phases(K, 0.5)
+    # Animator._heading and _spin_progress before pose17
+    tau = 2.0 * phase
+    sp = spin[a]
+    turn = wrap_angle(psi1[a] - psi0[a])
+    t0 = spin_start[a]
+    progress = smoothstep((tau - t0) / np.maximum(1.0 - t0, 1e-9))
+    want = psi0[a] + (turn - sp) * smoothstep(tau) + sp * progress
+    _same(ak.headings(psi0, psi1, spin, spin_start, a, phase), want)
+
+
+def test_swing_toes_are_the_numpy_code():
+    toe_out, toe_start = RNG.uniform(-0.3, 0.3, N), RNG.uniform(-0.8, 0.8, N)
+    toe_off = RNG.choice([0.0, 0.2, 0.45, 0.3], N)
+    stance_left, has_trail = RNG.random(N) < 0.5, RNG.random(N) < 0.5
+    trail_yaw = RNG.uniform(-4, 4, N)
+    a, tau = _agents(K), _phases(K, 1.0)
+    psi = RNG.uniform(-4, 4, K)
+    limit = np.radians(40.0)
+    # Animator._swing_toe before pose17
+    toe1, t_off = toe_out[a], toe_off[a]
+    side_sw = np.where(stance_left[a], -1.0, 1.0)
+    held = np.clip(side_sw * wrap_angle(trail_yaw[a] - psi), -limit, limit)
+    toe0 = np.where(has_trail[a], held, toe_start[a])
+    want = toe0 + (toe1 - toe0) * smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))
+    _same(ak.swing_toes(toe_out, toe_off, stance_left, trail_yaw, has_trail, toe_start, a,
+                        tau, psi, limit), want)
+
+
+def test_bezier_points_are_the_einsum():
+    ctrl, tau = RNG.normal(size=(K, 4, 3)), _phases(K, 1.0)
+    u = 1.0 - tau
+    w = np.stack([u**3, 3 * u * u * tau, 3 * u * tau * tau, tau**3], axis=1)
+    _same(ak.bezier_points(ctrl, tau, u**3, tau**3), np.einsum("kc,kcd->kd", w, ctrl))
+
+
+def _toe_off_shape(u):
+    return u * (1.0 - u) ** 3 * (1.0 + 3.0 * u)
+
+
+def test_corrections_are_the_numpy_code():
+    toe_off = RNG.choice([0.0, 0.2, 0.45, 0.3, 1e-12], N)
+    d0, d1, toe_vel = (RNG.normal(size=(N, 3)) for _ in range(3))
+    hip_fix0, hip_vel, hip_drop = (RNG.normal(size=(N, 3)) for _ in range(3))
+    duration = RNG.uniform(0.3, 0.8, N)
+    use_bezier, has_trail, join_long = (RNG.random(N) < 0.5 for _ in range(3))
+    a, tau = _agents(K), _phases(K, 1.0)
+    blend_, in_, out_, half, whole = 0.7, 0.5, 0.3, 0.5, 1.0
+    for c1 in (True, False):
+        # Animator._walk's corrected terms before pose17
+        t_off = toe_off[a]
+        s = smoothstep((tau - t_off) / np.maximum(1.0 - t_off, 1e-9))[:, None]
+        offset = (1.0 - s) * d0[a] + s * d1[a]
+        swing = np.maximum(1.0 - t_off, 1e-9)
+        if c1:
+            beta = blend_ * swing
+            u = np.clip((tau - t_off) / beta, 0.0, 1.0)
+            offset += toe_vel[a] * (duration[a] * beta * _toe_off_shape(u))[:, None]
+        ramp = (smoothstep((tau - t_off) / (in_ * swing))
+                * smoothstep((1.0 - tau) / (out_ * swing)))
+        blend = np.where(use_bezier[a], ramp, 0.0)
+        pinned = has_trail[a] & (tau < t_off)
+        toes = np.where(has_trail[a], 0.0, np.nan)
+        over = np.where(join_long[a], whole, half)
+        hip_fix = hip_fix0[a] * (1.0 - smoothstep(tau / over))[:, None]
+        x = np.clip(tau / half, 0.0, 1.0)
+        hip_fix += hip_vel[a] * (duration[a] * half * x * (1.0 - x) ** 2)[:, None]
+        hip_fix += hip_drop[a] * smoothstep((tau - 0.4) / 0.6)[:, None]
+        progress = ak.toe_off_progress(a, tau, toe_off, blend_)
+        if c1:
+            _same(progress, u)
+        got = ak.corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier,
+                             has_trail, join_long, hip_fix0, hip_vel, hip_drop, c1, progress,
+                             (1.0 - progress)**3, blend_, in_, out_, half, whole)
+        for g, w in zip(got, (offset, blend, pinned, toes, hip_fix), strict=True):
+            _same(g, w)
