@@ -522,20 +522,21 @@ class Animator:
         m = a.size
         out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m),
                       np.zeros((m, 3)))
-        if c1.any():
-            ac = a[c1]
-            k = ac.size
-            ends = self._walk(np.concatenate([ac, ac]), np.concatenate(
-                [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]), corrected=True)
-            out.root_velocity[c1] = (ends.root_position[:k] - ends.root_position[k:]) / (
-                2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
         if had.any():
-            ah = a[had]
+            # one walk: the agents' ends, and the c1 agents (a subset) a little earlier
+            # (each agent's walk is its own: the values of separate walks)
+            ah, ac = a[had], a[c1]
             k = ah.size
-            end = self._walk(ah, np.full(k, _PHASE_END), corrected=True)
+            walked = self._walk(np.concatenate([ah, ac]), np.concatenate(
+                [np.full(k, _PHASE_END), np.full(ac.size, _PHASE_END - _VEL_PHASE)]),
+                corrected=True)
+            root = walked.root_position
+            if ac.size:
+                out.root_velocity[c1] = (root[:k][c1[had]] - root[k:]) / (
+                    2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
             old_st = np.where(self._step.stance_left[ah], 0, 1)
-            out.root[had] = end.root_position
-            feet = foot_points(self.body.take(ah), end.positions, end.rotations)
+            out.root[had] = root[:k]
+            feet = foot_points(self.body.take(ah), walked.positions[:k], walked.rotations[:k])
             new_st = feet[np.arange(k), 1 - old_st]  # the foot that just landed
             out.heel[had] = new_st[:, 0]
             toward = new_st[:, 1] - new_st[:, 0]
@@ -662,15 +663,17 @@ class Animator:
         the join is C¹: the offset also starts with the root velocity the data lack at the
         heel strike and loses it over the same blend (docs/architecture.md, "C¹ root join
         on stair steps")."""
-        if had.any():
-            start_pose = self._walk(a[had], np.zeros(int(had.sum())), corrected=False)
-            self._swing.hip_fix[a[had]] = landed.root[had] - start_pose.root_position
-        if c1.any():
-            ac = a[c1]
-            k = ac.size
-            both = self._walk(np.concatenate([ac, ac]), np.concatenate(
-                [np.zeros(k), np.full(k, _VEL_PHASE)]), corrected=False)
-            v_data = (both.root_position[k:] - both.root_position[:k]) / (
+        if not had.any():
+            return
+        # one walk: the agents' starts, and the c1 agents (a subset) a little later
+        ah, ac = a[had], a[c1]
+        k = ah.size
+        walked = self._walk(np.concatenate([ah, ac]), np.concatenate(
+            [np.zeros(k), np.full(ac.size, _VEL_PHASE)]), corrected=False)
+        root = walked.root_position
+        self._swing.hip_fix[ah] = landed.root[had] - root[:k]
+        if ac.size:
+            v_data = (root[k:] - root[:k][c1[had]]) / (
                 2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
             self._swing.hip_vel[ac] = landed.root_velocity[c1] - v_data
 
@@ -1276,25 +1279,12 @@ class Animator:
         of ElevInterp's step measure, so the data's leg reaches it).
         """
         psi = self._heading(a, phase)
-        yaw = self._swing.trail_yaw[a]
-        slope = self._swing.trail_slope[a]
-        pitch = np.arctan(np.tan(swing_angles[:, 0]) * np.cos(yaw - psi))
-        body = self.body.take(a)
-        ch, sh = np.cos(yaw), np.sin(yaw)
-        flat = np.stack([ch, sh, np.zeros_like(yaw)], axis=1)
-        up = np.array([0.0, 0.0, 1.0])
-        along = direction(yaw, slope)
-        toe_len = body.toe_offset - body.ball_offset
-        tip = self._swing.trail_ball[a] + toe_len[:, None] * along
-        w = smoothstep(2.0 * phase / np.maximum(self._swing.toe_off[a], 1e-9))
-        toe_angle = (1.0 - w) * np.minimum(pitch - slope, 0.0)
-        toe_pitch = pitch - toe_angle
-        c, s_ = np.cos(pitch), np.sin(pitch)
-        ankle_to_ball = (flat * (body.ball_offset * c + body.ankle_height * s_)[:, None]
-                         + up * (body.ball_offset * s_ - body.ankle_height * c)[:, None])
-        ball_to_tip = toe_len[:, None] * (flat * np.cos(toe_pitch)[:, None]
-                                          + up * np.sin(toe_pitch)[:, None])  # fmt: skip
-        return tip - ball_to_tip - ankle_to_ball, toe_angle, tip - ball_to_tip
+        b, sw = self.body, self._swing
+        # numpy's tan and arctan (not glibc's here), the rest compiled
+        pitch = np.arctan(np.tan(swing_angles[:, 0]) * np.cos(sw.trail_yaw[a] - psi))
+        return ak.pinned_feet(_rows(a), _floats(phase), _floats(pitch), sw.trail_yaw,
+                              sw.trail_slope, sw.trail_ball, sw.toe_off, b.toe_offset,
+                              b.ball_offset, b.ankle_height)
 
     def _swing_sole(self, a: np.ndarray, walked) -> np.ndarray:
         """Points (k, q, 3) [m] along the swing foot's sole of agents a (k,): heel → ball

@@ -184,3 +184,39 @@ def corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier, has_trai
             v = v + hip_vel[i, c] * c1
             hip_fix[r, c] = v + hip_drop[i, c] * drop
     return offset, blend, pinned, toes, hip_fix
+
+
+@_jit
+def pinned_feet(a, phase, pitch, trail_yaw, trail_slope, trail_ball, toe_off, toe_offset,
+                ball_offset, ankle_height):  # pragma: no cover - compiled
+    """``Animator._pinned_foot`` of agents a (k,) at stance phases (k,), the trailing foot
+    pitched ``pitch`` (k,) [rad] (numpy's: its tan and arctan are not glibc's): ankle
+    (k, 3) [m], toe angle (k,) [rad], ball (k, 3) [m]. Body columns are the n agents'."""
+    k = a.shape[0]
+    ankle, ball = np.empty((k, 3)), np.empty((k, 3))
+    toe_angle = np.empty(k)
+    for r in range(k):
+        i = a[r]
+        yaw, slope, p = trail_yaw[i], trail_slope[i], pitch[r]
+        ch, sh = np.cos(yaw), np.sin(yaw)
+        cp = np.cos(slope)
+        along = (cp * np.cos(yaw), cp * np.sin(yaw), np.sin(slope))  # foot.direction
+        toe_len = toe_offset[i] - ball_offset[i]
+        w = _smooth(2.0 * phase[r] / _at_least(toe_off[i], 1e-9))
+        bent = p - slope
+        bent = bent if (np.isnan(bent) or bent <= 0.0) else 0.0  # np.minimum(., 0)
+        angle = (1.0 - w) * bent
+        toe_angle[r] = angle
+        toe_pitch = p - angle
+        c, s = np.cos(p), np.sin(p)
+        x = ball_offset[i] * c + ankle_height[i] * s  # ankle → ball: flat x + up y
+        y = ball_offset[i] * s - ankle_height[i] * c
+        ct, st = np.cos(toe_pitch), np.sin(toe_pitch)
+        flat = (ch, sh, 0.0)
+        up = (0.0, 0.0, 1.0)
+        for d in range(3):
+            tip = trail_ball[i, d] + toe_len * along[d]
+            b = tip - toe_len * (flat[d] * ct + up[d] * st)
+            ball[r, d] = b
+            ankle[r, d] = b - (flat[d] * x + up[d] * y)
+    return ankle, toe_angle, ball

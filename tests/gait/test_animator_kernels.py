@@ -7,7 +7,7 @@ import numpy as np
 
 from crowdwalk.gait import animator_kernels as ak
 from crowdwalk.gait.datasets import sample
-from crowdwalk.gait.foot import wrap_angle
+from crowdwalk.gait.foot import direction, wrap_angle
 from crowdwalk.gait.posing_kernels import smoothstep
 
 RNG = np.random.default_rng(17)
@@ -128,3 +128,36 @@ def test_corrections_are_the_numpy_code():
                              (1.0 - progress)**3, blend_, in_, out_, half, whole)
         for g, w in zip(got, (offset, blend, pinned, toes, hip_fix), strict=True):
             _same(g, w)
+
+
+def test_pinned_feet_are_the_numpy_code():
+    trail_yaw, trail_slope = RNG.uniform(-4, 4, N), RNG.uniform(-0.3, 0.3, N)
+    trail_slope[:5] = 0.0
+    trail_ball = RNG.normal(size=(N, 3))
+    toe_off = RNG.choice([0.0, 0.2, 0.45, 0.3], N)
+    toe_offset, ball_offset = RNG.uniform(0.15, 0.2, N), RNG.uniform(0.1, 0.13, N)
+    ankle_height = RNG.uniform(0.05, 0.08, N)
+    a, phase = _agents(K), _phases(K, 0.5)
+    pitch = RNG.uniform(-1.0, 1.0, K)
+    pitch[:20] = trail_slope[a[:20]]  # toes exactly flat
+    # Animator._pinned_foot before pose17 (after its pitch)
+    yaw, slope = trail_yaw[a], trail_slope[a]
+    ch, sh = np.cos(yaw), np.sin(yaw)
+    flat = np.stack([ch, sh, np.zeros_like(yaw)], axis=1)
+    up = np.array([0.0, 0.0, 1.0])
+    along = direction(yaw, slope)
+    toe_len = toe_offset[a] - ball_offset[a]
+    tip = trail_ball[a] + toe_len[:, None] * along
+    w = smoothstep(2.0 * phase / np.maximum(toe_off[a], 1e-9))
+    toe_angle = (1.0 - w) * np.minimum(pitch - slope, 0.0)
+    toe_pitch = pitch - toe_angle
+    c, s_ = np.cos(pitch), np.sin(pitch)
+    ankle_to_ball = (flat * (ball_offset[a] * c + ankle_height[a] * s_)[:, None]
+                     + up * (ball_offset[a] * s_ - ankle_height[a] * c)[:, None])
+    ball_to_tip = toe_len[:, None] * (flat * np.cos(toe_pitch)[:, None]
+                                      + up * np.sin(toe_pitch)[:, None])  # fmt: skip
+    want = (tip - ball_to_tip - ankle_to_ball, toe_angle, tip - ball_to_tip)
+    got = ak.pinned_feet(a, phase, pitch, trail_yaw, trail_slope, trail_ball, toe_off,
+                         toe_offset, ball_offset, ankle_height)
+    for g, w_ in zip(got, want, strict=True):
+        _same(g, w_)
