@@ -176,6 +176,86 @@ def _step_of_kernel(stance, swing, thigh, shank, ankle_h, heel, toe, out):  # pr
             out[a, 1] = sy + toe[a] * s - ankle_h[a] * c
 
 
+@nb.njit(cache=True, nogil=True)
+def _level_line_kernel(xs, keys, angles, phases, length, props, beyond
+                       ):  # pragma: no cover - compiled
+    """:meth:`ElevInterp._level_line`'s arithmetic per request, the numpy code's order
+    (bitwise equal): level datasets' Eq. 10 lengths xs (m,) ascending, key rows (m, 2, 4),
+    curves (m, N, 4), phases (m, 2); lengths (k,) and leg dimensions props (k, 5) [leg
+    lengths]. Returns curves (k, N, 4), phases (k, 2), steps (k, 2)."""
+    k, m, n = length.shape[0], xs.shape[0], angles.shape[1]
+    j = np.empty(k, np.intp)
+    f, lo, span = np.empty(k), np.empty(k), np.empty(k)
+    for r in range(k):
+        i = 0  # np.searchsorted(xs, length) (side "left"), less one, clipped
+        while i < m and xs[i] < length[r]:
+            i += 1
+        i = min(max(i - 1, 0), m - 2)
+        j[r], lo[r], span[r] = i, xs[i], xs[i + 1] - xs[i]
+        v = (length[r] - lo[r]) / span[r]
+        v = v if (np.isnan(v) or v > -beyond) else -beyond  # np.clip
+        f[r] = v if (np.isnan(v) or v < 1.0 + beyond) else 1.0 + beyond
+    stance, swing = np.empty((k, 3)), np.empty((k, 3))
+    step = np.empty((k, 2))
+    for rounds in range(4):  # three secant steps, then the step of the final weight
+        for r in range(k):
+            w, i = f[r], j[r]
+            for c in range(3):
+                stance[r, c] = (1.0 - w) * keys[i, 0, c] + w * keys[i + 1, 0, c]
+                swing[r, c] = (1.0 - w) * keys[i, 1, c] + w * keys[i + 1, 1, c]
+        _step_of_kernel(stance, swing, props[:, 0], props[:, 1], props[:, 2], props[:, 3],
+                        props[:, 4], step)
+        if rounds < 3:
+            for r in range(k):
+                v = f[r] + (length[r] - step[r, 0]) / span[r]
+                v = v if (np.isnan(v) or v > -beyond) else -beyond
+                f[r] = v if (np.isnan(v) or v < 1.0 + beyond) else 1.0 + beyond
+    curves = np.empty((k, n, 4))
+    blended = np.empty((k, 2))
+    for r in range(k):
+        w, i = f[r], j[r]
+        for s in range(n):
+            for c in range(4):
+                curves[r, s, c] = (1.0 - w) * angles[i, s, c] + w * angles[i + 1, s, c]
+        for c in range(2):
+            blended[r, c] = (1.0 - w) * phases[i, c] + w * phases[i + 1, c]
+    return curves, blended, step
+
+
+@nb.njit(cache=True, nogil=True)
+def _clamp_kernel(target, hull, centre):  # pragma: no cover - compiled
+    """:meth:`_ShapeSpace.clamp`'s arithmetic per target (k, 2), the numpy code's order
+    (bitwise equal): the counter-clockwise polygon ``hull`` (h, 2), its vertex mean
+    ``centre`` (2,). Returns the clamped targets (k, 2) and whether outside (k,)."""
+    k, h = target.shape[0], hull.shape[0]
+    out = np.empty((k, 2))
+    outside = np.zeros(k, np.bool_)
+    proj = np.empty((h, 2))
+    for r in range(k):
+        best, best_d = 0, 0.0
+        for e in range(h):
+            n = e + 1 if e + 1 < h else 0  # np.roll(hull, -1)
+            e0, e1 = hull[n, 0] - hull[e, 0], hull[n, 1] - hull[e, 1]
+            r0, r1 = target[r, 0] - hull[e, 0], target[r, 1] - hull[e, 1]
+            u = (r0 * e0 + r1 * e1) / (e0 * e0 + e1 * e1)
+            u = u if (np.isnan(u) or u > 0.0) else 0.0  # np.clip(u, 0, 1)
+            u = u if (np.isnan(u) or u < 1.0) else 1.0
+            proj[e, 0], proj[e, 1] = hull[e, 0] + u * e0, hull[e, 1] + u * e1
+            d0, d1 = target[r, 0] - proj[e, 0], target[r, 1] - proj[e, 1]
+            d = np.sqrt(d0 * d0 + d1 * d1)
+            if e == 0 or (not np.isnan(best_d) and (np.isnan(d) or d < best_d)):
+                best, best_d = e, d  # np.argmin: the first least (the first NaN)
+            cross = e0 * r1 - e1 * r0
+            if cross < -1e-12 * np.sqrt(e0 * e0 + e1 * e1):
+                outside[r] = True
+        if outside[r]:
+            for c in range(2):
+                out[r, c] = proj[best, c] + 1e-9 * (centre[c] - proj[best, c])
+        else:
+            out[r, 0], out[r, 1] = target[r, 0], target[r, 1]
+    return out, outside
+
+
 def _flat_rows(a: np.ndarray, shape: tuple) -> np.ndarray:
     """``a`` broadcast to ``shape``, C-contiguous (no broadcast where it has the shape)."""
     if a.shape == shape:
@@ -476,7 +556,13 @@ class _ShapeSpace:
         self.tree = cKDTree(points)
 
     def clamp(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Targets moved onto the hull where outside; (k, 2) and (k,) bool."""
+        """Targets moved onto the hull where outside; (k, 2) and (k,) bool (compiled:
+        :func:`_clamp_kernel`, the values of :meth:`_clamp_numpy`)."""
+        return _clamp_kernel(np.ascontiguousarray(target, dtype=float), self.hull,
+                             self.hull.mean(axis=0))
+
+    def _clamp_numpy(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`clamp` in numpy: what ``_clamp_kernel`` compiles."""
         a = self.hull
         b = np.roll(a, -1, axis=0)
         edge = b - a
@@ -818,25 +904,14 @@ class ElevInterp:
         lengths]: the neighbouring two, extrapolated linearly beyond the shortest and the
         longest by at most ``config.level_line_beyond`` of the end interval; the weight
         refined by secant steps on Eq. 10. Returns what :meth:`_solve` returns."""
-        xs = space.points[level, 0]
-        j = np.clip(np.searchsorted(xs, length) - 1, 0, len(xs) - 2)
-        lo, hi = xs[j], xs[j + 1]
-        beyond = self.config.level_line_beyond
-        f = np.clip((length - lo) / (hi - lo), -beyond, 1.0 + beyond)
-        keys = space.keys[level]
-        for _ in range(3):
-            k = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
-            step = step_of(k[:, 0], k[:, 1], _leg_of(props))
-            f = np.clip(f + (length - step[:, 0]) / (hi - lo), -beyond, 1.0 + beyond)
-        k = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
-        step = step_of(k[:, 0], k[:, 1], _leg_of(props))
-        curves = ((1.0 - f)[:, None, None] * space.angles[level][j]
-                  + f[:, None, None] * space.angles[level][j + 1])
-        phases = (1.0 - f)[:, None] * space.phases[level][j] + f[:, None] * space.phases[
-            level][j + 1]
+        f = np.ascontiguousarray
+        curves, phases, step = _level_line_kernel(
+            f(space.points[level, 0]), f(space.keys[level]), f(space.angles[level]),
+            f(space.phases[level]), f(length, dtype=float), f(props, dtype=float),
+            float(self.config.level_line_beyond))
         served = np.stack([length, step[:, 1]], axis=1)
         converged = np.abs(step[:, 0] - length) <= 1e-4  # refined once more by the caller
-        flags = np.stack([~converged, np.ones(len(f), bool), converged], axis=1)
+        flags = np.stack([~converged, np.ones(len(length), bool), converged], axis=1)
         return curves, phases, step, served, flags
 
     def _solve(self, space: _ShapeSpace, target: np.ndarray, props: np.ndarray,

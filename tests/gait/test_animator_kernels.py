@@ -161,3 +161,4 @@ def test_pinned_feet_are_the_numpy_code():
                          toe_offset, ball_offset, ankle_height)
     for g, w_ in zip(got, want, strict=True):
         _same(g, w_)
+

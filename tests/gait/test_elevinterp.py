@@ -434,3 +434,56 @@ def test_low_rise_blend_is_continuous_at_level():
         jump = np.rad2deg(np.abs(out.angles[1:] - out.angles[0]).max())
         assert jump < 2.0, (length, jump)
 
+
+def test_level_line_kernel_is_the_numpy_code():
+    """ElevInterp._level_line's compiled arithmetic (pose17) is the numpy code's, bitwise."""
+    from crowdwalk.gait.elevinterp import _leg_of, _level_line_kernel
+
+    rng = np.random.default_rng(17)
+    interp = ElevInterp()
+    props = np.array([0.245, 0.246, 0.0392, 0.0565, 0.0713]) / (0.245 + 0.246 + 0.0392)
+    key = np.round(props / interp.config.shape_resolution).astype(np.int64)
+    space = interp._space(key, props)
+    level = interp._level[np.argsort(space.points[interp._level, 0])]
+    k = 3000
+    xs = space.points[level, 0]
+    length = rng.uniform(xs[0] - 0.3, xs[-1] + 0.3, k)
+    length[:len(xs)] = xs  # exactly a level dataset's length
+    p = np.repeat(props[None], k, axis=0) * rng.uniform(0.97, 1.03, (k, 1))
+    beyond = interp.config.level_line_beyond
+    # ElevInterp._level_line before pose17
+    j = np.clip(np.searchsorted(xs, length) - 1, 0, len(xs) - 2)
+    lo, hi = xs[j], xs[j + 1]
+    f = np.clip((length - lo) / (hi - lo), -beyond, 1.0 + beyond)
+    keys = space.keys[level]
+    for _ in range(3):
+        kk = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
+        step = step_of(kk[:, 0], kk[:, 1], _leg_of(p))
+        f = np.clip(f + (length - step[:, 0]) / (hi - lo), -beyond, 1.0 + beyond)
+    kk = (1.0 - f)[:, None, None] * keys[j] + f[:, None, None] * keys[j + 1]
+    step = step_of(kk[:, 0], kk[:, 1], _leg_of(p))
+    curves = ((1.0 - f)[:, None, None] * space.angles[level][j]
+              + f[:, None, None] * space.angles[level][j + 1])
+    phases = (1.0 - f)[:, None] * space.phases[level][j] + f[:, None] * space.phases[
+        level][j + 1]
+    got = _level_line_kernel(xs, np.ascontiguousarray(keys),
+                             np.ascontiguousarray(space.angles[level]),
+                             np.ascontiguousarray(space.phases[level]), length, p, beyond)
+    for g, w in zip(got, (curves, phases, step), strict=True):
+        assert g.shape == w.shape and np.array_equal(g, w)
+
+
+def test_clamp_kernel_is_the_numpy_code():
+    """_ShapeSpace.clamp's compiled arithmetic (pose17) is the numpy code's, bitwise."""
+    rng = np.random.default_rng(18)
+    interp = ElevInterp()
+    space = next(iter(interp._spaces.values()), None) or interp._space(
+        np.array([1, 1, 1, 1, 1]), np.array([0.46, 0.46, 0.074, 0.107, 0.134]))
+    lo, hi = space.hull.min(axis=0), space.hull.max(axis=0)
+    target = rng.uniform(lo - 0.2 * (hi - lo), hi + 0.2 * (hi - lo), (5000, 2))
+    target[:len(space.hull)] = space.hull  # on the vertices
+    target[len(space.hull):2 * len(space.hull)] = 0.5 * (space.hull + np.roll(space.hull, -1, 0))
+    got, want = space.clamp(target), space._clamp_numpy(target)
+    assert 0 < want[1].sum() < len(target)  # inside and outside both
+    for g, w in zip(got, want, strict=True):
+        assert g.shape == w.shape and g.dtype == w.dtype and np.array_equal(g, w)
