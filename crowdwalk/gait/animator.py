@@ -1290,20 +1290,12 @@ class Animator:
         """Points (k, q, 3) [m] along the swing foot's sole of agents a (k,): heel → ball
         → toe tip (the foot is a segment: at a riser edge its middle can be inside the
         step while heel, ball and toe are not)."""
-        k = a.size
-        body = self.body.take(a)
-        sw = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)]
-        rows = np.arange(k)
-        ankle = walked.positions[rows, sw[:, 2]]
-        ball = walked.positions[rows, sw[:, 4]]
-        r_sub = walked.rotations[rows, sw[:, 3]]
-        r_mtp = walked.rotations[rows, sw[:, 4]]
-        heel = ankle - r_sub[:, :, 0] * body.heel_offset[:, None] \
-            - r_sub[:, :, 2] * body.ankle_height[:, None]
-        tip = ball + r_mtp[:, :, 0] * (body.toe_offset - body.ball_offset)[:, None]
-        hb = heel[:, None] + _SOLE_HEEL_BALL[None, :, None] * (ball - heel)[:, None]
-        bt = ball[:, None] + _SOLE_BALL_TOE[None, :, None] * (tip - ball)[:, None]
-        return np.concatenate([hb, bt], axis=1)
+        b = self.body
+        joints = np.ascontiguousarray(LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)],
+                                      dtype=np.intp)
+        return ak.sole_points(walked.positions, walked.rotations, joints, _rows(a),
+                              b.heel_offset, b.ankle_height, b.toe_offset, b.ball_offset,
+                              _SOLE_HEEL_BALL, _SOLE_BALL_TOE)
 
     def _points_depth(self, a: np.ndarray, sole: np.ndarray) -> np.ndarray:
         """Deepest point (k,) [m] of sole points ``sole`` (k, q, 3) [m] of agents a (k,) below

@@ -19,8 +19,8 @@ import numpy as np
 
 from crowdwalk.gait.datasets import _sample_kernel
 
-__all__ = ["bezier_points", "corrections", "crossfade_legs", "headings", "swing_toes",
-           "toe_off_progress"]
+__all__ = ["bezier_points", "corrections", "crossfade_legs", "headings", "pinned_feet",
+           "sole_points", "swing_toes", "toe_off_progress"]
 
 _jit = nb.njit(cache=True, nogil=True)
 
@@ -220,3 +220,31 @@ def pinned_feet(a, phase, pitch, trail_yaw, trail_slope, trail_ball, toe_off, to
             ball[r, d] = b
             ankle[r, d] = b - (flat[d] * x + up[d] * y)
     return ankle, toe_angle, ball
+
+
+@_jit
+def sole_points(positions, rotations, joints, a, heel_offset, ankle_height, toe_offset,
+                ball_offset, heel_ball, ball_toe):  # pragma: no cover - compiled
+    """``Animator._swing_sole``: points (k, q, 3) [m] along the swing sole of k walked
+    poses (``positions`` (k, J, 3), ``rotations`` (k, J, 3, 3)), the swing leg's joints
+    ``joints`` (k, 5), of agents a (k,): heel → ball at fractions ``heel_ball``, then
+    ball → toe tip at ``ball_toe``. Body columns are the n agents'."""
+    k, p, q = a.shape[0], heel_ball.shape[0], ball_toe.shape[0]
+    out = np.empty((k, p + q, 3))
+    heel, ball, tip = np.empty(3), np.empty(3), np.empty(3)
+    for r in range(k):
+        i = a[r]
+        tc, sub, mtp = joints[r, 2], joints[r, 3], joints[r, 4]
+        toe_len = toe_offset[i] - ball_offset[i]
+        for d in range(3):
+            heel[d] = (positions[r, tc, d] - rotations[r, sub, d, 0] * heel_offset[i]
+                       - rotations[r, sub, d, 2] * ankle_height[i])
+            ball[d] = positions[r, mtp, d]
+            tip[d] = ball[d] + rotations[r, mtp, d, 0] * toe_len
+        for s in range(p):
+            for d in range(3):
+                out[r, s, d] = heel[d] + heel_ball[s] * (ball[d] - heel[d])
+        for s in range(q):
+            for d in range(3):
+                out[r, p + s, d] = ball[d] + ball_toe[s] * (tip[d] - ball[d])
+    return out

@@ -162,3 +162,29 @@ def test_pinned_feet_are_the_numpy_code():
     for g, w_ in zip(got, want, strict=True):
         _same(g, w_)
 
+
+
+def test_sole_points_are_the_numpy_code():
+    from crowdwalk.body import LEG_JOINTS
+
+    nj = 20
+    positions, rotations = RNG.normal(size=(K, nj, 3)), RNG.normal(size=(K, nj, 3, 3))
+    heel_offset, ankle_height = RNG.uniform(0.04, 0.07, N), RNG.uniform(0.05, 0.08, N)
+    toe_offset, ball_offset = RNG.uniform(0.15, 0.2, N), RNG.uniform(0.1, 0.13, N)
+    stance_left = RNG.random(N) < 0.5
+    heel_ball, ball_toe = np.linspace(0.0, 1.0, 5), np.array([1.0])
+    a = _agents(K)
+    # Animator._swing_sole before pose17
+    sw = LEG_JOINTS[np.where(stance_left[a], 1, 0)]
+    rows = np.arange(K)
+    ankle, ball = positions[rows, sw[:, 2]], positions[rows, sw[:, 4]]
+    r_sub, r_mtp = rotations[rows, sw[:, 3]], rotations[rows, sw[:, 4]]
+    heel = (ankle - r_sub[:, :, 0] * heel_offset[a][:, None]
+            - r_sub[:, :, 2] * ankle_height[a][:, None])
+    tip = ball + r_mtp[:, :, 0] * (toe_offset[a] - ball_offset[a])[:, None]
+    hb = heel[:, None] + heel_ball[None, :, None] * (ball - heel)[:, None]
+    bt = ball[:, None] + ball_toe[None, :, None] * (tip - ball)[:, None]
+    got = ak.sole_points(positions, rotations, np.ascontiguousarray(sw, dtype=np.intp), a,
+                         heel_offset, ankle_height, toe_offset, ball_offset, heel_ball,
+                         ball_toe)
+    _same(got, np.concatenate([hb, bt], axis=1))
