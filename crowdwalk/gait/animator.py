@@ -1122,7 +1122,7 @@ class Animator:
             offset, blend, pinned, toes, hip_fix = ak.corrections(
                 rows, tau_, sw_.toe_off, sw_.d0, sw_.d1, sw_.toe_vel, self._step.duration,
                 sw_.use_bezier, sw_.has_trail, sw_.join_long, sw_.hip_fix, sw_.hip_vel,
-                sw_.hip_drop, bool(self.style.toe_off_c1), u, (1.0 - u)**3, _TOE_OFF_BLEND,
+                sw_.hip_drop, bool(self.style.toe_off_c1), _toe_off_shape(u), _TOE_OFF_BLEND,
                 _BEZIER_IN, _BEZIER_OUT, _HIP_BLEND, _HIP_BLEND_CLAMPED)
             target = _bezier(self._swing.bezier[a], tau)
             goal = np.full((a.size, 3), np.nan)

@@ -8,8 +8,9 @@ give its values bit for bit: ``np.clip``'s and ``np.maximum``'s NaN semantics, P
 float ``%`` (numpy's ``np.remainder``), ``** 2`` as a product (as numpy), the Catmull-Rom
 samples of :func:`crowdwalk.gait.datasets.sample` (its kernel) and ``einsum("kc,kcd->kd")``
 summed in index order (measured: 0 of 60,000 entries differ). Cubes are numpy's, passed
-in: numpy's ``x ** 3`` is its own (AVX-512, SVML) ``pow`` here, which differs from
-glibc's in ~6 % of values and from ``x * x * x`` in ~25 %.
+in (so is the toe-off hand-over's shape, ``animator._toe_off_shape``): numpy's ``x ** 3``
+is its own (AVX-512, SVML) ``pow`` here, which differs from glibc's (numba's) in ~6 % of
+values and from ``x * x * x`` in ~25 %.
 """
 
 from __future__ import annotations
@@ -143,12 +144,12 @@ def toe_off_progress(a, tau, toe_off, toe_off_blend):  # pragma: no cover - comp
 
 @_jit
 def corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier, has_trail,
-                join_long, hip_fix0, hip_vel, hip_drop, toe_off_c1, u, u_cubed,
+                join_long, hip_fix0, hip_vel, hip_drop, toe_off_c1, shape,
                 toe_off_blend, bezier_in, bezier_out, hip_blend, hip_blend_clamped
                 ):  # pragma: no cover - compiled
     """The step corrections of ``Animator._walk`` for agents a (k,) at step phases tau
     (k,): swing-ankle offset (k, 3) [m] (toe-off blend and, with ``toe_off_c1``, the C¹
-    hand-over at :func:`toe_off_progress` u (k,), (1 − u)³ (k,) numpy's), Bezier blend
+    hand-over, its shape h(u) (k,) at :func:`toe_off_progress` u given), Bezier blend
     (k,), pinned rows (k,) bool, rigid-toe angle (k,) (0 or NaN), stance-hip offset
     (k, 3) [m] (continuity, its C¹ term, the drop toward the landing)."""
     k = a.shape[0]
@@ -165,8 +166,7 @@ def corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier, has_trai
             offset[r, c] = (1.0 - s) * d0[i, c] + s * d1[i, c]
         if toe_off_c1:
             beta = toe_off_blend * swing
-            shape = u[r] * u_cubed[r] * (1.0 + 3.0 * u[r])  # animator._toe_off_shape
-            size = duration[i] * beta * shape
+            size = duration[i] * beta * shape[r]
             for c in range(3):
                 offset[r, c] = offset[r, c] + toe_vel[i, c] * size
         ramp = _smooth((t - t_off) / (bezier_in * swing)) * _smooth((1.0 - t) / (bezier_out

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from crowdwalk.gait import animator_kernels as ak
+from crowdwalk.gait.animator import _toe_off_shape
 from crowdwalk.gait.datasets import sample
 from crowdwalk.gait.foot import direction, wrap_angle
 from crowdwalk.gait.posing_kernels import smoothstep
@@ -88,10 +89,6 @@ def test_bezier_points_are_the_einsum():
     _same(ak.bezier_points(ctrl, tau, u**3, tau**3), np.einsum("kc,kcd->kd", w, ctrl))
 
 
-def _toe_off_shape(u):
-    return u * (1.0 - u) ** 3 * (1.0 + 3.0 * u)
-
-
 def test_corrections_are_the_numpy_code():
     toe_off = RNG.choice([0.0, 0.2, 0.45, 0.3, 1e-12], N)
     d0, d1, toe_vel = (RNG.normal(size=(N, 3)) for _ in range(3))
@@ -124,8 +121,8 @@ def test_corrections_are_the_numpy_code():
         if c1:
             _same(progress, u)
         got = ak.corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier,
-                             has_trail, join_long, hip_fix0, hip_vel, hip_drop, c1, progress,
-                             (1.0 - progress)**3, blend_, in_, out_, half, whole)
+                             has_trail, join_long, hip_fix0, hip_vel, hip_drop, c1,
+                             _toe_off_shape(progress), blend_, in_, out_, half, whole)
         for g, w in zip(got, (offset, blend, pinned, toes, hip_fix), strict=True):
             _same(g, w)
 
