@@ -843,14 +843,16 @@ def table(checks: list[Check]) -> str:
 def run_verification(*, full: bool = False, out: Path | None = None, only=(),
                      seeds: int | None = None, params=None, echo=print,
                      counterflow_length: float = 30.0,
-                     counterflow_density: float | None = None) -> list[Check]:
+                     counterflow_density: float | None = None,
+                     command_options: str = "") -> list[Check]:
     """Run the cases (``only``: their names; default all), print each row as it comes
     and write the Markdown table to ``out``. ``seeds``: how many seeds the counterflow
     case runs (default 1 fast, 5 full); ``params``: the
     :class:`~crowdwalk.crowd.CrowdParams` every case runs with (None: the default);
     ``counterflow_length`` [m], ``counterflow_density`` [1/m²]: the counterflow case's
     ``length`` and ``start_density`` (:func:`counterflow_scenario`; other than the
-    defaults, for measurements, not the verified table)."""
+    defaults, for measurements, not the verified table); ``command_options``: the CLI
+    options that chose ``params``, as the table's header names them."""
     from crowdwalk.errors import invalid
 
     names = list(only) or list(CASES)
@@ -877,8 +879,7 @@ def run_verification(*, full: bool = False, out: Path | None = None, only=(),
         Path(out).write_text(
             "# Verification\n\nWritten by `crowdwalk verify"
             f"{' --full' if full else ''}{' --only ' + ','.join(only) if only else ''}"
-            f"{f' --seeds {seeds}' if seeds else ''}"
-            f"{f' --speed-model {params.speed_model}' if params else ''}` "
+            f"{f' --seeds {seeds}' if seeds else ''}{command_options}` "
             f"({size} sizes). Cases, sources and the RiMEA tests that do not apply: "
             "`crowdwalk/verify.py`.\n\n" + table(checks) + "\n")
     return checks
