@@ -816,9 +816,9 @@ def counterflow(fast: bool, tmp: Path, *, seeds: int | None = None, length: floa
                             f"arrived; trip/free walk mean {trips.mean():.2f}, max "
                             f"{trips.max():.2f}; at Weidmann's speed for the densities met "
                             f"{at_weidmann.mean():.2f}", "order above interval, stand < 10 "
-                            "s, trip mean ≤ 1.5 (Weidmann's speed for the densities met "
-                            "gives > 1.5 here: items 3 and 4 conflict, docs/architecture.md)",
-                            ok))
+                            "s, trip mean ≤ 1.5 (where the trip at Weidmann's speed for the "
+                            "densities met exceeds 1.5, this conflicts with the fundamental "
+                            "diagram: docs/architecture.md)", ok))
     return checks
 
 
