@@ -43,7 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Check", "CASES", "FAST", "run_verification", "weidmann_speed", "sfpe_speed",
+__all__ = ["Check", "CASES", "FAST", "WalkerFrames", "run_verification", "walker_frames",
+           "weidmann_speed", "weidmann_trip_ratio", "sfpe_speed",
            "seyfried_band", "ring_corridor_speed", "ring_scenario"]
 
 
