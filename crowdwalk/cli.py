@@ -197,13 +197,18 @@ def run(
     seed: int = typer.Option(None, "--seed", help="Override the scenario's random seed."),
     workers: int = typer.Option(None, "--workers", help="Worker processes beside this one "
                                 "(default: one per further core from 500 walkers; 0: none)."),
+    crowd_model: str = typer.Option("free", "--crowd-model", help="Named crowd model: "
+                                    "free (the default) or headway_s175 "
+                                    "(crowdwalk.crowd.params.CROWD_MODELS)."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
     """Simulate a scenario and write trajectories, footsteps, poses and a summary."""
     from crowdwalk.cli_conventions import check_out_folder, next_hint
+    from crowdwalk.crowd.params import crowd_model as named_model
     from crowdwalk.crowd.run import RunOverrides, run_scenario
 
     _term_as_interrupt()
+    params = named_model(crowd_model)
     check_out_folder(out, overwrite, "run")
     overrides = RunOverrides(planner=planner, duration=duration, seed=seed, workers=workers)
     _check_before_running(scenario, overrides)
@@ -215,7 +220,8 @@ def run(
             def update(t: float, total: float, remaining: int) -> None:
                 bar.update(task, completed=t, total=total, remaining=remaining)
 
-        summary = run_scenario(scenario, out, overrides=overrides, progress=update)
+        summary = run_scenario(scenario, out, overrides=overrides, progress=update,
+                               params=params)
     arrived = f"{summary['agents_arrived']}/{summary['agents_total']} agents arrived"
     if quiet:
         typer.echo(f"wrote the run folder {out} ({arrived}); {next_hint(f'crowdwalk view {out}')}")
@@ -343,22 +349,28 @@ def verify(
     only: str = typer.Option("", "--only", help="Comma-separated case names."),
     seeds: int = typer.Option(0, "--seeds", min=0, help="Seeds of the counterflow case "
                               "(0: 1 fast, 5 full)."),
-    speed_model: str = typer.Option("", "--speed-model", help="Crowd speed model: free "
-                                    "(the default), time_gap, contact_gap or headway."),
+    speed_model: str = typer.Option("", "--speed-model", help="Crowd speed model alone, "
+                                    "over the crowd model: free, time_gap, contact_gap or "
+                                    "headway."),
+    crowd_model: str = typer.Option("", "--crowd-model", help="Named crowd model: free "
+                                    "(the default) or headway_s175."),
 ) -> None:
     """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
-    from dataclasses import replace
-
-    from crowdwalk.crowd import CrowdParams
+    from crowdwalk.crowd.params import crowd_model as named_model
     from crowdwalk.errors import invalid
     from crowdwalk.verify import run_verification
 
     models = ("free", "time_gap", "contact_gap", "headway")
     if speed_model and speed_model not in models:
         raise invalid("verify", "speed_model", f"one of {', '.join(models)}", speed_model)
-    params = replace(CrowdParams(), speed_model=speed_model) if speed_model else None
+    params = None
+    if speed_model or crowd_model:
+        params = named_model(crowd_model or "free",
+                             {"speed_model": speed_model} if speed_model else None)
     run_verification(full=full, out=out, only=[s for s in only.split(",") if s],
-                     seeds=seeds or None, params=params, echo=typer.echo)
+                     seeds=seeds or None, params=params, echo=typer.echo,
+                     command_options=(f"{f' --crowd-model {crowd_model}' if crowd_model else ''}"
+                                      f"{f' --speed-model {speed_model}' if speed_model else ''}"))
 
 
 # --- gait export (issue 4): export-bvh ----------------------------------------------

@@ -218,3 +218,20 @@ def test_verify_fast_subset(tmp_path):
     checks = run_verification(only=FAST, out=out, echo=lambda s: None)
     assert [c.passed for c in checks] == [True] * len(checks)
     assert "| RiMEA 1 |" in out.read_text()
+
+
+def test_verify_cli_runs_and_names_the_crowd_model(tmp_path):
+    from typer.testing import CliRunner
+
+    from crowdwalk.cli import app
+
+    out = tmp_path / "verification.md"
+    result = CliRunner().invoke(app, ["verify", "--only", "rimea1", "--crowd-model",
+                                      "headway_s175", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    text = out.read_text()
+    assert "`crowdwalk verify --only rimea1 --crowd-model headway_s175`" in text
+    assert "| RiMEA 1 |" in text and "| pass |" in text
+    bad = CliRunner().invoke(app, ["verify", "--only", "rimea1", "--crowd-model", "fast",
+                                   "--out", str(out)])
+    assert bad.exit_code == 2 and "crowd.model must be one of" in bad.output

@@ -11,8 +11,9 @@ import numpy as np
 
 from crowdwalk.body import PROPORTIONS
 from crowdwalk.crowd.steering import SteeringParams
+from crowdwalk.errors import invalid
 
-__all__ = ["CrowdParams", "parse_overrides"]
+__all__ = ["CROWD_MODELS", "CrowdParams", "crowd_model", "parse_overrides"]
 
 
 @dataclass(frozen=True)
@@ -280,3 +281,28 @@ def parse_overrides(items: Sequence[str]) -> dict[str, object]:
         except (ValueError, SyntaxError):
             fields[name] = text
     return fields
+
+
+#: Named crowd models (``crowdwalk run`` / ``verify --crowd-model NAME``): the
+#: :class:`CrowdParams` fields each sets over the defaults; every field stays a switch of
+#: its own for experiments. ``"free"``: the default. ``"headway_s175"`` ("S175" in
+#: docs/architecture.md, "Overtaking under the headway model"): Seyfried et al. 2005's
+#: headway speed model with the free zone at openings, lane keeping and lining up at
+#: doors, same-way leaders by route, and overtaking in the route lane scored at equal
+#: time; ``headway_lane`` 1.75 was chosen on the ring and free-speed cases (calibration).
+CROWD_MODELS: dict[str, dict[str, object]] = {
+    "free": {},
+    "headway_s175": {
+        "speed_model": "headway", "headway_lane": 1.75, "headway_free_margin": 1.0,
+        "lane_keep": True, "headway_same_way": "route", "line_up": True,
+        "headway_overtake": True, "headway_route_lane": True, "headway_same_time": True,
+        "headway_overtake_open_lanes": True},
+}
+
+
+def crowd_model(name: str, overrides: Mapping[str, object] | None = None) -> CrowdParams:
+    """The :class:`CrowdParams` of the named crowd model (:data:`CROWD_MODELS`), with
+    ``overrides`` (:meth:`CrowdParams.with_overrides` fields) on top."""
+    if name not in CROWD_MODELS:
+        raise invalid("crowd", "model", f"one of {', '.join(CROWD_MODELS)}", name)
+    return CrowdParams().with_overrides({**CROWD_MODELS[name], **(overrides or {})})

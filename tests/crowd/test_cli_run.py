@@ -42,3 +42,25 @@ def test_bad_input_exits_2_without_traceback(tmp_path):
         assert result.exit_code == 2, (args, result.output)
         assert text in result.output
         assert "Traceback" not in result.output
+
+
+def test_crowd_model_option_runs_the_named_model(tmp_path, monkeypatch):
+    import crowdwalk.crowd.run as crowd_run
+    from crowdwalk.crowd.params import crowd_model
+
+    seen = []
+    real = crowd_run.run_scenario
+
+    def spy(*args, params=None, **kwargs):
+        seen.append(params)
+        return real(*args, params=params, **kwargs)
+
+    monkeypatch.setattr(crowd_run, "run_scenario", spy)
+    result = runner.invoke(app, ["run", str(SCENARIO), "--out", str(tmp_path), "--quiet",
+                                 "--duration", "1", "--crowd-model", "headway_s175"])
+    assert result.exit_code == 0, result.output
+    assert seen == [crowd_model("headway_s175")]
+    result = runner.invoke(app, ["run", str(SCENARIO), "--out", str(tmp_path / "b"),
+                                 "--crowd-model", "fast"])
+    assert result.exit_code == 2 and "crowd.model must be one of" in result.output
+    assert "Traceback" not in result.output

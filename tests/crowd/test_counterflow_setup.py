@@ -33,3 +33,31 @@ def test_groups_start_at_the_density_apart_in_a_longer_corridor(density):
         np.testing.assert_allclose(d[:, 1], spacing, rtol=1e-6)
     assert west[:, 0].min() - east[:, 0].max() > 50.0 - 2 * (50 / (3.1 * density) + 1.0)
     assert east[:, 0].min() > 0.0 and west[:, 0].max() < 50.0
+
+
+def test_weidmann_trip_ratio_is_the_path_mean_of_free_over_weidmann_speed():
+    from crowdwalk.verify import WalkerFrames, weidmann_speed, weidmann_trip_ratio
+
+    # walker 1: 1 m at 0.5 /m², 3 m at 2 /m²; walker 2: at 5 /m² (clipped at 3.5); 3 not arrived
+    ids = np.array([1] * 4 + [2] * 2 + [3] * 2)
+    rho = np.array([0.5, 2.0, 2.0, 2.0, 5.0, 5.0, 1.0, 1.0])
+    step = np.ones(ids.size)
+    frames = WalkerFrames(ids, np.full(ids.size, 1.2), rho, step, step, np.zeros(ids.size))
+    agents = [{"id": k, "arrived": k != 3, "distance_m": 4.0} for k in (1, 2, 3)]
+    got = weidmann_trip_ratio(frames, agents)
+    slow = 1.34 / weidmann_speed(np.array([0.5, 2.0, 3.5]))
+    np.testing.assert_allclose(got, [(slow[0] + 3 * slow[1]) / 4, slow[2]])
+    assert got[1] > got[0] > 1.0
+
+
+def test_walkers_alone_meet_the_voronoi_cut_off_density_and_walk_at_weidmann(tmp_path):
+    from crowdwalk.verify import _run, walker_frames, weidmann_trip_ratio
+
+    run = _run(counterflow_scenario(1, n=1), tmp_path / "two")
+    frames = walker_frames(run.folder, run.summary, (0.0, 0.0, 30.0, 4.0))
+    assert set(np.unique(frames.id)) == {a["id"] for a in run.summary["agents"]}
+    # until they pass each other each cell is the 1 m cut-off disc (the walls 2 m away),
+    # a 16-gon in PedPy (4 segments a quarter)
+    assert np.median(frames.density) == pytest.approx(1 / (8 * np.sin(np.pi / 8)), rel=0.01)
+    ratio = weidmann_trip_ratio(frames, run.summary["agents"])
+    assert ratio.shape == (2,) and np.all((ratio >= 1.0) & (ratio < 1.05))

@@ -24,3 +24,19 @@ def test_an_unknown_field_is_refused():
         CrowdParams().with_overrides({"no_such_field": 1})
     with pytest.raises(TypeError):
         CrowdParams().with_overrides({"steering.no_such_field": 1})
+
+
+def test_named_crowd_models_set_their_fields_and_overrides_go_on_top():
+    from crowdwalk.crowd.params import CROWD_MODELS, crowd_model
+    from crowdwalk.errors import InputError
+
+    assert crowd_model("free") == CrowdParams()
+    s175 = crowd_model("headway_s175")
+    assert s175.speed_model == "headway" and s175.headway_route_lane and s175.line_up
+    base = CrowdParams()
+    changed = {k for k in vars(base) if getattr(s175, k) != getattr(base, k)}
+    assert changed == set(CROWD_MODELS["headway_s175"])  # every switch its own field
+    mixed = crowd_model("headway_s175", {"headway_lane": 2.0, "steering.right_bias": 0.0})
+    assert (mixed.headway_lane, mixed.steering.right_bias, mixed.line_up) == (2.0, 0.0, True)
+    with pytest.raises(InputError, match="crowd.model must be one of free, headway_s175"):
+        crowd_model("fast")
