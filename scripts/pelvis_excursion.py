@@ -55,7 +55,10 @@ def _elev(proximal: np.ndarray, distal: np.ndarray) -> np.ndarray:
 
 def _parts(hip_z: np.ndarray, ankle_z: np.ndarray, thigh: np.ndarray, shank: np.ndarray,
            a: int, b: int) -> list[float]:
-    """Single-hip figures of one stride [a, b] (frame indices, heel strikes)."""
+    """Single-hip figures of one stride [a, b] (frame indices of two heel strikes): peak
+    to peak over the stride and over 0-50 %, the rise from heel strike to the stance
+    peak and its hip - ankle and ankle parts [cm]; thigh at 0 and 20 %, shank at 0 and
+    20 % [deg]. ``hip_z``, ``ankle_z`` (F,) [m]; ``thigh``, ``shank`` (F,) [deg]."""
     half = a + int(round(0.5 * (b - a)))
     at20 = a + int(round(0.2 * (b - a)))
     stance = slice(a, half + 1)
