@@ -111,8 +111,6 @@ _LIFT_GRID = np.linspace(0.0, 1.0, 9)  # step phases sampled for the anticipated
 _LIFT_SUB = np.array([0.25, 0.5, 0.75])  # sole positions sampled between two of them
 _LIFT_WIDTH = 0.2  # half-width of each sample's lift bump, fraction of the step
 _LIFT_LAND = 0.1  # the lift is gone over this last fraction of the step (the landing)
-_TOE_OFF_GRID = np.linspace(0.0, 1.0, 11)  # data_toe_off: fractions of the toe-off sampled
-_TOE_OFF_RISE = 0.035  # data_toe_off: the data's swing sole risen this far is off [m]
 _LIFT_ROUNDS = 3  # clearance passes on a swing foot below the ground
 _LIFT_MARGIN = 1e-3  # a lifted swing sole clears the ground by this [m]
 _LEVEL_RISE = 0.02  # steps rising or falling less than this are level [m]
@@ -123,6 +121,8 @@ _TOE_OFF_ACCEL = 25.0  # ... adds at most this acceleration [m/s²] (chosen on t
 _TOE_OFF_KEEP = 2.0  # ... and leaves a velocity jump up to this [m/s] (level walkers: 1.2-1.8)
 _TOE_OFF_PEAK = 3.94  # max |h''(u)| of its shape (_toe_off_shape)
 _TOE_OFF_DPHASE = 0.005  # stance-phase interval of its velocity differences [1]
+_TOE_OFF_GRID = np.linspace(0.0, 1.0, 11)  # data_toe_off: fractions of the toe-off sampled
+_TOE_OFF_RISE = 0.035  # data_toe_off: the data's swing sole risen this far is off [m] (park)
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 
