@@ -122,6 +122,8 @@ _TOE_OFF_ACCEL = 25.0  # ... adds at most this acceleration [m/s²] (chosen on t
 _TOE_OFF_KEEP = 2.0  # ... and leaves a velocity jump up to this [m/s] (level walkers: 1.2-1.8)
 _TOE_OFF_PEAK = 3.94  # max |h''(u)| of its shape (_toe_off_shape)
 _TOE_OFF_DPHASE = 0.005  # stance-phase interval of its velocity differences [1]
+_TOE_OFF_GRID = np.linspace(0.0, 1.0, 11)  # data_toe_off: fractions of the toe-off sampled
+_TOE_OFF_RISE = 0.035  # data_toe_off: the data's swing sole risen this far is off [m] (park)
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 
@@ -450,7 +452,8 @@ class Animator:
         self._last = _LastPose.zeros(n, nj)
         self._trail_memo: _TrailMemo | None = None  # set while a frame is posed
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
-                      "lifted": 0, "lift_steps": 0, "yaw_fixes": 0, "pin_fixes": 0}  # fmt: skip
+                      "lifted": 0, "lift_steps": 0, "yaw_fixes": 0, "pin_fixes": 0,
+                      "data_toe_offs": 0}  # fmt: skip
 
     # -- public -----------------------------------------------------------------------
     @property
@@ -510,6 +513,8 @@ class Animator:
                                      & (np.abs(cmd.step_height) < _LEVEL_RISE)
                                      & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
                                      & ~spun_before & (self._stance.spin[a] == 0.0))
+        if self.style.data_toe_off and self.ground is not None:
+            self._data_toe_off(a, had & ~c1)
         self._swing_ends(cmd, body, had, data, trail)
         self._swing_curve(cmd, bumpy)
         if bumpy.any():
@@ -727,6 +732,32 @@ class Animator:
                            0.0)
         sw.hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
         sw.d1[a] = ankle_land - ankle1 - sw.hip_drop[a]
+
+    def _data_toe_off(self, a: np.ndarray, which: np.ndarray) -> None:
+        """``GaitStyle.data_toe_off``: the trailing foot of agents ``a[which]`` (steps off
+        stairs) is let go no later than where the step's own data lift its swing sole
+        ``_TOE_OFF_RISE`` above where it starts the step (uncorrected walks at
+        ``_TOE_OFF_GRID`` of the stance-fraction toe-off, linear between samples)."""
+        j = np.flatnonzero(which & (self._swing.toe_off[a] > 0.0))
+        if j.size == 0:
+            return
+        aj = a[j]
+        t_off = self._swing.toe_off[aj]
+        g = _TOE_OFF_GRID
+        idx = np.tile(aj, g.size)
+        walked = self._walk(idx, 0.5 * np.repeat(g, aj.size) * np.tile(t_off, g.size),
+                            corrected=False)
+        height = -self._points_depth(idx, self._swing_sole(idx, walked)).reshape(g.size, -1)
+        rise = height - height[0]
+        over = rise > _TOE_OFF_RISE
+        first = np.argmax(over, axis=0)
+        k = np.arange(aj.size)
+        lo = np.maximum(first - 1, 0)
+        r0, r1 = rise[lo, k], rise[first, k]
+        frac = np.clip((_TOE_OFF_RISE - r0) / np.maximum(r1 - r0, 1e-9), 0.0, 1.0)
+        x = (lo + np.where(first > 0, frac, 0.0)) / (g.size - 1)
+        self._swing.toe_off[aj] = np.where(over.any(axis=0), x * t_off, t_off)
+        self.stats["data_toe_offs"] += int((over.any(axis=0)).sum())
 
     def _toe_off_velocity(self, a: np.ndarray, had: np.ndarray, toe_off_phase: np.ndarray,
                           pin: np.ndarray, ankle_joint: np.ndarray) -> None:

@@ -166,6 +166,11 @@ class GaitStyle:
         where the pin put it (a turned foot rolls about the skew talocrural axis and its
         ball slid up to 19 mm at the corner; an extension: docs/architecture.md "Toe-off
         hand-over"); False: the goal as the pin computes it.
+    data_toe_off : bool
+        Off stairs, the trailing foot is let go no later than where the step's own
+        (blended) data have lifted its swing sole 3.5 cm above where it starts the step
+        (an extension: docs/architecture.md "Toe-off where the data lift the foot");
+        False (default): at 2 (stance fraction − 0.5) of the step.
     """
 
     step_width: float = 0.05
@@ -186,6 +191,7 @@ class GaitStyle:
     clamped_join: bool = True
     toe_off_c1: bool = True
     pin_ball: bool = True
+    data_toe_off: bool = False
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):

@@ -658,3 +658,41 @@ def test_the_trailing_ball_stays_where_it_stood_in_a_turn():
 
     assert _push_off_ball_slide(GaitStyle()) < animator_module._PIN_TOLERANCE + 0.0005
     assert _push_off_ball_slide(GaitStyle(pin_ball=False)) > 0.008
+
+
+def _level_toe_offs(style, steps=3, sl=0.62, duration=0.403):
+    """Toe-off (fraction of the step) of each step after the first of a level walk (1.75 m
+    body) and the Animator, for the switch tests below."""
+    animator = Animator(Body.from_heights([1.75]), ground=_flat, style=style)
+    out = []
+    for s in range(steps):
+        y = 0.045 if s % 2 == 0 else -0.045
+        animator.command(_command([0], s * duration, 1 if s % 2 == 0 else 0,
+                                  [[s * sl, y, 0.0]], [[(s + 1) * sl, -y, 0.0]],
+                                  duration=duration))
+        for f in range(1, 6):
+            animator.pose(s * duration + f * 0.02)
+        if s:
+            out.append(float(animator._swing.toe_off[0]))
+    return np.array(out), animator
+
+
+def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch):
+    """``data_toe_off``: the trailing foot is released where the step's own data have
+    lifted its swing sole ``_TOE_OFF_RISE`` above its height at the step's start, when
+    that comes before 2 (stance fraction − 0.5); off, the toe-off is the stance
+    fraction's. (A 5 mm rise, so that an ordinary level step triggers it.)"""
+    import crowdwalk.gait.animator as animator_module
+
+    monkeypatch.setattr(animator_module, "_TOE_OFF_RISE", 0.005)
+    base, off_animator = _level_toe_offs(GaitStyle())
+    assert off_animator.stats["data_toe_offs"] == 0
+    moved, animator = _level_toe_offs(GaitStyle(data_toe_off=True))
+    assert animator.stats["data_toe_offs"] == moved.size
+    assert np.all(moved < base - 0.02)
+    # at the new toe-off the data's swing sole has risen the threshold (the last step)
+    a = np.array([0, 0])
+    phases = 0.5 * np.array([0.0, moved[-1]])
+    walked = animator._walk(a, phases, corrected=False)
+    height = -animator._points_depth(a, animator._swing_sole(a, walked))
+    assert height[1] - height[0] == pytest.approx(0.005, abs=0.002)
