@@ -444,12 +444,8 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
             lam0 = neutral_cost[a]
             for t in range(Ns):
                 row[t] = np.rint((cost[a, t] - lam0 * progress[a, t]) * 1e10) / 1e10
-            ub = 0.0 if seed_found[0] else np.inf  # the start's sum in the DP's order
-            m = 0
-            for k in range(n):
-                if seed_found[0]:
-                    ub = ub + row[step_off[k] + m * J + seeds[0, k]]
-                    m += seeds[0, k]
+            # bounded from above by the legal start's sum
+            ub = _row_sum(row, seeds[0], J, step_off) if seed_found[0] else np.inf
             F, H, pred, qs, path = bounds
             settle(sp, sw, a, row, 1, 0, lam0, step_j, progress, J, step_off, swing_off,
                    strides, ub, F, H, pred, qs, path)
@@ -506,6 +502,18 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
                 configs[a, :] = seeds[0]
         expanded[a] = exp_a
         checks[a] = chk_a
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _row_sum(row, q, J, step_off):
+    """The sum of the DP entries ``row`` (Ns,) over the steps of ``q`` (n,), in the DP's
+    order (as :func:`~planners.dp.dp_one` adds them)."""
+    total = 0.0
+    m = 0
+    for k in range(q.size):
+        total = total + row[step_off[k] + m * J + q[k]]
+        m += q[k]
+    return total
 
 
 @lru_cache(maxsize=64)

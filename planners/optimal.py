@@ -7,7 +7,7 @@ import numpy as np
 
 from planners.dp import dp_one, dp_scratch, settle, settle_scratch
 from planners.lattice import StepTables, run_parts
-from planners.multistart import _nearest, nearest_legal
+from planners.multistart import _nearest, _row_sum, nearest_legal
 from planners.search import SearchResult, efficiency_one
 
 __all__ = ["optimal"]
@@ -118,18 +118,13 @@ def _iterate(sp, sw, cost, progress, step_j, J, step_off, swing_off, strides, a,
     scratch). Each DP pass is bounded (:func:`~planners.dp.settle`) by the sum of the
     configuration so far."""
     Ns = cost.shape[1]
-    n = config.size
     F, H, pred, q, path = bounds
     eff = efficiency_one(a, config, cost, progress, J, step_off)
     for _ in range(iterations):
         lam = 1.0 / eff
         for t in range(Ns):
             row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
-        ub = 0.0  # the configuration's sum in the DP's order
-        m = 0
-        for k in range(n):
-            ub = ub + row[step_off[k] + m * J + config[k]]
-            m += config[k]
+        ub = _row_sum(row, config, J, step_off)  # the configuration's sum
         settle(sp, sw, a, row, 1, 0, lam, step_j, progress, J, step_off, swing_off,
                strides, ub, F, H, pred, q, path)
         ok, states, transitions = dp_one(sp[1], sw, row, a, J, step_off,
