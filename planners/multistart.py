@@ -196,10 +196,12 @@ def _climb_one(sp, sw, cost, progress, J, step_off, swing_off, strides, deltas, 
     swings need not be read. With deferred steps (``sp``,
     :func:`~planners.lattice_kernel.step_at`) a neighbour's efficiency is first bounded
     from above (:func:`_efficiency_bound`) and its deferred steps are evaluated only
-    where the bound could make it the move. Returns (efficiency, expansions, checks)."""
+    where the bound could make it the move (``q``'s own first, where a search has not
+    read them yet). Returns (efficiency, expansions, checks)."""
     n = q.size
     expanded = 0
     checks = 0
+    _steps_legal(sp, a, q, J, step_off)
     cur = efficiency_one(a, q, cost, progress, J, step_off)
     while True:
         expanded += 1
