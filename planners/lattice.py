@@ -87,10 +87,8 @@ DEFER_SWINGS = frozenset({"optimal", "best_first_multistart"})
 #: (neither level nor hopeless) to be evaluated where the search reads them
 #: (``build_tables(..., defer_steps=True)``; :func:`planners.lattice_kernel.step_at`):
 #: their DP passes first evaluate only the steps that a lower bound of the cost cannot
-#: rule out (:func:`planners.dp.settle`), and the climbs and greedy start of
-#: ``best_first_multistart`` only those whose bound could decide. Empty: every step up
-#: front (the same plans).
-DEFER_STEPS = frozenset({"optimal", "best_first_multistart"})
+#: rule out (:func:`planners.dp.settle`). Empty: every step up front (the same plans).
+DEFER_STEPS = frozenset({"optimal"})
 
 
 @dataclass(frozen=True, eq=False)

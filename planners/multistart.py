@@ -13,9 +13,9 @@ from functools import lru_cache
 import numba as nb
 import numpy as np
 
-from planners.dp import cheapest, dp_one, dp_scratch, settle, settle_scratch
+from planners.dp import cheapest, dp_one, dp_scratch
 from planners.lattice import StepTables, run_parts
-from planners.lattice_kernel import _energy, step_at, swing_at
+from planners.lattice_kernel import swing_at
 from planners.search import SearchResult, efficiency_one, neighbour_deltas
 
 __all__ = ["nearest_legal", "budget", "greedy", "hill_climb", "best_first_multistart"]
@@ -55,7 +55,7 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
     A = agents.size
     configs = np.repeat(centres[:, None], n, axis=1).astype(np.int64)
     legal = np.empty(A, dtype=np.bool_)
-    _legal_each(tables.steps, tables.swings, st.J, st._step_offsets,
+    _legal_each(tables.step_legal, tables.swings, st.J, st._step_offsets,
                 st._swing_offsets, st._swing_strides, np.asarray(agents, dtype=np.int64),
                 configs, legal)
     found = legal.copy()
@@ -76,70 +76,31 @@ def nearest_legal(tables: StepTables, centres: np.ndarray | None = None,
 
 
 @nb.njit(cache=True, nogil=True)
-def _legal_each(sp, sw, J, step_off, swing_off, strides, agents, configs, legal):
+def _legal_each(step_legal, sw, J, step_off, swing_off, strides, agents, configs,
+                legal):
     """Whether each configuration ``configs[b]`` (B, n) is legal for table row
     ``agents[b]`` (compiled, as :meth:`~planners.lattice.StepTables.evaluate`)."""
     for b in range(configs.shape[0]):
-        legal[b] = _legal_one(sp, sw, J, step_off, swing_off, strides, agents[b],
-                              configs[b])
+        legal[b] = _legal_one(step_legal, sw, J, step_off, swing_off, strides,
+                              agents[b], configs[b])
 
 
 @nb.njit(cache=True, nogil=True)
-def _legal_one(sp, sw, J, step_off, swing_off, strides, a, config):
-    """Whether ``config`` (n,) is legal for table row ``a`` (every step and swing, in
-    order up to the first illegal one; steps read through ``sp``,
-    :func:`~planners.lattice_kernel.step_at`, swings through ``sw``,
-    :func:`~planners.lattice_kernel.swing_at`)."""
+def _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, config):
+    """Whether ``config`` (n,) is legal for table row ``a`` (every step and swing)."""
     m_prev, m_prev2, j_prev = 0, 0, 0
     ok = True
     for k in range(config.size):
         j = config[k]
         step = step_off[k] + m_prev * J + j
         swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-        if ok and not (step_at(sp, a, step) and swing_at(sw, a, swing)):
+        if ok and not (step_legal[a, step] and swing_at(sw, a, swing)):
             ok = False
         if k > 0:
             m_prev2 += j_prev
         m_prev += j
         j_prev = j
     return ok
-
-
-@nb.njit(cache=True, nogil=True, _nrt=False)
-def _efficiency_bound(sp, a, q, cost, progress, J, step_off):
-    """An upper bound of the efficiency of ``q`` (n,) for table row ``a``, rounded as
-    :func:`~planners.lattice_kernel.efficiency_one`: its ``cost`` with each deferred
-    step's lower bound (``cost_lb`` of ``sp``) in its place, summed in the same order
-    (rounding is monotone, so it is never below the efficiency once they are evaluated;
-    without deferred steps it is the efficiency). Returns (bound, whether a step of
-    ``q`` is deferred)."""
-    pending, cost_lb = sp[0], sp[2]
-    m_prev = 0
-    energy = 0.0
-    length = 0.0
-    deferred = False
-    for k in range(q.size):
-        step = step_off[k] + m_prev * J + q[k]
-        if pending[a, step]:
-            energy += cost_lb[a, step]
-            deferred = True
-        else:
-            energy += cost[a, step]
-        length += progress[a, step]
-        m_prev += q[k]
-    return np.rint(length / energy * 1e12) / 1e12, deferred
-
-
-@nb.njit(cache=True, nogil=True, _nrt=False)
-def _steps_legal(sp, a, q, J, step_off):
-    """Whether every step of ``q`` (n,) of table row ``a`` is legal (read through
-    :func:`~planners.lattice_kernel.step_at`, in order up to the first illegal one)."""
-    m_prev = 0
-    for k in range(q.size):
-        if not step_at(sp, a, step_off[k] + m_prev * J + q[k]):
-            return False
-        m_prev += q[k]
-    return True
 
 
 def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
@@ -157,7 +118,7 @@ def hill_climb(tables: StepTables, agents: np.ndarray, configs: np.ndarray):
     current = np.empty(B)
     expanded = np.zeros(B, dtype=np.int64)
     checks = np.zeros(B, dtype=np.int64)
-    run_parts(_climb, B, tables.steps, tables.swings,
+    run_parts(_climb, B, tables.step_legal, tables.swings,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress), st.J,
               st._step_offsets, st._swing_offsets, st._swing_strides, _deltas(st.n),
               np.asarray(agents, dtype=np.int64), configs, current, expanded, checks)
@@ -173,35 +134,32 @@ def _deltas(n: int) -> np.ndarray:
 
 
 @nb.njit(cache=True, nogil=True)
-def _climb(sp, sw, cost, progress, J, step_off, swing_off, strides, deltas, agents,
-           configs, current, expanded, checks, part, parts):
+def _climb(step_legal, sw, cost, progress, J, step_off, swing_off, strides, deltas,
+           agents, configs, current, expanded, checks, part, parts):
     """The climbs of :func:`hill_climb`, every ``parts``-th from ``part``
     (:func:`planners.lattice.run_parts`; :func:`_climb_one`)."""
     B, n = configs.shape
     r = np.empty(n, dtype=np.int64)
     for b in range(part, B, parts):
-        current[b], exp, chk = _climb_one(sp, sw, cost, progress, J, step_off, swing_off,
-                                          strides, deltas, agents[b], configs[b], r)
+        current[b], exp, chk = _climb_one(step_legal, sw, cost, progress, J, step_off,
+                                          swing_off, strides, deltas, agents[b], configs[b],
+                                          r)
         expanded[b] += exp
         checks[b] += chk
 
 
 @nb.njit(cache=True, nogil=True)
-def _climb_one(sp, sw, cost, progress, J, step_off, swing_off, strides, deltas, a, q, r):
+def _climb_one(step_legal, sw, cost, progress, J, step_off, swing_off, strides, deltas,
+               a, q, r):
     """One climb of :func:`hill_climb` from the legal ``q`` (n,) of table row ``a``, in
     place (``r``: scratch (n,)); efficiencies rounded to 1e-12 as
     :meth:`~planners.lattice.StepTables.evaluate`. A neighbour's legality is read only
     where its efficiency could make it the move (above the best legal neighbour so far
     and the current configuration's threshold): the others cannot be chosen, so their
-    swings need not be read. With deferred steps (``sp``,
-    :func:`~planners.lattice_kernel.step_at`) a neighbour's efficiency is first bounded
-    from above (:func:`_efficiency_bound`) and its deferred steps are evaluated only
-    where the bound could make it the move (``q``'s own first, where a search has not
-    read them yet). Returns (efficiency, expansions, checks)."""
+    swings need not be read. Returns (efficiency, expansions, checks)."""
     n = q.size
     expanded = 0
     checks = 0
-    _steps_legal(sp, a, q, J, step_off)
     cur = efficiency_one(a, q, cost, progress, J, step_off)
     while True:
         expanded += 1
@@ -216,15 +174,9 @@ def _climb_one(sp, sw, cost, progress, J, step_off, swing_off, strides, deltas, 
             if not inside:
                 continue
             checks += 1
-            e, deferred = _efficiency_bound(sp, a, r, cost, progress, J, step_off)
-            if not (e > best_eff and e > threshold):
-                continue  # (its efficiency is at most e)
-            if deferred:
-                if not _steps_legal(sp, a, r, J, step_off):
-                    continue
-                e = efficiency_one(a, r, cost, progress, J, step_off)
+            e = efficiency_one(a, r, cost, progress, J, step_off)
             if (e > best_eff and e > threshold
-                    and _legal_one(sp, sw, J, step_off, swing_off, strides, a, r)):
+                    and _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, r)):
                 best_eff, best_d = e, d
         if not best_eff > threshold:
             break
@@ -240,33 +192,29 @@ def greedy(tables: StepTables) -> SearchResult:
     A, n, J = tables.neutral.size, st.n, st.J
     configs = np.zeros((A, n), dtype=np.int64)
     found = np.ones(A, dtype=bool)
-    run_parts(_greedy, A, tables.steps, tables.swings, tables.length, tables.E, J,
+    run_parts(_greedy, A, tables.step_legal, tables.swings, tables.length, tables.E, J,
               st._step_offsets, st._swing_offsets, st._swing_strides, configs, found)
     checks = np.full(A, n * J, dtype=np.int64)
     return SearchResult(configs, found, np.full(A, n, dtype=np.int64), checks)
 
 
 @nb.njit(cache=True, nogil=True)
-def _greedy(sp, sw, length, E, J, step_off, swing_off, strides, configs, found, part,
-            parts):
+def _greedy(step_legal, sw, length, E, J, step_off, swing_off, strides, configs,
+            found, part, parts):
     """The steps of :func:`greedy` (:func:`_greedy_one`), compiled, for every
     ``parts``-th agent from ``part`` (:func:`planners.lattice.run_parts`)."""
     for a in range(part, configs.shape[0], parts):
-        if not _greedy_one(sp, sw, length, E, J, step_off, swing_off, strides, a,
-                           configs[a]):
+        if not _greedy_one(step_legal, sw, length, E, J, step_off, swing_off, strides,
+                           a, configs[a]):
             found[a] = False
 
 
 @nb.njit(cache=True, nogil=True)
-def _greedy_one(sp, sw, length, E, J, step_off, swing_off, strides, a, config):
+def _greedy_one(step_legal, sw, length, E, J, step_off, swing_off, strides, a, config):
     """The steps of :func:`greedy` for table row ``a`` into ``config`` (n,): at step k
     the first j of highest ``length / E`` among the legal steps (of the swing from
     f_{k-2}), as ``np.argmax`` (a NaN score wins; where none is legal, j = 0 and not
-    found). Returns whether found. A deferred step (``sp``,
-    :func:`~planners.lattice_kernel.step_at`) is evaluated only where its score's
-    bound (``length / E`` with Ej = 0: Eq. 3 is a sum of joint rotations, never
-    negative) beats the best so far."""
-    pending, rise, weights, speeds, normal = sp[0], sp[16], sp[20], sp[21], sp[22]
+    found). Returns whether found."""
     n = config.size
     found = True
     m_prev, m_prev2, j_prev = 0, 0, 0
@@ -275,11 +223,7 @@ def _greedy_one(sp, sw, length, E, J, step_off, swing_off, strides, a, config):
         for j in range(J):
             step = step_off[k] + m_prev * J + j
             swing = swing_off[k] + m_prev2 * strides[k] + j + (j_prev if k > 0 else 0)
-            if pending[a, step] and (length[a, step] / _energy(
-                    length[a, step], rise[a, step], 0.0, speeds[a], normal[a],
-                    weights)[2] <= best):
-                continue  # (its score is at most the bound)
-            if not step_at(sp, a, step):
+            if not step_legal[a, step]:
                 continue
             score = length[a, step] / E[a, step]
             # the swing is read only where the step would be taken
@@ -336,7 +280,7 @@ def best_first_multistart(tables: StepTables, starts: int | None = None) -> Sear
     st = tables.struct
     A = tables.neutral.size
     out = SearchResult.empty(A, st.n)
-    run_parts(_multistart, A, tables.steps, tables.swings,
+    run_parts(_multistart, A, tables.step_legal, tables.swings,
               np.ascontiguousarray(tables.cost), np.ascontiguousarray(tables.progress),
               tables.length, tables.E, tables.neutral.astype(np.int64), tables.neutral_cost,
               st.step_j, st.J, st._step_offsets, st._swing_offsets, st._swing_strides,
@@ -382,25 +326,19 @@ def _composed(tables: StepTables, starts: int | None = None) -> SearchResult:
 
 
 @nb.njit(cache=True, nogil=True)
-def _nearest(sp, sw, cost, progress, step_j, J, step_off, swing_off, strides, a, centre,
-             row, value, new, choice, bounds, config):
+def _nearest_one(step_legal, sw, cost, step_j, J, step_off, swing_off, strides, a,
+                 centre, row, value, new, choice, config):
     """:func:`nearest_legal` from ``(centre, ..., centre)`` for table row ``a`` into
-    ``config`` (n,), its steps read through ``sp``
-    (:func:`~planners.lattice_kernel.step_at`) and its DP pass bounded
-    (:func:`~planners.dp.settle`) (``row``: scratch (Ns,); ``value``, ``new``,
-    ``choice``: :func:`~planners.dp.dp_scratch`; ``bounds``:
-    :func:`~planners.dp.settle_scratch`). Returns (found, expanded, checks)."""
+    ``config`` (n,) (``row``: scratch (Ns,); ``value``, ``new``, ``choice``:
+    :func:`~planners.dp.dp_scratch`). Returns (found, expanded, checks)."""
     n = config.size
     config[:] = centre
-    if _legal_one(sp, sw, J, step_off, swing_off, strides, a, config):
+    if _legal_one(step_legal, sw, J, step_off, swing_off, strides, a, config):
         return True, 0, 1
     for t in range(row.size):  # np.round(dist + 1e-7 * cost, 10), as cheapest
         row[t] = np.rint((abs(step_j[t] - centre) + 1e-7 * cost[a, t]) * 1e10) / 1e10
-    F, H, pred, q, path = bounds
-    settle(sp, sw, a, row, 0, centre, 0.0, step_j, progress, J, step_off, swing_off,
-           strides, np.inf, F, H, pred, q, path)
     best = np.empty(n, dtype=np.int64)
-    ok, states, transitions = dp_one(sp[1], sw, row, a, J, step_off, swing_off,
+    ok, states, transitions = dp_one(step_legal, sw, row, a, J, step_off, swing_off,
                                      strides, value, new, choice, best)
     if ok:
         config[:] = best
@@ -408,26 +346,20 @@ def _nearest(sp, sw, cost, progress, step_j, J, step_off, swing_off, strides, a,
 
 
 @nb.njit(cache=True, nogil=True)
-def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j, J,
-                step_off, swing_off, strides, deltas, extra, starts, configs, found,
-                expanded, checks, part, parts):
+def _multistart(step_legal, sw, cost, progress, length, E, neutral, neutral_cost,
+                step_j, J, step_off, swing_off, strides, deltas, extra, starts, configs,
+                found, expanded, checks, part, parts):
     """:func:`best_first_multistart` of every ``parts``-th agent from ``part``
     (:func:`planners.lattice.run_parts`), in one pass per agent: the starts
-    (:func:`_nearest`, the budget DP, :func:`_greedy_one`), a climb from each one
+    (:func:`_nearest_one`, the budget DP, :func:`_greedy_one`), a climb from each one
     found (:func:`_climb_one`), the best kept as :func:`_keep_best` (the first among
     equals; a NaN only where all are NaN), and where the local optima differ by more
     than :data:`AGREE`, the climbs from the nearest legal configurations to the
     ``extra`` constant steps, the best of them (the first among equals, NaN last) taken
-    where it is more efficient. The arithmetic of :func:`_composed`. Steps are read
-    through ``sp`` (:func:`~planners.lattice_kernel.step_at`): on tables with deferred
-    steps (:data:`~planners.lattice.DEFER_STEPS`) both DP passes are bounded
-    (:func:`~planners.dp.settle`; the budget pass from above by the nearest legal
-    start's sum, where one was found) and run over the evaluated steps, and the climbs
-    and greedy evaluate a deferred step only where its bound could decide."""
+    where it is more efficient. The arithmetic of :func:`_composed`."""
     A, n = configs.shape
     Ns = cost.shape[1]
     value, new, choice = dp_scratch(J, n)
-    bounds = settle_scratch(sp[10].shape[1], n)
     row = np.empty(Ns)
     seeds = np.empty((3, n), dtype=np.int64)
     seed_found = np.zeros(3, dtype=np.bool_)
@@ -435,9 +367,9 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
     r = np.empty(n, dtype=np.int64)
     for a in range(part, A, parts):
         exp_a, chk_a = 0, 0
-        ok, e_, c_ = _nearest(sp, sw, cost, progress, step_j, J, step_off, swing_off,
-                              strides, a, neutral[a], row, value, new, choice, bounds,
-                              seeds[0])
+        ok, e_, c_ = _nearest_one(step_legal, sw, cost, step_j, J, step_off,
+                                  swing_off, strides, a, neutral[a], row, value, new,
+                                  choice, seeds[0])
         seed_found[0] = ok
         exp_a += e_
         chk_a += c_
@@ -446,20 +378,15 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
             lam0 = neutral_cost[a]
             for t in range(Ns):
                 row[t] = np.rint((cost[a, t] - lam0 * progress[a, t]) * 1e10) / 1e10
-            # bounded from above by the legal start's sum
-            ub = _row_sum(row, seeds[0], J, step_off) if seed_found[0] else np.inf
-            F, H, pred, qs, path = bounds
-            settle(sp, sw, a, row, 1, 0, lam0, step_j, progress, J, step_off, swing_off,
-                   strides, ub, F, H, pred, qs, path)
-            ok, e_, c_ = dp_one(sp[1], sw, row, a, J, step_off, swing_off, strides, value,
-                                new, choice, seeds[1])
+            ok, e_, c_ = dp_one(step_legal, sw, row, a, J, step_off, swing_off,
+                                strides, value, new, choice, seeds[1])
             seed_found[1] = ok
             exp_a += e_
             chk_a += c_
             count = 2
         if starts >= 3:
-            seed_found[2] = _greedy_one(sp, sw, length, E, J, step_off, swing_off, strides,
-                                        a, seeds[2])
+            seed_found[2] = _greedy_one(step_legal, sw, length, E, J, step_off,
+                                        swing_off, strides, a, seeds[2])
             exp_a += n
             chk_a += n * J
             count = 3
@@ -472,8 +399,8 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
                 continue
             any_found = True
             q[:] = seeds[i]
-            e, x, c = _climb_one(sp, sw, cost, progress, J, step_off, swing_off, strides,
-                                 deltas, a, q, r)
+            e, x, c = _climb_one(step_legal, sw, cost, progress, J, step_off,
+                                 swing_off, strides, deltas, a, q, r)
             exp_a += x
             chk_a += c
             if not np.isnan(worst) and (np.isnan(e) or e < worst):
@@ -486,15 +413,15 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
         if any_found and extra.size and worst < best_eff * (1 - AGREE):
             win_eff = np.nan
             for i in range(extra.size):
-                ok, e_, c_ = _nearest(sp, sw, cost, progress, step_j, J, step_off,
-                                      swing_off, strides, a, extra[i], row, value, new,
-                                      choice, bounds, q)
+                ok, e_, c_ = _nearest_one(step_legal, sw, cost, step_j, J, step_off,
+                                          swing_off, strides, a, extra[i], row, value, new,
+                                          choice, q)
                 exp_a += e_
                 chk_a += c_
                 if not ok:
                     continue
-                e, x, c = _climb_one(sp, sw, cost, progress, J, step_off, swing_off,
-                                     strides, deltas, a, q, r)
+                e, x, c = _climb_one(step_legal, sw, cost, progress, J, step_off,
+                                     swing_off, strides, deltas, a, q, r)
                 exp_a += x
                 chk_a += c
                 if not np.isnan(e) and (np.isnan(win_eff) or e > win_eff):
@@ -504,18 +431,6 @@ def _multistart(sp, sw, cost, progress, length, E, neutral, neutral_cost, step_j
                 configs[a, :] = seeds[0]
         expanded[a] = exp_a
         checks[a] = chk_a
-
-
-@nb.njit(cache=True, nogil=True, _nrt=False)
-def _row_sum(row, q, J, step_off):
-    """The sum of the DP entries ``row`` (Ns,) over the steps of ``q`` (n,), in the DP's
-    order (as :func:`~planners.dp.dp_one` adds them)."""
-    total = 0.0
-    m = 0
-    for k in range(q.size):
-        total = total + row[step_off[k] + m * J + q[k]]
-        m += q[k]
-    return total
 
 
 @lru_cache(maxsize=64)

@@ -7,7 +7,8 @@ import numpy as np
 
 from planners.dp import dp_one, dp_scratch, settle, settle_scratch
 from planners.lattice import StepTables, run_parts
-from planners.multistart import _nearest, _row_sum, nearest_legal
+from planners.lattice_kernel import step_at, swing_at
+from planners.multistart import nearest_legal
 from planners.search import SearchResult, efficiency_one
 
 __all__ = ["optimal"]
@@ -70,7 +71,7 @@ def _optimal(sp, sw, cost, progress, neutral, step_j, J, step_off, swing_off,
              strides, configs, found, expanded, checks, iterations, part, parts):
     """:func:`optimal` of every ``parts``-th agent from ``part``
     (:func:`planners.lattice.run_parts`): the start
-    (:func:`~planners.multistart._nearest` from the neutral step), then, where one
+    (:func:`~planners.multistart._nearest_one` from the neutral step), then, where one
     is found, :func:`_dinkelbach`'s iterations from it."""
     A, n = configs.shape
     value, new, choice = dp_scratch(J, n)
@@ -86,6 +87,41 @@ def _optimal(sp, sw, cost, progress, neutral, step_j, J, step_off, swing_off,
             _iterate(sp, sw, cost, progress, step_j, J, step_off, swing_off, strides,
                      a, configs[a], expanded, checks, iterations, value, new, choice, row,
                      best, bounds)
+
+
+@nb.njit(cache=True, nogil=True)
+def _nearest(sp, sw, cost, progress, step_j, J, step_off, swing_off, strides, a, centre,
+             row, value, new, choice, bounds, config):
+    """:func:`~planners.multistart._nearest_one` (the legal configuration nearest
+    ``(centre, ..., centre)``) with its steps read through ``sp``
+    (:func:`~planners.lattice_kernel.step_at`) and its DP pass bounded
+    (:func:`~planners.dp.settle`). Returns (found, expanded, checks)."""
+    n = config.size
+    config[:] = centre
+    m_prev, m_prev2, j_prev = 0, 0, 0
+    legal = True
+    for k in range(n):  # _legal_one: steps and swings in order up to the first illegal
+        step = step_off[k] + m_prev * J + config[k]
+        swing = swing_off[k] + m_prev2 * strides[k] + config[k] + (j_prev if k > 0 else 0)
+        if legal and not (step_at(sp, a, step) and swing_at(sw, a, swing)):
+            legal = False
+        if k > 0:
+            m_prev2 += j_prev
+        m_prev += config[k]
+        j_prev = config[k]
+    if legal:
+        return True, 0, 1
+    for t in range(row.size):  # np.round(dist + 1e-7 * cost, 10), as cheapest
+        row[t] = np.rint((abs(step_j[t] - centre) + 1e-7 * cost[a, t]) * 1e10) / 1e10
+    F, H, pred, q, path = bounds
+    settle(sp, sw, a, row, 0, centre, 0.0, step_j, progress, J, step_off, swing_off,
+           strides, np.inf, F, H, pred, q, path)
+    best = np.empty(n, dtype=np.int64)
+    ok, states, transitions = dp_one(sp[1], sw, row, a, J, step_off, swing_off,
+                                     strides, value, new, choice, best)
+    if ok:
+        config[:] = best
+    return ok, states, 1 + transitions
 
 
 @nb.njit(cache=True, nogil=True)
@@ -118,13 +154,18 @@ def _iterate(sp, sw, cost, progress, step_j, J, step_off, swing_off, strides, a,
     scratch). Each DP pass is bounded (:func:`~planners.dp.settle`) by the sum of the
     configuration so far."""
     Ns = cost.shape[1]
+    n = config.size
     F, H, pred, q, path = bounds
     eff = efficiency_one(a, config, cost, progress, J, step_off)
     for _ in range(iterations):
         lam = 1.0 / eff
         for t in range(Ns):
             row[t] = np.rint((cost[a, t] - lam * progress[a, t]) * 1e10) / 1e10
-        ub = _row_sum(row, config, J, step_off)  # the configuration's sum
+        ub = 0.0  # the configuration's sum in the DP's order
+        m = 0
+        for k in range(n):
+            ub = ub + row[step_off[k] + m * J + config[k]]
+            m += config[k]
         settle(sp, sw, a, row, 1, 0, lam, step_j, progress, J, step_off, swing_off,
                strides, ub, F, H, pred, q, path)
         ok, states, transitions = dp_one(sp[1], sw, row, a, J, step_off,
