@@ -1,0 +1,44 @@
+"""A batch planned on several threads (planners.lattice.run_parts: each thread takes every
+``parts``-th agent) gives byte-identical plans, counters included, to the same batch on
+one thread, whatever the number of threads: an agent's plan does not depend on which
+thread planned it or on the other agents."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import planners.lattice as lattice
+from planners import PLANNERS, Leg, plan_batch
+
+_FIELDS = ("footholds_s", "footholds_z", "swing_controls", "phase_durations", "En", "Ev",
+           "Ej", "E")
+
+
+def _batch():
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from bench_planners import random_terrain
+
+    rng = np.random.default_rng(5)
+    count = 3 * lattice.PARALLEL_AGENTS + 1  # parallel, and not a multiple of the threads
+    profiles = [random_terrain(rng) for _ in range(count)]
+    legs = [Leg.from_body_height(h) for h in rng.uniform(1.5, 1.95, count)]
+    return profiles, legs, rng.uniform(0.8, 1.8, count), -rng.uniform(0.3, 0.8, count)
+
+
+@pytest.mark.parametrize("planner", sorted(PLANNERS))
+def test_threads_give_the_plans_of_one_thread(planner, monkeypatch):
+    profiles, legs, speeds, trailing = _batch()
+    runs = {}
+    for threads in (1, 2, 3):
+        monkeypatch.setattr(lattice, "THREADS", threads)
+        runs[threads] = plan_batch(profiles, legs, speeds, planner, trailing=trailing)
+    stats = [k for k in runs[1][0].stats if k != "time_s"]
+    assert any(p.ok for p in runs[1]) and not all(p.ok for p in runs[1]), "a mixed batch"
+    for threads in (2, 3):
+        for p, q in zip(runs[1], runs[threads], strict=True):
+            assert (p.status, p.message) == (q.status, q.message)
+            for field in _FIELDS:
+                assert getattr(p, field).tobytes() == getattr(q, field).tobytes(), field
+            assert [p.stats[k] for k in stats] == [q.stats[k] for k in stats]
