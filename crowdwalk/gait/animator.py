@@ -215,6 +215,18 @@ class StepCommand:
     spin: np.ndarray | None = None
     speed: np.ndarray | None = None
 
+    def take(self, rows: np.ndarray) -> StepCommand:
+        """The commands at ``rows`` (k,)."""
+        def pick(value):
+            return None if value is None else value[rows]
+        return StepCommand(agent=self.agent[rows], time=self.time[rows],
+                           duration=self.duration[rows], swing_foot=self.swing_foot[rows],
+                           start=self.start[rows], target=self.target[rows],
+                           heading=self.heading[rows], step_length=self.step_length[rows],
+                           step_height=self.step_height[rows],
+                           swing_bezier=pick(self.swing_bezier), toe_out=pick(self.toe_out),
+                           spin=pick(self.spin), speed=pick(self.speed))
+
     @classmethod
     def from_batch(cls, steps: StepBatch) -> StepCommand:
         """The gait part of the crowd's steps (step lengths below 5 cm requested as 5 cm)."""
@@ -513,9 +525,23 @@ class Animator:
                                      & (np.abs(cmd.step_height) < _LEVEL_RISE)
                                      & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
                                      & ~spun_before & (self._stance.spin[a] == 0.0))
+        sw = self._swing
+        sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
+        sw.has_trail[a] = had
+        joins = np.flatnonzero(sw.trail_root[a])
+        if joins.size:  # the join starts from the trailing leg's root, not the stance leg's
+            aj = a[joins]
+            sw.hip_fix[aj] -= self._trailing_root(aj, np.zeros(aj.size))
+        capped = self._swing_ends(cmd, body, had, data.angles)
         if self.style.data_toe_off and self.ground is not None:
-            self._data_toe_off(a, had & ~c1)
-        self._swing_ends(cmd, body, had, data, trail)
+            # where the toe-off hand-over's cap leaves a jump, off stairs: let the foot go
+            # where the data have lifted it, and find the swing's ends again
+            j = np.flatnonzero(capped & ~c1)
+            j = j[self._data_toe_off(a[j])]
+            if j.size:
+                aj = a[j]
+                sw.d0[aj] = sw.d1[aj] = sw.toe_vel[aj] = sw.hip_drop[aj] = 0.0
+                self._swing_ends(cmd.take(j), body.take(j), had[j], data.angles[j])
         self._swing_curve(cmd, bumpy)
         if bumpy.any():
             self._anticipate_lift(a[bumpy])
@@ -682,18 +708,15 @@ class Animator:
                 2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
             self._swing.hip_vel[ac] = landed.root_velocity[c1] - v_data
 
-    def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray, data, trail) -> None:
+    def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray,
+                    angles: np.ndarray) -> np.ndarray:
         """The data-driven swing ankle at toe-off and at the landing (no swing corrections
         yet), the offsets that pin the trailing foot in push-off and land the swing foot
-        on the target, and the pelvis drop where the landing is out of reach."""
+        on the target, and the pelvis drop where the landing is out of reach (``angles``
+        the steps' datasets). Returns (m,) bool: the toe-off hand-over's cap leaves a
+        jump (:meth:`_toe_off_velocity`; none without ``toe_off_c1``)."""
         a = cmd.agent
         sw = self._swing
-        sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
-        sw.has_trail[a] = had
-        joins = np.flatnonzero(sw.trail_root[a])
-        if joins.size:  # the join starts from the trailing leg's root, not the stance leg's
-            aj = a[joins]
-            sw.hip_fix[aj] -= self._trailing_root(aj, np.zeros(aj.size))
         ends = np.concatenate([a, a])
         toe_off_phase = 0.5 * sw.toe_off[a]
         phases = np.concatenate([toe_off_phase, np.full(a.size, _PHASE_END)])
@@ -710,15 +733,16 @@ class Animator:
         land_along = np.stack([np.cos(land_yaw), np.sin(land_yaw)], axis=1)
         land_heel = cmd.target[:, :2] - body.heel_offset[:, None] * land_along
         land = self._contact(body, land_heel, cmd.target[:, 2], land_yaw)
-        land_phi = sample(data.angles, np.zeros(m))[:, 0]
+        land_phi = sample(angles, np.zeros(m))[:, 0]
         land_pitch = np.arctan(np.tan(land_phi) * np.cos(land_yaw - cmd.heading))
         ankle_land = stance_foot_pose(body, land, land_pitch)[1]
         # Push-off: until toe-off the trailing foot (the previous stance foot) stays on
         # its ball, pitched by the data; then the ankle joins the data smoothly.
         pin = self._pinned_ankle(a, toe_off_phase, self._legs(a, toe_off_phase)[1])[0]
         sw.d0[a] = np.where(had[:, None], pin - ankle0, 0.0)
+        capped = np.zeros(m, dtype=bool)
         if self.style.toe_off_c1:
-            self._toe_off_velocity(a, had, toe_off_phase, pin, tc)
+            capped = self._toe_off_velocity(a, had, toe_off_phase, pin, tc)
         # Out of reach (a step down deeper than the data's): the stance leg bends and
         # lowers the pelvis toward the landing over the second half of the step.
         hip1 = pose.positions[m + rows, sw_idx[:, 0]]
@@ -732,16 +756,15 @@ class Animator:
                            0.0)
         sw.hip_drop[a] = short[:, None] * to_land / np.maximum(reach, 1e-9)[:, None]
         sw.d1[a] = ankle_land - ankle1 - sw.hip_drop[a]
+        return capped
 
-    def _data_toe_off(self, a: np.ndarray, which: np.ndarray) -> None:
-        """``GaitStyle.data_toe_off``: the trailing foot of agents ``a[which]`` (steps off
-        stairs) is let go no later than where the step's own data lift its swing sole
-        ``_TOE_OFF_RISE`` above where it starts the step (uncorrected walks at
-        ``_TOE_OFF_GRID`` of the stance-fraction toe-off, linear between samples)."""
-        j = np.flatnonzero(which & (self._swing.toe_off[a] > 0.0))
-        if j.size == 0:
-            return
-        aj = a[j]
+    def _data_toe_off(self, aj: np.ndarray) -> np.ndarray:
+        """``GaitStyle.data_toe_off``: the trailing foot of agents ``aj`` (k,) is let go
+        no later than where the step's own data lift its swing sole ``_TOE_OFF_RISE``
+        above where it starts the step (uncorrected walks at ``_TOE_OFF_GRID`` of the
+        stance-fraction toe-off, linear between samples). Returns (k,) bool: moved."""
+        if aj.size == 0:
+            return np.zeros(0, dtype=bool)
         t_off = self._swing.toe_off[aj]
         g = _TOE_OFF_GRID
         idx = np.tile(aj, g.size)
@@ -756,8 +779,10 @@ class Animator:
         r0, r1 = rise[lo, k], rise[first, k]
         frac = np.clip((_TOE_OFF_RISE - r0) / np.maximum(r1 - r0, 1e-9), 0.0, 1.0)
         x = (lo + np.where(first > 0, frac, 0.0)) / (g.size - 1)
-        self._swing.toe_off[aj] = np.where(over.any(axis=0), x * t_off, t_off)
-        self.stats["data_toe_offs"] += int((over.any(axis=0)).sum())
+        moved = over.any(axis=0)
+        self._swing.toe_off[aj] = np.where(moved, x * t_off, t_off)
+        self.stats["data_toe_offs"] += int(moved.sum())
+        return moved
 
     def _toe_off_velocity(self, a: np.ndarray, had: np.ndarray, toe_off_phase: np.ndarray,
                           pin: np.ndarray, ankle_joint: np.ndarray) -> None:
@@ -765,10 +790,12 @@ class Animator:
         offset starts with at toe-off: the pinned push-off ankle's less the data's swing
         ankle's there (one-sided differences over ``_TOE_OFF_DPHASE`` of stance phase;
         ``pin`` (k, 3) the pinned ankle at toe-off), less ``_TOE_OFF_KEEP`` of it and at
-        most what the hand-over carries within ``_TOE_OFF_ACCEL``."""
+        most what the hand-over carries within ``_TOE_OFF_ACCEL``. Returns (m,) bool: that
+        cap leaves more than ``_TOE_OFF_KEEP`` of the jump."""
+        capped = np.zeros(a.size, dtype=bool)
         j = np.flatnonzero(had & (self._swing.toe_off[a] > 0.0))
         if j.size == 0:
-            return
+            return capped
         aj, p = a[j], toe_off_phase[j]
         dt = 2.0 * _TOE_OFF_DPHASE * self._step.duration[aj]
         after = self._walk(aj, p + _TOE_OFF_DPHASE, corrected=True)
@@ -784,9 +811,11 @@ class Animator:
         # within the acceleration it may add (on short swings the whole difference would
         # add more than the jump it removes)
         beta = _TOE_OFF_BLEND * (1.0 - self._swing.toe_off[aj]) * self._step.duration[aj]
-        carry = np.minimum(np.maximum(size - _TOE_OFF_KEEP, 0.0),
-                           _TOE_OFF_ACCEL * beta / _TOE_OFF_PEAK)
+        cap = _TOE_OFF_ACCEL * beta / _TOE_OFF_PEAK
+        carry = np.minimum(np.maximum(size - _TOE_OFF_KEEP, 0.0), cap)
         self._swing.toe_vel[aj] = dv * (carry / size)[:, None]
+        capped[j] = size - _TOE_OFF_KEEP > cap
+        return capped
 
     def _uneven(self, cmd: StepCommand, body: Body, swing_from: np.ndarray) -> np.ndarray:
         """(m,) bool: steps over uneven ground — something above the line from the

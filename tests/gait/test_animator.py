@@ -678,15 +678,24 @@ def _level_toe_offs(style, steps=3, sl=0.62, duration=0.403):
 
 
 def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch):
-    """``data_toe_off``: the trailing foot is released where the step's own data have
-    lifted its swing sole ``_TOE_OFF_RISE`` above its height at the step's start, when
-    that comes before 2 (stance fraction − 0.5); off, the toe-off is the stance
-    fraction's. (A 5 mm rise, so that an ordinary level step triggers it.)"""
+    """``data_toe_off``: where the toe-off hand-over's cap leaves a jump, the trailing
+    foot is released where the step's own data have lifted its swing sole
+    ``_TOE_OFF_RISE`` above its height at the step's start, when that comes before
+    2 (stance fraction − 0.5), and the swing's ends are found again there (the ankle
+    leaves the pin without a jump); where the cap leaves none (ordinary level steps) and
+    off, the toe-off is the stance fraction's. (A 5 mm rise, so that a level step
+    reaches it; the cap made to bind by keeping nothing and carrying almost nothing.)"""
     import crowdwalk.gait.animator as animator_module
 
     monkeypatch.setattr(animator_module, "_TOE_OFF_RISE", 0.005)
-    base, off_animator = _level_toe_offs(GaitStyle())
+    base, off_animator = _level_toe_offs(GaitStyle(data_toe_off=False))
     assert off_animator.stats["data_toe_offs"] == 0
+    uncapped, animator = _level_toe_offs(GaitStyle(data_toe_off=True))
+    assert animator.stats["data_toe_offs"] == 0
+    np.testing.assert_array_equal(uncapped, base)
+    monkeypatch.setattr(animator_module, "_TOE_OFF_KEEP", 0.0)
+    monkeypatch.setattr(animator_module, "_TOE_OFF_ACCEL", 1e-3)
+    base, _ = _level_toe_offs(GaitStyle(data_toe_off=False))
     moved, animator = _level_toe_offs(GaitStyle(data_toe_off=True))
     assert animator.stats["data_toe_offs"] == moved.size
     assert np.all(moved < base - 0.02)
@@ -696,3 +705,7 @@ def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch
     walked = animator._walk(a, phases, corrected=False)
     height = -animator._points_depth(a, animator._swing_sole(a, walked))
     assert height[1] - height[0] == pytest.approx(0.005, abs=0.002)
+    # ... and the swing ankle (the last step swings the right foot) leaves the pin there
+    around = animator._walk(a, 0.5 * moved[-1] + np.array([-1e-4, 1e-4]), corrected=True)
+    ankle = around.positions[:, LEG_JOINTS[1, 2]]
+    assert np.linalg.norm(ankle[1] - ankle[0]) < 2e-3
