@@ -124,6 +124,7 @@ _TOE_OFF_PEAK = 3.94  # max |h''(u)| of its shape (_toe_off_shape)
 _TOE_OFF_DPHASE = 0.005  # stance-phase interval of its velocity differences [1]
 _TOE_OFF_GRID = np.linspace(0.0, 1.0, 11)  # data_toe_off: fractions of the toe-off sampled
 _TOE_OFF_RISE = 0.035  # data_toe_off: the data's swing sole risen this far is off [m] (park)
+_TOE_OFF_SHORT = 0.75  # ... on steps shorter than this [leg lengths] (park's: <= 0.74)
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 
@@ -534,9 +535,10 @@ class Animator:
             sw.hip_fix[aj] -= self._trailing_root(aj, np.zeros(aj.size))
         capped = self._swing_ends(cmd, body, had, data.angles)
         if self.style.data_toe_off and self.ground is not None:
-            # where the toe-off hand-over's cap leaves a jump, off stairs: let the foot go
-            # where the data have lifted it, and find the swing's ends again
-            j = np.flatnonzero(capped & ~c1)
+            # where the toe-off hand-over's cap leaves a jump on a short step off stairs:
+            # let the foot go where the data have lifted it, and find the swing's ends again
+            short = cmd.step_length < _TOE_OFF_SHORT * (body.thigh + body.shank)
+            j = np.flatnonzero(capped & short & ~c1)
             j = j[self._data_toe_off(a[j])]
             if j.size:
                 aj = a[j]

@@ -678,8 +678,8 @@ def _level_toe_offs(style, steps=3, sl=0.62, duration=0.403):
 
 
 def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch):
-    """``data_toe_off``: where the toe-off hand-over's cap leaves a jump, the trailing
-    foot is released where the step's own data have lifted its swing sole
+    """``data_toe_off``: where the toe-off hand-over's cap leaves a jump on a short step
+    (under ``_TOE_OFF_SHORT`` leg lengths), the trailing foot is released where the step's own data have lifted its swing sole
     ``_TOE_OFF_RISE`` above its height at the step's start, when that comes before
     2 (stance fraction − 0.5), and the swing's ends are found again there (the ankle
     leaves the pin without a jump); where the cap leaves none (ordinary level steps) and
@@ -709,3 +709,9 @@ def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch
     around = animator._walk(a, 0.5 * moved[-1] + np.array([-1e-4, 1e-4]), corrected=True)
     ankle = around.positions[:, LEG_JOINTS[1, 2]]
     assert np.linalg.norm(ankle[1] - ankle[0]) < 2e-3
+    # a step longer than _TOE_OFF_SHORT leg lengths keeps the stance fraction's toe-off
+    # (these 0.62 m steps are 0.72 leg lengths of the 1.75 m body)
+    monkeypatch.setattr(animator_module, "_TOE_OFF_SHORT", 0.5)
+    kept, animator = _level_toe_offs(GaitStyle(data_toe_off=True))
+    assert animator.stats["data_toe_offs"] == 0
+    np.testing.assert_array_equal(kept, base)
