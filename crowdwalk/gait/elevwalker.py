@@ -167,10 +167,11 @@ class GaitStyle:
         ball slid up to 19 mm at the corner; an extension: docs/architecture.md "Toe-off
         hand-over"); False: the goal as the pin computes it.
     data_toe_off : bool
-        Off stairs, the trailing foot is let go no later than where the step's own
-        (blended) data have lifted its swing sole 3.5 cm above where it starts the step
-        (an extension: docs/architecture.md "Toe-off where the data lift the foot");
-        False (default): at 2 (stance fraction − 0.5) of the step.
+        Where ``toe_off_c1``'s hand-over cannot carry the toe-off jump, on steps shorter
+        than 0.75 leg lengths off stairs, the trailing foot is let go no later than where
+        the step's own (blended) data have lifted its swing sole 3.5 cm above where it
+        starts the step (an extension: docs/architecture.md "Toe-off where the data lift
+        the foot"); False (default): at 2 (stance fraction − 0.5) of the step.
     """
 
     step_width: float = 0.05

@@ -679,12 +679,13 @@ def _level_toe_offs(style, steps=3, sl=0.62, duration=0.403):
 
 def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch):
     """``data_toe_off``: where the toe-off hand-over's cap leaves a jump on a short step
-    (under ``_TOE_OFF_SHORT`` leg lengths), the trailing foot is released where the step's own data have lifted its swing sole
-    ``_TOE_OFF_RISE`` above its height at the step's start, when that comes before
-    2 (stance fraction − 0.5), and the swing's ends are found again there (the ankle
-    leaves the pin without a jump); where the cap leaves none (ordinary level steps) and
-    off, the toe-off is the stance fraction's. (A 5 mm rise, so that a level step
-    reaches it; the cap made to bind by keeping nothing and carrying almost nothing.)"""
+    (under ``_TOE_OFF_SHORT`` leg lengths), the trailing foot is released where the
+    step's own data have lifted its swing sole ``_TOE_OFF_RISE`` above its height at the
+    step's start, when that comes before 2 (stance fraction − 0.5), and the swing's ends
+    are found again there (the ankle leaves the pin without a jump); where the cap
+    leaves none (ordinary level steps), on longer steps and off, the toe-off is the
+    stance fraction's. (A 5 mm rise, so that a level step reaches it; the cap made to
+    bind by keeping nothing and carrying almost nothing.)"""
     import crowdwalk.gait.animator as animator_module
 
     monkeypatch.setattr(animator_module, "_TOE_OFF_RISE", 0.005)
