@@ -261,7 +261,7 @@ def _solver(chain, m):
     chain outputs in ``args`` and returns the knee angle's cosine, sine and whether it
     exists. m is a compile-time constant of ``solve`` (a closure variable): its loops and
     :func:`_step`'s are unrolled (the same operations in the same order: the same
-    values; the swing solve ~15 % faster)."""
+    values; the solves ~6–7 % faster)."""
 
     @_jit
     def solve(i, x, jac, args, tol, max_iter, scratch):
