@@ -116,26 +116,35 @@ def _backtrack(tables: StepTables, agent: int, order: np.ndarray):
     Returns the configuration (None if nothing is legal), the step decisions opened and
     the candidate steps looked up."""
     st = tables.struct
-    n = st.n
+    n, J = st.n, st.J
+    # the agent's rows of the complete tables (read only), and the indices of step and
+    # swing k of a configuration by Structure.indices' formulas, from the prefix's sums
+    step_legal, swing_ok = tables.step_legal[agent].tolist(), tables.swing_ok[agent].tolist()
+    step_off, swing_off, strides = st.step_offset, st.swing_offset, st.swing_strides
     prefix: list[int] = []
+    sums = [0]  # sums[k] = m_k, the sum of prefix[:k]
+    order = order.tolist()
     stack = [iter(order)]
     budget = 20000
     looked = pushes = 0
     while stack and budget > 0:
         try:
-            choice = int(next(stack[-1]))
+            choice = next(stack[-1])
         except StopIteration:
             stack.pop()
             if prefix:
                 prefix.pop()
+                sums.pop()
             continue
         budget -= 1
         looked += 1
-        trial = np.array([*prefix, choice] + [0] * (n - len(prefix) - 1))
-        steps, swings = st.indices(trial)
         k = len(prefix)
-        if tables.step_legal[agent, steps[k]] and tables.swing_ok[agent, swings[k]]:
+        step = step_off[k] + sums[k] * J + choice
+        swing = (swing_off[k] + (sums[k - 1] * strides[k] + prefix[-1] if k else 0)
+                 + choice)
+        if step_legal[step] and swing_ok[swing]:
             prefix.append(choice)
+            sums.append(sums[-1] + choice)
             if len(prefix) == n:
                 return np.array(prefix), pushes, looked
             stack.append(iter(order))

@@ -37,6 +37,8 @@ PLANNERS = frozenset(_SEARCHES)
 BATCH_CHUNK = 64
 OK = "ok"
 NO_FOOTHOLD = "no legal foothold"
+#: The message of a failed plan that was not diagnosed (``plan_batch(diagnose=...)``).
+NOT_DIAGNOSED = "no legal configuration (not diagnosed)"
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,7 +192,7 @@ def plan(profile: GroundProfile, leg: Leg, speed: float, planner: str = "best_fi
 def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], speeds,
                planner: str = "best_first", config: PlannerConfig | None = None, *,
                trailing=None, origins=None, heading_change=None,
-               first_foot=None) -> list[Plan]:
+               first_foot=None, diagnose=True) -> list[Plan]:
     """Plan for many walkers in one vectorised pass per chunk of agents.
 
     Parameters
@@ -212,6 +214,12 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         ``"left"`` or ``"right"``: the foot making each agent's next step (which foot
         turns first, :attr:`Plan.feet`); default ``"left"`` where ``heading_change`` is
         given.
+    diagnose : bool or array_like of bool (A,), optional
+        Diagnose the failed plans of these agents (default all): the message naming
+        where the walker is stopped and the longest legal prefix, which evaluates the
+        agent's whole table (:meth:`~planners.lattice.StepTables.complete`). A failed plan
+        not diagnosed has no steps and the message ``NOT_DIAGNOSED`` (for a caller that
+        plans it again); every other plan is the same.
 
     Returns
     -------
@@ -241,6 +249,7 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     first_foot = list(first_foot)
     if len(first_foot) != A or not set(first_foot) <= {"left", "right", ""}:
         raise invalid("plan", "first_foot", f"{A} of 'left' or 'right'", first_foot)
+    diagnose = np.broadcast_to(np.asarray(diagnose, dtype=bool), (A,))
     if trailing is not None:
         trailing = _vector(trailing, A, "trailing")
         bad = np.flatnonzero(~((trailing < 0) & (trailing > -3.0)))
@@ -260,7 +269,7 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         t2 = stages.add("search", t1)
         elapsed = (t2 - t0) / len(profiles[sl])
         plans += _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],
-                           origins[sl], elapsed)
+                           origins[sl], elapsed, diagnose[sl])
         stages.add("assemble", t2)
     if turns is None and not any(first_foot):
         return plans
@@ -306,14 +315,19 @@ def _vector(values, count: int, name: str) -> np.ndarray:
 
 
 def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, legs,
-              speeds, origins, elapsed: float) -> list[Plan]:
-    """Turn search results into :class:`Plan` objects (gathers, no numerics per agent)."""
+              speeds, origins, elapsed: float, diagnose: np.ndarray) -> list[Plan]:
+    """Turn search results into :class:`Plan` objects (gathers, no numerics per agent);
+    the failed plans of agents ``diagnose`` (A,) bool get their diagnosis, the others no
+    steps."""
     st = tables.struct
     A = speeds.size
     rows = np.arange(A)[:, None]
     messages = {}
-    if not result.found.all():
-        failed = np.flatnonzero(~result.found)
+    undiagnosed = ~result.found & ~diagnose
+    for a in np.flatnonzero(undiagnosed).tolist():
+        messages[a] = NOT_DIAGNOSED, 0  # no steps: its configuration is not read
+    if not result.found.all() and diagnose.any():
+        failed = np.flatnonzero(~result.found & diagnose)
         if tables.lazy or tables.deferred:
             tables.complete(failed)  # the diagnosis reads every legal prefix
         for a, (message, prefix, depth) in zip(failed.tolist(),
@@ -324,7 +338,7 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     steps, swings = st.indices(result.configs)
     Np = tables.controls.shape[1]
     if tables.deferred:  # (a search reads every swing of the configuration it returns)
-        unbuilt = tables.pending.take(rows * Np + swings).any(axis=1)
+        unbuilt = tables.pending.take(rows * Np + swings).any(axis=1) & ~undiagnosed
         if unbuilt.any():
             tables.build_pending(np.flatnonzero(unbuilt))
     foot_nodes = np.empty((A, st.n + 1), dtype=np.int64)

@@ -394,14 +394,15 @@ class FootstepPlanner:
                 legs = [self.legs[leg[i]] for i in first]
                 speeds = [float(speed[i]) for i in first]
                 behind = [float(trailing[i]) for i in first]
-                plans = plan_batch(grounds, legs, speeds, planner=name, config=config,
-                                   trailing=behind)
                 # a long stride's first swing curve (the trailing foot more than half a leg
                 # behind) can fail the planner's clearance test even on near-level
                 # ground; such steps are planned again from half a leg behind (the
-                # Animator swings the real foot from where it is)
-                retry = [k for k, p in enumerate(plans)
-                         if not p.ok and behind[k] < -0.5 * legs[k].length]
+                # Animator swings the real foot from where it is), so their failed
+                # first plans are not diagnosed (the diagnosis evaluates the whole table)
+                long = [b < -0.5 * leg_k.length for b, leg_k in zip(behind, legs, strict=True)]
+                plans = plan_batch(grounds, legs, speeds, planner=name, config=config,
+                                   trailing=behind, diagnose=[not x for x in long])
+                retry = [k for k, p in enumerate(plans) if not p.ok and long[k]]
                 if retry:
                     self.retries += len(retry)
                     again = plan_batch([grounds[k] for k in retry], [legs[k] for k in retry],
