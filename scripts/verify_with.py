@@ -6,10 +6,11 @@ Usage: ``python scripts/verify_with.py --only rimea4,bottleneck,counterflow [--s
 (``--crowd-model``: the named model the ``--set`` fields go over,
 ``crowdwalk.crowd.params.CROWD_MODELS``, default free; ``--set``: Python literals;
 a bare word is taken as a string; ``steering.FIELD=V`` sets a
-:class:`~crowdwalk.crowd.steering.SteeringParams` field). ``--counterflow-length L`` and
-``--counterflow-density D`` change the counterflow case's corridor length [m] and start the
-groups on a lattice at D [1/m²] (``crowdwalk.verify.counterflow_scenario``; measurements,
-not the verified case).
+:class:`~crowdwalk.crowd.steering.SteeringParams` field). ``--counterflow-length L`` (default
+the verified 50 m; 30 m: the former case) and ``--counterflow-density D`` change the
+counterflow case's corridor length [m] and start the groups on a lattice at D [1/m²]
+(``crowdwalk.verify.counterflow_scenario``; other than the defaults: measurements, not the
+verified case).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from __future__ import annotations
 import argparse
 
 from crowdwalk.crowd.params import crowd_model, parse_overrides
-from crowdwalk.verify import run_verification
+from crowdwalk.verify import COUNTERFLOW_LENGTH, run_verification
 
 
 def main() -> None:
@@ -27,7 +28,8 @@ def main() -> None:
     ap.add_argument("--full", action="store_true", help="full sizes")
     ap.add_argument("--crowd-model", default="free", metavar="NAME")
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
-    ap.add_argument("--counterflow-length", type=float, default=30.0, metavar="M")
+    ap.add_argument("--counterflow-length", type=float, default=COUNTERFLOW_LENGTH,
+                    metavar="M")
     ap.add_argument("--counterflow-density", type=float, default=None, metavar="PER_M2")
     args = ap.parse_args()
     fields = parse_overrides(args.set)

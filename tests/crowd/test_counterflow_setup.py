@@ -1,6 +1,6 @@
 """The counterflow case's setup (``crowdwalk.verify.counterflow_scenario``): the verified
-case unchanged by default; a longer corridor and a start at a given density for
-measurements (``scripts/verify_with.py --counterflow-length / --counterflow-density``)."""
+case (50 m) by default; another length and a start at a given density for measurements
+(``scripts/verify_with.py --counterflow-length / --counterflow-density``)."""
 
 import numpy as np
 import pytest
@@ -18,10 +18,15 @@ def _starts(data):
     return pop.spawn_xy[pop.group == 0], pop.spawn_xy[pop.group == 1]
 
 
-def test_default_groups_start_in_the_end_nodes_of_the_30_m_corridor():
-    east, west = _starts(counterflow_scenario(1))
+def test_default_groups_start_in_the_end_nodes_of_the_50_m_corridor():
+    data = counterflow_scenario(1)
+    assert data["terrain"]["extent"][2] == 50.0
+    east, west = _starts(data)
     assert len(east) == len(west) == 50
-    assert east[:, 0].max() < 5.0 and west[:, 0].min() > 25.0
+    assert east[:, 0].max() < 5.0 and west[:, 0].min() > 45.0
+    # the former 30 m case: the same start areas at its ends
+    east30, west30 = _starts(counterflow_scenario(1, length=30.0))
+    assert east30[:, 0].max() < 5.0 and 25.0 < west30[:, 0].min() < 30.0
 
 
 @pytest.mark.parametrize("density", [1.0, 2.0])
@@ -53,7 +58,7 @@ def test_weidmann_trip_ratio_is_the_path_mean_of_free_over_weidmann_speed():
 def test_walkers_alone_meet_the_voronoi_cut_off_density_and_walk_at_weidmann(tmp_path):
     from crowdwalk.verify import _run, walker_frames, weidmann_trip_ratio
 
-    run = _run(counterflow_scenario(1, n=1), tmp_path / "two")
+    run = _run(counterflow_scenario(1, n=1, length=30.0), tmp_path / "two")
     frames = walker_frames(run.folder, run.summary, (0.0, 0.0, 30.0, 4.0))
     assert set(np.unique(frames.id)) == {a["id"] for a in run.summary["agents"]}
     # until they pass each other each cell is the 1 m cut-off disc (the walls 2 m away),

@@ -75,7 +75,8 @@ def test_same_time_scoring_compares_directions_by_speed():
 
 
 def _counterflow_sim(params):
-    sc = Scenario.model_validate(counterflow_scenario(1))
+    # 30 m: oncoming walkers are neighbours by 8 s
+    sc = Scenario.model_validate(counterflow_scenario(1, length=30.0))
     from crowdwalk.world import build_world
 
     world = build_world(sc)
