@@ -70,8 +70,10 @@ def time_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.nd
 
     Parameters
     ----------
-    position, direction : (k, 2) float
-        Walkers [m] and their unit step directions.
+    position : (k, 2) float
+        Walkers [m].
+    direction : (k, 2) or (k, C, 2) float
+        Their unit step directions (C candidate directions each: speeds (k, C)).
     radius : (k,) float
         Their body radii [m].
     others, others_radius, valid : (k, m, 2), (k, m), (k, m)
@@ -81,8 +83,15 @@ def time_gap_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.nd
 
     Returns
     -------
-    (k,) speeds [m/s].
+    (k,) or (k, C) speeds [m/s].
     """
+    if direction.ndim == 3:  # candidate directions (overtaking scores them): one at a time
+        return np.stack([time_gap_speed(position=position, direction=direction[:, c],
+                                        radius=radius, others=others,
+                                        others_radius=others_radius, valid=valid,
+                                        free_speed=free_speed, time_gap=time_gap)
+                         for c in range(direction.shape[1])], axis=1).reshape(
+                             direction.shape[:2])
     rel = others - position[:, None, :]
     along = np.einsum("kmj,kj->km", rel, direction)
     lateral = np.abs(rel[..., 0] * direction[:, None, 1] - rel[..., 1] * direction[:, None, 0])

@@ -96,3 +96,29 @@ def test_verify_names_an_unknown_speed_model_in_one_line(tmp_path):
     assert ("speed_model must be one of free, time_gap, contact_gap, headway; got 'fast'"
             in result.output)
     assert not (tmp_path / "v.md").exists()
+
+
+def test_time_gap_speed_scores_candidate_directions_one_by_one():
+    """(k, C, 2) directions (overtaking scores candidates) give what each direction gives
+    alone: a neighbour 1.2 m ahead limits the straight step, not the one at 60°."""
+    me, others = np.zeros((2, 2)), np.array([[[1.2, 0.0], [0.0, 1.0]], [[0.9, 0.1], [3.0, 0.0]]])
+    a = np.deg2rad([0.0, 60.0, 90.0])
+    dirs = np.broadcast_to(np.stack([np.cos(a), np.sin(a)], -1), (2, 3, 2))
+    kw = dict(position=me, radius=np.full(2, 0.18), others=others,
+              others_radius=np.full((2, 2), 0.18), valid=np.ones((2, 2), bool),
+              free_speed=np.full(2, 1.34), time_gap=0.8)
+    v = time_gap_speed(direction=dirs, **kw)
+    assert v.shape == (2, 3)
+    for c in range(3):
+        np.testing.assert_array_equal(v[:, c], time_gap_speed(direction=dirs[:, c], **kw))
+    assert v[0, 0] < 1.34 and v[0, 1] == 1.34
+
+
+def test_the_headway_preset_runs_with_the_time_gap_speed_model(tmp_path):
+    """``--crowd-model headway_s175 --speed-model time_gap``: S175's overtaking scores
+    candidate directions with Tordeux's speed (it raised before)."""
+    from crowdwalk.crowd.params import crowd_model
+
+    params = crowd_model("headway_s175", {"speed_model": "time_gap"})
+    density, speed = ring_corridor_speed(1.5, tmp_path, params=params)
+    assert 1.0 < density < 2.2 and 0.0 < speed < 1.6
