@@ -65,7 +65,7 @@ rise, :func:`_spin_start`), and the body with it; nothing else turns a planted f
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -217,16 +217,9 @@ class StepCommand:
     speed: np.ndarray | None = None
 
     def take(self, rows: np.ndarray) -> StepCommand:
-        """The commands at ``rows`` (k,)."""
-        def pick(value):
-            return None if value is None else value[rows]
-        return StepCommand(agent=self.agent[rows], time=self.time[rows],
-                           duration=self.duration[rows], swing_foot=self.swing_foot[rows],
-                           start=self.start[rows], target=self.target[rows],
-                           heading=self.heading[rows], step_length=self.step_length[rows],
-                           step_height=self.step_height[rows],
-                           swing_bezier=pick(self.swing_bezier), toe_out=pick(self.toe_out),
-                           spin=pick(self.spin), speed=pick(self.speed))
+        """The commands at ``rows`` (k,) (every field's rows; optional fields stay None)."""
+        return StepCommand(**{f.name: None if (v := getattr(self, f.name)) is None else v[rows]
+                              for f in fields(self)})
 
     @classmethod
     def from_batch(cls, steps: StepBatch) -> StepCommand:
