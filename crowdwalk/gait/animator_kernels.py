@@ -18,20 +18,14 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from crowdwalk.gait.complexes import _wrap  # foot.wrap_angle of one float
 from crowdwalk.gait.datasets import _sample_kernel
+from crowdwalk.gait.posing_kernels import smooth_one as _smooth
 
 __all__ = ["bezier_points", "corrections", "crossfade_legs", "headings", "pinned_feet",
            "sole_points", "swing_toes", "toe_off_progress"]
 
 _jit = nb.njit(cache=True, nogil=True)
-
-
-@_jit
-def _smooth(v):  # pragma: no cover - compiled
-    """posing_kernels.smoothstep of one float (``np.clip`` semantics: NaN kept)."""
-    v = v if (np.isnan(v) or v > 0.0) else 0.0
-    v = v if (np.isnan(v) or v < 1.0) else 1.0
-    return v * v * (3.0 - 2.0 * v)
 
 
 @_jit
@@ -45,12 +39,6 @@ def _clip(v, lo, hi):  # pragma: no cover - compiled
 def _at_least(v, lo):  # pragma: no cover - compiled
     """``np.maximum(v, lo)`` of one float (NaN kept)."""
     return v if (np.isnan(v) or v >= lo) else lo
-
-
-@_jit
-def _wrap(v):  # pragma: no cover - compiled
-    """``foot.wrap_angle`` of one float: (v + π) mod 2π − π, Python's (numpy's) modulo."""
-    return (v + np.pi) % (2.0 * np.pi) - np.pi
 
 
 @_jit

@@ -18,8 +18,8 @@ from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
 
-__all__ = ["as_rows", "pelvis_rotations", "shifted_stance_leg", "smoothstep", "stance_foot",
-           "upper_body"]
+__all__ = ["as_rows", "pelvis_rotations", "shifted_stance_leg", "smooth_one", "smoothstep",
+           "stance_foot", "upper_body"]
 
 _jit = nb.njit(cache=True, nogil=True)
 
@@ -165,12 +165,17 @@ def stance_foot(yaw, slope, pitch, ball, heel_offset, ball_offset, ankle_height
 
 
 @_jit
+def smooth_one(v):  # pragma: no cover - compiled
+    """:func:`smoothstep` of one float, for other kernels (``np.clip`` semantics: NaN kept)."""
+    v = v if (np.isnan(v) or v > 0.0) else 0.0  # np.clip(v, 0.0, 1.0)
+    v = v if (np.isnan(v) or v < 1.0) else 1.0
+    return v * v * (3.0 - 2.0 * v)
+
+
+@_jit
 def _smoothstep_kernel(x, out):  # pragma: no cover - compiled
     for i in range(x.size):
-        v = x[i]
-        v = v if (np.isnan(v) or v > 0.0) else 0.0  # np.clip(v, 0.0, 1.0)
-        v = v if (np.isnan(v) or v < 1.0) else 1.0
-        out[i] = v * v * (3.0 - 2.0 * v)
+        out[i] = smooth_one(x[i])
 
 
 def smoothstep(x) -> np.ndarray:
