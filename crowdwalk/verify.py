@@ -729,9 +729,11 @@ def walker_frames(folder: Path, summary: dict, box: tuple[float, float, float, f
     keep = i[1:] == i[:-1]
     step = np.hypot(np.diff(x), np.diff(y))[keep]
     dt = np.diff(f)[keep] / traj.frame_rate
-    v0 = {a["id"]: a["free_speed_m_s"] for a in summary["agents"]}
+    agent_ids = np.array([a["id"] for a in summary["agents"]])
+    order = np.argsort(agent_ids)
+    v0 = np.array([a["free_speed_m_s"] for a in summary["agents"]], float)[order]
     ids = i[:-1][keep]
-    return WalkerFrames(ids, np.array([v0[int(k)] for k in ids]),
+    return WalkerFrames(ids, v0[np.searchsorted(agent_ids[order], ids)],
                         df.density.to_numpy(float)[:-1][keep], step,
                         step / np.where(dt > 0, dt, np.nan), x[:-1][keep])
 
@@ -744,12 +746,13 @@ def weidmann_trip_ratio(frames: WalkerFrames, agents: list[dict], clip: float = 
     ``clip`` [1/m²] (3.5: the top of the range the fundamental diagram is checked on;
     w is 0 at 5.4), which can only lower the ratio."""
     slow = 1.34 / weidmann_speed(np.minimum(frames.density, clip))
-    out = []
-    for a in agents:
-        k = frames.id == a["id"]
-        if a["arrived"] and a["distance_m"] > 0 and k.any():
-            out.append(float(np.sum(frames.step[k] * slow[k]) / np.sum(frames.step[k])))
-    return np.array(out)
+    walked = [a["id"] for a in agents if a["arrived"] and a["distance_m"] > 0]
+    ids, row = np.unique(frames.id, return_inverse=True)  # one row per walker seen
+    path = np.bincount(row, weights=frames.step)
+    at_weidmann = np.bincount(row, weights=frames.step * slow)
+    seen = np.isin(walked, ids)
+    k = np.searchsorted(ids, np.asarray(walked)[seen])
+    return at_weidmann[k] / path[k]
 
 
 #: The verified counterflow corridor's length [m]: 50 m, not 30 m, because in 30 m a walker
