@@ -557,26 +557,9 @@ class _ShapeSpace:
 
     def clamp(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Targets moved onto the hull where outside; (k, 2) and (k,) bool (compiled:
-        :func:`_clamp_kernel`, the values of :meth:`_clamp_numpy`)."""
+        :func:`_clamp_kernel`; tests/gait/test_elevinterp.py holds the numpy code it compiles)."""
         return _clamp_kernel(np.ascontiguousarray(target, dtype=float), self.hull,
                              self.hull.mean(axis=0))
-
-    def _clamp_numpy(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`clamp` in numpy: what ``_clamp_kernel`` compiles."""
-        a = self.hull
-        b = np.roll(a, -1, axis=0)
-        edge = b - a
-        rel = target[:, None, :] - a[None]
-        u = np.clip(np.einsum("khd,hd->kh", rel, edge) / np.einsum("hd,hd->h", edge, edge), 0, 1)
-        proj = a[None] + u[..., None] * edge[None]
-        dist = np.linalg.norm(target[:, None, :] - proj, axis=-1)
-        # Inside a counter-clockwise convex polygon every edge has the point on its left.
-        cross = edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0]
-        outside = np.any(cross < -1e-12 * np.linalg.norm(edge, axis=1), axis=1)
-        nearest = proj[np.arange(len(target)), np.argmin(dist, axis=1)]
-        centre = self.hull.mean(axis=0)
-        nearest = nearest + 1e-9 * (centre - nearest)  # strictly inside
-        return np.where(outside[:, None], nearest, target), outside
 
     def locate(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Indices (k,) of the containing triangles and barycentric weights (k, 3)."""
