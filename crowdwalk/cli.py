@@ -197,8 +197,8 @@ def run(
     seed: int = typer.Option(None, "--seed", help="Override the scenario's random seed."),
     workers: int = typer.Option(None, "--workers", help="Worker processes beside this one "
                                 "(default: one per further core from 500 walkers; 0: none)."),
-    crowd_model: str = typer.Option("free", "--crowd-model", help="Named crowd model: "
-                                    "free (the default) or headway_s175 "
+    crowd_model: str = typer.Option("headway_s175", "--crowd-model", help="Named crowd "
+                                    "model: headway_s175 (the default) or free "
                                     "(crowdwalk.crowd.params.CROWD_MODELS)."),
     overwrite: bool = _OVERWRITE,
 ) -> None:
@@ -352,8 +352,8 @@ def verify(
     speed_model: str = typer.Option("", "--speed-model", help="Crowd speed model alone, "
                                     "over the crowd model: free, time_gap, contact_gap or "
                                     "headway."),
-    crowd_model: str = typer.Option("", "--crowd-model", help="Named crowd model: free "
-                                    "(the default) or headway_s175."),
+    crowd_model: str = typer.Option("", "--crowd-model", help="Named crowd model: "
+                                    "headway_s175 (the default) or free."),
 ) -> None:
     """Run the RiMEA tests that apply, the bottleneck series and the fundamental diagram."""
     from crowdwalk.crowd.params import crowd_model as named_model
@@ -365,7 +365,7 @@ def verify(
         raise invalid("verify", "speed_model", f"one of {', '.join(models)}", speed_model)
     params = None
     if speed_model or crowd_model:
-        params = named_model(crowd_model or "free",
+        params = named_model(crowd_model or "headway_s175",
                              {"speed_model": speed_model} if speed_model else None)
     run_verification(full=full, out=out, only=[s for s in only.split(",") if s],
                      seeds=seeds or None, params=params, echo=typer.echo,

@@ -9,7 +9,7 @@ import numpy as np
 import shapely
 
 from crowdwalk.crowd.clearance import ClearanceField
-from crowdwalk.crowd.params import CrowdParams
+from crowdwalk.crowd.params import CrowdParams, crowd_model
 from crowdwalk.crowd.routing import steering_targets
 
 # a 4 m wide corridor along +x with a 0.2 m thick wall at x = 2.0-2.2 and a door
@@ -45,7 +45,7 @@ def test_a_walker_beside_a_door_lines_up_with_it_instead_of_grazing_the_post():
     # walkers 0.8-1.0 m before the wall and 0.7-0.9 m off the door's axis: the lane ahead
     # runs into the wall, and no lane beside the axis clears the post
     xy = np.array([[1.0, 0.9], [1.2, 0.8], [1.1, -0.7]])
-    plain = CrowdParams()
+    plain = crowd_model("free")  # lane_keep and line_up off (S175, the default, has both)
     field, t0 = targets(plain, xy)
     _, t1 = targets(replace(plain, line_up=True), xy)
     before = least_clearance(field, xy, t0)
@@ -60,7 +60,7 @@ def test_lane_keeping_keeps_a_walker_off_axis_where_its_lane_fits_the_door():
     # 0.9 m off the axis, 1.9 m before the wall: the lane ahead ends in the wall, one
     # 0.2 m off the axis fits the door
     xy = np.array([[0.1, 0.9], [0.1, -0.9]])
-    plain = CrowdParams()
+    plain = crowd_model("free")  # lane_keep and line_up off (S175, the default, has both)
     field, t0 = targets(plain, xy)
     _, t1 = targets(replace(plain, lane_keep=True), xy)
     assert np.allclose(t0[:, 1], 0.0)  # without: everybody aims at the centre line

@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from crowdwalk.crowd.neighbours import gather_neighbours
+from crowdwalk.crowd.params import crowd_model
 from crowdwalk.crowd.routing import lane_runs_into_wall
 from crowdwalk.crowd.run import RunOverrides, run_scenario
 from crowdwalk.crowd.simulation import CrowdParams, CrowdSimulation, build_parts
@@ -86,7 +87,8 @@ def _counterflow_sim(params):
 
 
 def test_oncoming_walkers_are_not_scored_as_leaders():
-    base = replace(CrowdParams(), speed_model="headway", headway_same_way="route")
+    # the free model's switches (no overtaking, no route lane) with route-direction leaders
+    base = replace(crowd_model("free"), speed_model="headway", headway_same_way="route")
     sim = _counterflow_sim(replace(base, headway_steer=True))
     while sim.time < 8.0:
         sim.step()

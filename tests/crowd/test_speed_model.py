@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from crowdwalk.crowd import CrowdParams
+from crowdwalk.crowd.params import crowd_model
 from crowdwalk.crowd.speed import contact_gap_speed, headway_speed, time_gap_speed
 from crowdwalk.verify import free_speed, ring_corridor_speed, weidmann_speed
 
@@ -33,7 +34,7 @@ def test_lone_walkers_reach_their_free_speed(tmp_path):
 
 
 def test_time_gap_model_follows_weidmann_at_1_5_per_m2(tmp_path):
-    params = replace(CrowdParams(), speed_model="time_gap")
+    params = replace(crowd_model("free"), speed_model="time_gap")  # without S175's switches
     density, speed = ring_corridor_speed(1.5, tmp_path, params=params)
     assert 1.0 < density < 2.2
     assert speed == pytest.approx(float(weidmann_speed(density)), abs=0.15)
