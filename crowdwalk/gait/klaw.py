@@ -235,7 +235,7 @@ class KlawEngine:
             "p_hs", "yaw_st", "yaw_tr", "yaw_land", "p_tr0", "k_tr0", "front", "lat_to",
             "lat_hs", "rear", "z_land", "v_end_x", "v_end_z", "next_p", "p_hs_now", "kmin",
             "arm", "arm_out", "elbow_min", "elbow_max", "shoulder", "tilt", "sway", "spin",
-            "spin_t0", "yaw_end")}
+            "spin_t0", "spin_pitch", "yaw_end")}
         self._s.update({name: z3.copy() for name in (
             "origin", "u", "heel_st", "ball_st", "ball_tr", "hip_b_end", "ankle_hs")})
         self._s.update({name: np.zeros((n, 4)) for name in (
@@ -400,8 +400,9 @@ class KlawEngine:
         clearance(lo + w * (hi - lo))
         # the spin turn (MetaGait §6.1) of the stance foot: about its ball, from when its
         # heel is up SPIN_HEEL_LIFT to the step's end (none if it never stood flat and
-        # rose: then the trailing foot keeps its yaw)
-        s["spin_t0"][a] = self._heel_off(a, b, t_abs, T)
+        # rose, nor was carried onto its ball by 30 % of the step: then the trailing foot
+        # keeps its yaw)
+        s["spin_t0"][a], s["spin_pitch"][a] = self._heel_off(a, b, t_abs, T)
         s["spin"][a] = np.where(s["spin_t0"][a] < T, column_or(cmd, "spin", np.zeros(m)),
                                 0.0)
         # the stance foot's state at t4 is the next step's trailing foot
@@ -413,17 +414,29 @@ class KlawEngine:
     def _heel_off(self, a, b, t_abs, T):
         """Time into the step [s] (m,) at which the stance foot's heel has risen
         ``SPIN_HEEL_LIFT`` rolling on its ball (after 30 % of the step: not the heel
-        strike's rocker); ``T`` where it never does."""
+        strike's rocker); ``T`` where it never does, and where the foot neither stood
+        flat (its heel down) nor was off its heel rocker by then (a short queueing step
+        still on its rocker). A foot the hip carries from its heel straight onto its
+        ball (the pivot foot of a step across its own axis) spins, its heel held at
+        least as high as at the spin's start (its heel never stood lower). Also the
+        highest pitch (m,) [rad] the foot takes while spinning."""
         m = a.size
         times = t_abs[:, None] + _SPIN_GRID[None, :] * T[:, None]
         legs = self._legs(np.repeat(a, _SPIN_GRID.size), times.ravel())
         hb = np.repeat(b.heel_offset + b.ball_offset, _SPIN_GRID.size)
         pitch = legs["pitch_a"].reshape(m, -1)
         up = hb.reshape(m, -1) * np.sin(np.maximum(-pitch, 0.0)) >= SPIN_HEEL_LIFT
-        # only a foot that has stood flat (its heel down) rises to spin on its ball
+        # only a foot that has stood flat (its heel down), or is on its ball early, rises
+        # to spin on its ball
         flat = np.maximum.accumulate(pitch == 0.0, axis=1)
-        up &= flat & (_SPIN_GRID[None, :] > 0.3)
-        return np.where(up.any(axis=1), _SPIN_GRID[np.argmax(up, axis=1)] * T, T)
+        early = _SPIN_GRID[None, :] <= 0.3
+        on_ball = ((pitch < 0.0) & early).any(axis=1, keepdims=True)
+        up &= (flat | on_ball) & ~early
+        first = np.argmax(up, axis=1)
+        hold = -np.arcsin(np.minimum(SPIN_HEEL_LIFT / (b.heel_offset + b.ball_offset), 1.0))
+        never_flat = ~flat[:, -1]
+        limit = np.where(never_flat, np.minimum(hold, pitch[np.arange(m), first]), hold)
+        return np.where(up.any(axis=1), _SPIN_GRID[first] * T, T), limit
 
     @staticmethod
     def _swing_coords(b, hip, ankle, psi):
@@ -497,9 +510,8 @@ class KlawEngine:
         far = np.linalg.norm(hip_a - flat_ankle, axis=1) > kmin_reach
         pitch_a = np.where(p_rock > 0, p_rock, np.where(far, p_ball, 0.0))
         # while it spins the heel stays up: the foot turns on its ball only
-        hold = -np.arcsin(np.minimum(SPIN_HEEL_LIFT / (b.heel_offset + b.ball_offset), 1.0))
-        pitch_a = np.where((turned > 0) & (s["spin"][a] != 0), np.minimum(pitch_a, hold),
-                           pitch_a)
+        pitch_a = np.where((turned > 0) & (s["spin"][a] != 0),
+                           np.minimum(pitch_a, s["spin_pitch"][a]), pitch_a)
         offs_a = _foot_offsets(b, pitch_a, yaw_st)
         ankle_a = np.where((pitch_a >= 0)[:, None], heel - offs_a[:, 0],
                            s["ball_st"][a] - offs_a[:, 1])
