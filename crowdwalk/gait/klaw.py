@@ -430,11 +430,11 @@ class KlawEngine:
         # to spin on its ball
         flat = np.maximum.accumulate(pitch == 0.0, axis=1)
         early = _SPIN_GRID[None, :] <= 0.3
-        on_ball = ((pitch < 0.0) & early).any(axis=1, keepdims=True)
-        up &= (flat | on_ball) & ~early
+        never_flat = ~flat[:, -1]
+        on_ball = never_flat & ((pitch < 0.0) & early).any(axis=1)
+        up &= (flat | on_ball[:, None]) & ~early
         first = np.argmax(up, axis=1)
         hold = -np.arcsin(np.minimum(SPIN_HEEL_LIFT / (b.heel_offset + b.ball_offset), 1.0))
-        never_flat = ~flat[:, -1]
         limit = np.where(never_flat, np.minimum(hold, pitch[np.arange(m), first]), hold)
         return np.where(up.any(axis=1), _SPIN_GRID[first] * T, T), limit
 
