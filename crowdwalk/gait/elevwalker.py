@@ -47,15 +47,14 @@ from crowdwalk.body import (
     mirrored_axis,
 )
 from crowdwalk.errors import invalid
+from crowdwalk.gait import elevwalker_kernels as ek
 from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.joints import assemble_joints
 from crowdwalk.gait.posing_kernels import (
     as_rows,
-    pelvis_rotations,
     rows_finite,
-    shifted_stance_leg,
     upper_body,
 )
 
@@ -84,6 +83,11 @@ _ELBOWS = np.array([JOINT["l_elbow"], JOINT["r_elbow"]])
 def _vector(values, k: int) -> np.ndarray:
     """``values`` (scalar or (k,)) as a contiguous float (k,) array for the kernels."""
     return as_rows(values, (k,))
+
+
+def _rows(values, k: int, dtype) -> np.ndarray:
+    """``values`` (scalar or (k,)) as a contiguous (k,) array of ``dtype``."""
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(values, dtype=dtype), (k,)))
 
 
 @dataclass(frozen=True)
@@ -258,12 +262,6 @@ class WalkerPose:
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("ka,ka->k", a, b)
-
-
-def _frame(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sagittal forward unit vector and sagittal-plane normal (left), each (k, 3)."""
-    c, s, z = np.cos(heading), np.sin(heading), np.zeros_like(heading)
-    return np.stack([c, s, z], axis=-1), np.stack([-s, c, z], axis=-1)
 
 
 def sagittal_elevation(v: np.ndarray, heading: np.ndarray) -> np.ndarray:
@@ -444,43 +442,41 @@ def elevwalker_pose(
     """
     style = style or GaitStyle()
     k = len(body)
-    left = np.asarray(stance_left, dtype=bool)
-    side_st = np.where(left, 1.0, -1.0)  # +1: stance leg is the left one
+    left = _rows(stance_left, k, bool)
     st_row = np.where(left, 0, 1)
     sw_row = 1 - st_row
-    heading = np.asarray(heading, dtype=float)
-    phase = np.asarray(phase, dtype=float)
-    fwd, normal = _frame(heading)
+    heading = _vector(heading, k)
+    phase = _vector(phase, k)
     h = body.height
-    half_hips = 0.5 * body.hip_separation
-    sway = style.sway * h * np.sin(2.0 * np.pi * phase)
-    half_width = 0.5 * (style.step_width * h if attributes is None else attributes.stride_width)
-    list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
-    list_shape, rotation_shape = pelvis_shapes(style, phase)
-    rotation = 0.0 if attributes is None else (
-        -side_st * attributes.pelvic_rotation * rotation_shape)
-    if attributes is not None:
-        dip = _bounce_dip(body, attributes, phase)
-        stance_hip_offset = dip if stance_hip_offset is None else stance_hip_offset + dip
-    w_stance = side_st * (half_width - half_hips - sway)  # Eq. 8's W_st(t), (a - h)·n
-    w_swing = side_st * (half_hips - half_width - sway)
-
-    phi_st = np.asarray(stance_angles, dtype=float)
-    phi_sw = np.asarray(swing_angles, dtype=float)
+    phi_st = as_rows(stance_angles, (k, 4))
+    phi_sw = as_rows(swing_angles, (k, 4))
     toe_out = np.broadcast_to(np.asarray(toe_out, dtype=float), (k,))
+    list_shape, rotation_shape = pelvis_shapes(style, phase)
+    styled = attributes is not None
+    width = style.step_width * h if attributes is None else attributes.stride_width
+    list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
+    # compiled (elevwalker_kernels.stance_terms): the side, Eq. 8's W_st(t) = (a - h)·n and
+    # the swing width, the sway, the pelvis's list and rotation, KLAW's bounce dip added
+    # to the stance hip's offset, the stance leg moved by it (_shifted_stance_leg); the
+    # trigonometric terms numpy's
+    shifted = stance_hip_offset is not None
+    zeros = np.zeros(k)
+    side_st, normal, w_stance, w_swing, phi_st, lst, yaw, tilt_data = ek.stance_terms(
+        left, _vector(h, k), _vector(body.hip_separation, k), _vector(width, k),
+        float(style.sway), np.sin(2.0 * np.pi * phase), _vector(list_amplitude, k),
+        _vector(list_shape, k), zeros if list_scale is None else _vector(list_scale, k),
+        list_scale is not None, _vector(attributes.pelvic_rotation, k) if styled else zeros,
+        _vector(rotation_shape, k), styled,
+        _vector(attributes.bounciness, k) if styled else zeros, BOUNCE_DIP,
+        np.cos(4.0 * np.pi * (phase - BOUNCE_LOW)) if styled else zeros, heading,
+        np.cos(heading), np.sin(heading), phi_st, phi_sw, _vector(body.thigh, k),
+        _vector(body.shank, k), as_rows(stance_hip_offset, (k, 3)) if shifted
+        else np.zeros((k, 3)), shifted)  # fmt: skip
 
     # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
     #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
     pitch = np.arctan(np.tan(phi_st[:, 0]) * np.cos(foot.yaw - heading))
     r_foot, ankle, toe_angle = stance_foot_pose(body, foot, pitch)
-
-    if stance_hip_offset is not None:
-        phi_st = phi_st.copy()
-        offset = np.asarray(stance_hip_offset, dtype=float)
-        phi_st[:, 1], phi_st[:, 2] = _shifted_stance_leg(
-            body, phi_st[:, 1], phi_st[:, 2], heading, offset
-        )
-        w_stance = w_stance - _dot(offset, normal)
 
     # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
     tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
@@ -490,41 +486,29 @@ def elevwalker_pose(
                            warm.ankle_jacobian, style.tolerance, style.max_iterations)
     )  # fmt: skip
 
-    # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
-    lst = side_st * list_amplitude * list_shape
-    if list_scale is not None:
-        lst = lst * np.asarray(list_scale, dtype=float)
-    tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
+    # 3. Hip complex: pelvis from data tilt (exact under list), list and heading; root and
+    #    swing hip half the hip separation along its y axis (compiled: ek.pelvis_hips).
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
-    r_pelvis = pelvis_rotations(_vector(heading + rotation, k), _vector(lst, k), _vector(tilt, k))
-    y_pelvis = r_pelvis[:, :, 1]
-    root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
-    hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
+    r_pelvis, root, hip_sw = ek.pelvis_hips(yaw, lst, tilt, hip_st, side_st,
+                                            _vector(body.hip_separation, k))
     x_hip, ok_hip, jac_hip, r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = (
         solve_swing_hip(r_pelvis, hip_sw, body.thigh, body.shank, heading, phi_sw[:, 1],
                         phi_sw[:, 2], normal, -side_st, toe_out, w_swing, warm.hip,
                         warm.hip_jacobian, style.tolerance, style.max_iterations)
     )  # fmt: skip
 
-    # Optional swing-ankle goal, reached with two-link IK on the swing leg.
+    # Optional swing-ankle goal, reached with two-link IK on the swing leg (compiled:
+    # ek.swing_goal).
     goal = use = None
-    if (swing_offset is not None or swing_goal is not None
-            or (swing_target is not None and swing_blend is not None)):  # fmt: skip
-        goal = ankle_sw.copy()
-        use = np.zeros(k, dtype=bool)
-        if swing_offset is not None:
-            offset = np.asarray(swing_offset, dtype=float)
-            goal += offset
-            use |= np.any(offset != 0.0, axis=1)
-        if swing_target is not None and swing_blend is not None:
-            blend = np.clip(np.asarray(swing_blend, dtype=float), 0.0, 1.0)
-            goal += blend[:, None] * (np.asarray(swing_target, dtype=float) - goal)
-            use |= blend > 0
-        if swing_goal is not None:
-            absolute = np.asarray(swing_goal, dtype=float)
-            pinned = np.isfinite(absolute).all(axis=1)
-            goal = np.where(pinned[:, None], absolute, goal)
-            use |= pinned
+    blended = swing_target is not None and swing_blend is not None
+    if swing_offset is not None or swing_goal is not None or blended:
+        none3 = np.zeros((k, 3))
+        goal, use = ek.swing_goal(
+            ankle_sw, none3 if swing_offset is None else as_rows(swing_offset, (k, 3)),
+            swing_offset is not None, as_rows(swing_target, (k, 3)) if blended else none3,
+            _vector(swing_blend, k) if blended else zeros, blended,
+            none3 if swing_goal is None else as_rows(swing_goal, (k, 3)),
+            swing_goal is not None)  # fmt: skip
 
     # Swing IK, swing talocrural (analytic for the data foot elevation; the swing subtalar
     # stays neutral), push-off toes flat on the ground (double support), every joint's
@@ -582,15 +566,6 @@ THIGH_MID, THIGH_HALF = np.deg2rad(3.97), np.deg2rad(21.38)
 BOUNCE_DIP, BOUNCE_LOW = 0.006, 0.05  # [body heights], stance phase of the lowest hip [1]
 
 
-def _bounce_dip(body: Body, attributes, phase: np.ndarray) -> np.ndarray:
-    """Stance-hip displacement (k, 3) [m]: down by (bounciness − 1) BOUNCE_DIP H at the
-    middle of double support, zero at mid stance (period: one step)."""
-    shape = 0.5 * (1.0 + np.cos(4.0 * np.pi * (phase - BOUNCE_LOW)))
-    out = np.zeros((phase.size, 3))
-    out[:, 2] = -(attributes.bounciness - 1.0) * BOUNCE_DIP * body.height * shape
-    return out
-
-
 def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
                        attributes, style: GaitStyle | None = None) -> None:
     """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
@@ -621,35 +596,6 @@ def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thi
     upper_body(local, np.ascontiguousarray(r_pelvis), _vector(heading + shoulder, k),
                _vector(sway, k), _vector(tilt, k), _vector(heading, k), arm_out, swing, elbow,
                JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
-
-
-def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
-    """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
-    in the sagittal plane: two-link IK from the ankle, knee forward."""
-    k = len(body)
-    if k:  # _shifted_stance_leg_numpy, compiled (its operations; glibc's hypot/arccos)
-        f = as_rows
-        return shifted_stance_leg(f(body.thigh, (k,)), f(body.shank, (k,)),
-                                  f(phi_shank, (k,)), f(phi_thigh, (k,)), f(heading, (k,)),
-                                  f(offset, (k, 3)))
-    return _shifted_stance_leg_numpy(body.thigh, body.shank, phi_shank, phi_thigh, heading,
-                                     offset)
-
-
-def _shifted_stance_leg_numpy(l1, l2, phi_shank, phi_thigh, heading, offset):
-    """:func:`_shifted_stance_leg` in numpy for thigh and shank lengths l1, l2 (k,) [m]
-    (the reference of ``posing_kernels.shifted_stance_leg``)."""
-    ch, sh = np.cos(heading), np.sin(heading)
-    # Data hip relative to the ankle in sagittal coordinates (forward, up).
-    fwd = -l2 * np.sin(phi_shank) - l1 * np.sin(phi_thigh)
-    up = l2 * np.cos(phi_shank) + l1 * np.cos(phi_thigh)
-    fwd = fwd + offset[:, 0] * ch + offset[:, 1] * sh
-    up = up + offset[:, 2]
-    dist = np.clip(np.hypot(fwd, up), np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
-    line = np.arctan2(-fwd, up)  # elevation of the hip→ankle line
-    at_hip = np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1.0, 1.0))
-    at_ankle = np.arccos(np.clip((l2**2 + dist**2 - l1**2) / (2 * l2 * dist), -1.0, 1.0))
-    return line - at_ankle, line + at_hip
 
 
 # --- measurements on poses ------------------------------------------------------------
