@@ -55,7 +55,6 @@ from crowdwalk.gait.joints import assemble_joints
 from crowdwalk.gait.posing_kernels import (
     as_rows,
     rows_finite,
-    upper_body,
 )
 
 __all__ = [
@@ -523,9 +522,7 @@ def elevwalker_pose(
     )  # fmt: skip
     rows = np.arange(k)
     if attributes is not None:
-        thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
-        thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
-        _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
+        _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
                            attributes, style)
 
     positions, rotations = forward_kinematics(body, root, r_pelvis, local)
@@ -566,36 +563,33 @@ THIGH_MID, THIGH_HALF = np.deg2rad(3.97), np.deg2rad(21.38)
 BOUNCE_DIP, BOUNCE_LOW = 0.006, 0.05  # [body heights], stance phase of the lowest hip [1]
 
 
-def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
-                       attributes, style: GaitStyle | None = None) -> None:
+def _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
+                       attributes, style: GaitStyle) -> None:
     """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
     KLAW attributes: trunk tilt and sway over the stance leg, shoulders against the
     pelvis, arms with the opposite thigh (abducted by arm_out), elbows between their
-    least (arm back) and greatest (arm forward) flexion; the head stays upright."""
-    a = attributes
-    tilt = a.torso_tilt
-    if style is not None and style.trunk_from_data:
+    least (arm back) and greatest (arm forward) flexion; the head stays upright.
+
+    trunk = Rz(heading + shoulder) Rx(sway) Ry(tilt); vl5 = r_pelvisᵀ trunk; skullbase =
+    trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
+    signal); elbows Ry(-elbow): compiled (``elevwalker_kernels.styled_upper_body``), the
+    trunk's measured shapes and the sines numpy's."""
+    a, k = attributes, local.shape[0]
+    from_data = bool(style.trunk_from_data)
+    if from_data:
         from crowdwalk.gait.datasets import trunk_motion
 
         motion = trunk_motion()  # + stance side forward: negative at heel strike
-        shoulder = -side_st * a.shoulder_rotation * motion.rotation_shape(phase)
-        tilt = tilt + motion.tilt_wave(phase)
+        shape, wave = motion.rotation_shape(phase), motion.tilt_wave(phase)
     else:
-        shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
-    sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
-    k = local.shape[0]
-    arm_out, swing, elbow = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
-    for s, (thigh, sign) in enumerate(((thigh_right, 1.0), (thigh_left, -1.0))):  # l, r
-        signal = np.clip((thigh - THIGH_MID) / THIGH_HALF, -1.0, 1.0)
-        arm_out[:, s] = sign * a.arm_out
-        swing[:, s] = -a.arm_swing * signal
-        elbow[:, s] = -(a.elbow_min + (a.elbow_max - a.elbow_min) * 0.5 * (signal + 1.0))
-    # trunk = Rz(heading + shoulder) Rx(sway) Ry(tilt); vl5 = r_pelvisᵀ trunk; skullbase =
-    # trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
-    # signal); elbows Ry(-elbow): compiled, numpy's values (posing_kernels)
-    upper_body(local, np.ascontiguousarray(r_pelvis), _vector(heading + shoulder, k),
-               _vector(sway, k), _vector(tilt, k), _vector(heading, k), arm_out, swing, elbow,
-               JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
+        shape, wave = np.cos(2.0 * np.pi * phase), np.zeros(k)
+    f = _vector
+    ek.styled_upper_body(
+        local, np.ascontiguousarray(r_pelvis), f(heading, k), left, side_st, phi_st, phi_sw,
+        from_data, f(shape, k), f(wave, k), np.sin(2.0 * np.pi * phase),
+        f(a.shoulder_rotation, k), f(a.torso_tilt, k), f(a.torso_sway, k), f(a.arm_out, k),
+        f(a.arm_swing, k), f(a.elbow_min, k), f(a.elbow_max, k), float(THIGH_MID),
+        float(THIGH_HALF), JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
 
 
 # --- measurements on poses ------------------------------------------------------------

@@ -1,5 +1,6 @@
 """Compiled per-agent arithmetic of :func:`crowdwalk.gait.elevwalker.elevwalker_pose`
-between its solves: the stance side's terms, the pelvis and hips, the swing-ankle goal.
+between its solves: the stance side's terms, the pelvis and hips, the swing-ankle goal,
+the KLAW upper body's terms.
 
 ``elevwalker_pose`` combined its (k,) columns in ~100 small numpy operations, a fixed
 ~0.25 ms per call (1,269 calls, 214,410 rows in the replay of the 1,000-walker stadium;
@@ -17,9 +18,9 @@ import numba as nb
 import numpy as np
 
 from crowdwalk.gait.animator_kernels import _clip
-from crowdwalk.gait.posing_kernels import pelvis_rotations, shifted_stance_leg
+from crowdwalk.gait.posing_kernels import pelvis_rotations, shifted_stance_leg, upper_body
 
-__all__ = ["pelvis_hips", "stance_terms", "swing_goal"]
+__all__ = ["pelvis_hips", "stance_terms", "styled_upper_body", "swing_goal"]
 
 _jit = nb.njit(cache=True, nogil=True)
 
@@ -134,3 +135,37 @@ def swing_goal(ankle_sw, offset, has_offset, target, blend, has_target, absolute
                     goal[r, a] = absolute[r, a]
                 use[r] = True
     return goal, use
+
+
+@_jit
+def styled_upper_body(local, r_pelvis, heading, left, side, phi_st, phi_sw, from_data,
+                      shoulder_shape, tilt_wave, sin_phase, shoulder_rotation, torso_tilt,
+                      torso_sway, arm_out, arm_swing, elbow_min, elbow_max, thigh_mid,
+                      thigh_half, vl5, skullbase, shoulders, elbows
+                      ):  # pragma: no cover - compiled
+    """``elevwalker._styled_upper_body``'s terms of k walkers, then
+    ``posing_kernels.upper_body`` into ``local`` (k, J, 3, 3): the shoulders' rotation
+    −side · rotation · shape (``from_data``: the trunk's measured shape) or side ·
+    rotation · cos 2πt (``shoulder_shape`` the one or the other, (k,)), the tilt plus
+    ``tilt_wave`` (k,) [rad] where ``from_data``, the sway −side · sway · sin 2πt, each arm
+    with the opposite thigh's elevation (``phi_st``, ``phi_sw`` (k, 4) [rad], ``left``
+    (k,) bool stance side) normalised by ``thigh_mid``, ``thigh_half`` [rad] and clipped
+    to [−1, 1]. Attributes (k,) [rad]; joint indices into J. Its numpy code's values."""
+    k = local.shape[0]
+    yaw, sway, tilt = np.empty(k), np.empty(k), np.empty(k)
+    out, swing, elbow = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
+    for r in range(k):
+        s = -side[r] if from_data else side[r]
+        yaw[r] = heading[r] + s * shoulder_rotation[r] * shoulder_shape[r]
+        tilt[r] = torso_tilt[r] + tilt_wave[r] if from_data else torso_tilt[r]
+        sway[r] = -side[r] * torso_sway[r] * sin_phase[r]
+        thigh_left = phi_st[r, 2] if left[r] else phi_sw[r, 2]
+        thigh_right = phi_sw[r, 2] if left[r] else phi_st[r, 2]
+        for a in range(2):  # left arm with the right thigh, right arm with the left
+            thigh, sign = (thigh_right, 1.0) if a == 0 else (thigh_left, -1.0)
+            signal = _clip((thigh - thigh_mid) / thigh_half, -1.0, 1.0)
+            out[r, a] = sign * arm_out[r]
+            swing[r, a] = -arm_swing[r] * signal
+            elbow[r, a] = -(elbow_min[r] + (elbow_max[r] - elbow_min[r]) * 0.5 * (signal + 1.0))
+    upper_body(local, r_pelvis, yaw, sway, tilt, heading, out, swing, elbow, vl5, skullbase,
+               shoulders, elbows)

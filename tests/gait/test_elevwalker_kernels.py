@@ -3,12 +3,23 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
+from crowdwalk.body import JOINT, JOINT_NAMES
 from crowdwalk.gait import elevwalker_kernels as ek
 from crowdwalk.gait import posing_kernels as pk
-from crowdwalk.gait.elevwalker import BOUNCE_DIP, BOUNCE_LOW
+from crowdwalk.gait.datasets import trunk_motion
+from crowdwalk.gait.elevwalker import (
+    BOUNCE_DIP,
+    BOUNCE_LOW,
+    THIGH_HALF,
+    THIGH_MID,
+    GaitStyle,
+    _styled_upper_body,
+)
 
 RNG = np.random.default_rng(19)
 
@@ -155,3 +166,52 @@ def test_swing_goal_is_the_numpy_code(given):
                         absolute if has_absolute else none3, has_absolute)  # fmt: skip
     for g, w in zip(got, want, strict=True):
         _same(g, w)
+
+
+def _styled_upper_body_numpy(local, r_pelvis, heading, phase, side_st, thigh_left,
+                             thigh_right, a, from_data):
+    """elevwalker._styled_upper_body before pose19 (its terms in numpy, then pose16's
+    ``posing_kernels.upper_body``)."""
+    tilt = a.torso_tilt
+    if from_data:
+        motion = trunk_motion()
+        shoulder = -side_st * a.shoulder_rotation * motion.rotation_shape(phase)
+        tilt = tilt + motion.tilt_wave(phase)
+    else:
+        shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
+    sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
+    k = local.shape[0]
+    arm_out, swing, elbow = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
+    for s, (thigh, sign) in enumerate(((thigh_right, 1.0), (thigh_left, -1.0))):
+        signal = np.clip((thigh - THIGH_MID) / THIGH_HALF, -1.0, 1.0)
+        arm_out[:, s] = sign * a.arm_out
+        swing[:, s] = -a.arm_swing * signal
+        elbow[:, s] = -(a.elbow_min + (a.elbow_max - a.elbow_min) * 0.5 * (signal + 1.0))
+    pk.upper_body(local, np.ascontiguousarray(r_pelvis), heading + shoulder, sway, tilt,
+                  heading, arm_out, swing, elbow, JOINT["vl5"], JOINT["skullbase"],
+                  np.array([JOINT["l_shoulder"], JOINT["r_shoulder"]]),
+                  np.array([JOINT["l_elbow"], JOINT["r_elbow"]]))
+
+
+@pytest.mark.parametrize("from_data", [True, False])
+def test_styled_upper_body_is_the_numpy_code(from_data):
+    k, nj = 3000, len(JOINT_NAMES)
+    attributes = SimpleNamespace(**{name: RNG.uniform(lo, hi, k) for name, lo, hi in (
+        ("shoulder_rotation", 0.0, 0.4), ("torso_tilt", -0.2, 0.3), ("torso_sway", 0.0, 0.1),
+        ("arm_out", 0.0, 0.4), ("arm_swing", 0.0, 0.8), ("elbow_min", 0.0, 0.5),
+        ("elbow_max", 0.5, 1.5))})  # fmt: skip
+    local = RNG.normal(size=(k, nj, 3, 3))
+    want = local.copy()
+    r_pelvis = pk.pelvis_rotations(*(RNG.uniform(-3, 3, k) for _ in range(3)))
+    heading, phase = RNG.uniform(-4, 4, k), RNG.uniform(0.0, 0.5, k)
+    left = RNG.random(k) < 0.5
+    side = np.where(left, 1.0, -1.0)
+    phi_st, phi_sw = RNG.uniform(-0.8, 0.8, (k, 4)), RNG.uniform(-0.8, 0.8, (k, 4))
+    thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
+    thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
+    _styled_upper_body_numpy(want, r_pelvis, heading, phase, side, thigh_left, thigh_right,
+                             attributes, from_data)  # fmt: skip
+    _styled_upper_body(local, r_pelvis, heading, phase, left, side, phi_st, phi_sw, attributes,
+                       GaitStyle(trunk_from_data=from_data))
+    _same(local, want)
+    assert (np.abs((thigh_left - THIGH_MID) / THIGH_HALF) > 1).any()  # clipped arms too
