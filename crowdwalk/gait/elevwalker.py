@@ -32,7 +32,7 @@ Conventions: world x east, y north, z up; ψ from +x; angles [rad]; lengths [m].
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -60,6 +60,7 @@ from crowdwalk.gait.posing_kernels import (
 __all__ = [
     "GaitStyle",
     "StanceFoot",
+    "StanceHalf",
     "WarmStart",
     "WalkerPose",
     "elevwalker_pose",
@@ -228,6 +229,44 @@ class WarmStart:
 
 
 @dataclass(frozen=True, eq=False)
+class StanceHalf:
+    """What :func:`elevwalker_pose` solves for k agents before the swing leg: the stance
+    leg, pelvis and root, which the swing leg's toe-out and ankle goal do not change.
+
+    Attributes
+    ----------
+    side : (k,) +1 where the left leg is the stance leg, else −1.
+    normal : (k, 3) sagittal-plane normal (left).
+    w_swing : (k,) required swing width [m].
+    phi_st : (k, 4) stance elevations followed [rad] (shank and thigh moved by the
+        stance hip's offset).
+    r_pelvis : (k, 3, 3); root, hip_sw : (k, 3) [m].
+    x_ankle, ok_ankle, jac_ankle : the stance ankle solve, (k, 2) [rad], (k,), (k, 2, 2).
+    knee_rel, ok_knee_st : (k,) stance knee [rad] and whether it was solvable.
+    r_thigh_st : (k, 3, 3); toe_angle : (k,) stance toe angle [rad].
+    """
+
+    side: np.ndarray
+    normal: np.ndarray
+    w_swing: np.ndarray
+    phi_st: np.ndarray
+    r_pelvis: np.ndarray
+    root: np.ndarray
+    hip_sw: np.ndarray
+    x_ankle: np.ndarray
+    ok_ankle: np.ndarray
+    jac_ankle: np.ndarray
+    knee_rel: np.ndarray
+    ok_knee_st: np.ndarray
+    r_thigh_st: np.ndarray
+    toe_angle: np.ndarray
+
+    def take(self, rows: np.ndarray) -> StanceHalf:
+        """The agents at ``rows`` (m,)."""
+        return StanceHalf(**{f.name: getattr(self, f.name)[rows] for f in fields(self)})
+
+
+@dataclass(frozen=True, eq=False)
 class WalkerPose:
     """ElevWalker output for k agents.
 
@@ -243,6 +282,8 @@ class WalkerPose:
     warm : WarmStart for the next frame.
     solves : (k, 5) bool, which solve succeeded: stance ankle GN, swing hip GN, stance
         knee, swing knee, swing talocrural (analytic).
+    stance : StanceHalf, the stance half of the pose (for a pose of the same agents at the
+        same phases that changes only the swing's inputs).
     """
 
     root_position: np.ndarray
@@ -254,6 +295,7 @@ class WalkerPose:
     converged: np.ndarray
     warm: WarmStart
     solves: np.ndarray | None = None
+    stance: StanceHalf | None = None
 
 
 # --- geometry helpers -------------------------------------------------------------------
@@ -390,6 +432,7 @@ def elevwalker_pose(
     swing_toe_angle: np.ndarray | None = None,
     attributes=None,
     list_scale: np.ndarray | None = None,
+    stance: StanceHalf | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -434,6 +477,10 @@ def elevwalker_pose(
         The k walkers' KLAW attributes (:func:`styled`); None: ``style`` alone.
     list_scale : (k,), optional
         Factor [1] on the pelvic list (the Animator starts a walk from a level pelvis).
+    stance : StanceHalf, optional
+        The stance half of a pose of these agents with the same arguments but the swing's
+        (``toe_out``, ``swing_offset``, ``swing_target``, ``swing_blend``, ``swing_goal``,
+        ``swing_toe_angle``): taken instead of solved again (the same values).
 
     Returns
     -------
@@ -446,10 +493,80 @@ def elevwalker_pose(
     sw_row = 1 - st_row
     heading = _vector(heading, k)
     phase = _vector(phase, k)
-    h = body.height
     phi_st = as_rows(stance_angles, (k, 4))
     phi_sw = as_rows(swing_angles, (k, 4))
     toe_out = np.broadcast_to(np.asarray(toe_out, dtype=float), (k,))
+    tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
+    if stance is None:
+        stance = _stance_half(body, left, phase, heading, phi_st, phi_sw, foot, warm, style,
+                              stance_hip_offset, attributes, list_scale, tc_axis, sub_axis)
+    # (the stance half: steps 1-3 below but the swing hip, _stance_half)
+    side_st, normal, phi_st, r_pelvis = stance.side, stance.normal, stance.phi_st, stance.r_pelvis
+    hip_sw = stance.hip_sw
+    # 3. (cont.) The swing hip's 3 DOFs: thigh elevation, swing width and toe-out (GN).
+    x_hip, ok_hip, jac_hip, r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = (
+        solve_swing_hip(r_pelvis, hip_sw, body.thigh, body.shank, heading, phi_sw[:, 1],
+                        phi_sw[:, 2], normal, -side_st, toe_out, stance.w_swing, warm.hip,
+                        warm.hip_jacobian, style.tolerance, style.max_iterations)
+    )  # fmt: skip
+    # Optional swing-ankle goal, reached with two-link IK on the swing leg (compiled:
+    # ek.swing_goal).
+    goal = use = None
+    blended = swing_target is not None and swing_blend is not None
+    if swing_offset is not None or swing_goal is not None or blended:
+        none3 = np.zeros((k, 3))
+        goal, use = ek.swing_goal(
+            ankle_sw, none3 if swing_offset is None else as_rows(swing_offset, (k, 3)),
+            swing_offset is not None, as_rows(swing_target, (k, 3)) if blended else none3,
+            _vector(swing_blend, k) if blended else np.zeros(k), blended,
+            none3 if swing_goal is None else as_rows(swing_goal, (k, 3)),
+            swing_goal is not None)  # fmt: skip
+
+    # Swing IK, swing talocrural (analytic for the data foot elevation; the swing subtalar
+    # stays neutral), push-off toes flat on the ground (double support), every joint's
+    # local rotation, upper body (§8: trunk upright along ψ, arms with the opposite
+    # thigh) — compiled, per agent.
+    toe_given = np.nan if swing_toe_angle is None else swing_toe_angle
+    local, knee_sw, ok_foot_sw = assemble_joints(
+        left, phase, heading, stance_fraction, r_pelvis, stance.r_thigh_st, stance.knee_rel,
+        tc_axis, sub_axis, stance.x_ankle, stance.toe_angle, hip_sw, r_thigh_sw, knee_sw,
+        r_shank_sw, _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
+        style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
+    )  # fmt: skip
+    rows = np.arange(k)
+    if attributes is not None:
+        _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
+                           attributes, style)
+
+    positions, rotations = forward_kinematics(body, stance.root, r_pelvis, local)
+    swing_phase = phase + 0.5
+    contact = np.empty((k, 2), dtype=bool)
+    contact[rows, st_row] = True
+    contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
+    converged = stance.ok_ankle & ok_hip & stance.ok_knee_st & ok_knee_sw & ok_foot_sw
+    converged &= rows_finite(positions, local)  # every joint position and rotation finite
+    return WalkerPose(
+        root_position=stance.root,
+        root_rotation=r_pelvis,
+        local=local,
+        positions=positions,
+        rotations=rotations,
+        contact=contact,
+        converged=converged,
+        warm=WarmStart(stance.x_ankle, x_hip, stance.jac_ankle, jac_hip),
+        solves=np.stack([stance.ok_ankle, ok_hip, stance.ok_knee_st, ok_knee_sw, ok_foot_sw],
+                        axis=1),
+        stance=stance,
+    )
+
+
+def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
+                 warm: WarmStart, style: GaitStyle, stance_hip_offset, attributes, list_scale,
+                 tc_axis, sub_axis) -> StanceHalf:
+    """:func:`elevwalker_pose`'s stance leg, pelvis and root (steps 1–3 without the swing
+    hip): arrays (k,) or (k, 4) as it makes them; the stance axes (k, 3)."""
+    k = len(body)
+    h = body.height
     list_shape, rotation_shape = pelvis_shapes(style, phase)
     styled = attributes is not None
     width = style.step_width * h if attributes is None else attributes.stride_width
@@ -478,7 +595,6 @@ def elevwalker_pose(
     r_foot, ankle, toe_angle = stance_foot_pose(body, foot, pitch)
 
     # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
-    tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
     x_ankle, ok_ankle, jac_ankle, r_shank_st, knee_rel, ok_knee_st, r_thigh_st, hip_st = (
         solve_stance_ankle(r_foot, ankle, tc_axis, sub_axis, body.shank, body.thigh, heading,
                            phi_st[:, 1], phi_st[:, 2], normal, w_stance, warm.ankle,
@@ -490,59 +606,8 @@ def elevwalker_pose(
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
     r_pelvis, root, hip_sw = ek.pelvis_hips(yaw, lst, tilt, hip_st, side_st,
                                             _vector(body.hip_separation, k))
-    x_hip, ok_hip, jac_hip, r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = (
-        solve_swing_hip(r_pelvis, hip_sw, body.thigh, body.shank, heading, phi_sw[:, 1],
-                        phi_sw[:, 2], normal, -side_st, toe_out, w_swing, warm.hip,
-                        warm.hip_jacobian, style.tolerance, style.max_iterations)
-    )  # fmt: skip
-
-    # Optional swing-ankle goal, reached with two-link IK on the swing leg (compiled:
-    # ek.swing_goal).
-    goal = use = None
-    blended = swing_target is not None and swing_blend is not None
-    if swing_offset is not None or swing_goal is not None or blended:
-        none3 = np.zeros((k, 3))
-        goal, use = ek.swing_goal(
-            ankle_sw, none3 if swing_offset is None else as_rows(swing_offset, (k, 3)),
-            swing_offset is not None, as_rows(swing_target, (k, 3)) if blended else none3,
-            _vector(swing_blend, k) if blended else zeros, blended,
-            none3 if swing_goal is None else as_rows(swing_goal, (k, 3)),
-            swing_goal is not None)  # fmt: skip
-
-    # Swing IK, swing talocrural (analytic for the data foot elevation; the swing subtalar
-    # stays neutral), push-off toes flat on the ground (double support), every joint's
-    # local rotation, upper body (§8: trunk upright along ψ, arms with the opposite
-    # thigh) — compiled, per agent.
-    toe_given = np.nan if swing_toe_angle is None else swing_toe_angle
-    local, knee_sw, ok_foot_sw = assemble_joints(
-        left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_rel, tc_axis,
-        sub_axis, x_ankle, toe_angle, hip_sw, r_thigh_sw, knee_sw, r_shank_sw,
-        _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
-        style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
-    )  # fmt: skip
-    rows = np.arange(k)
-    if attributes is not None:
-        _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
-                           attributes, style)
-
-    positions, rotations = forward_kinematics(body, root, r_pelvis, local)
-    swing_phase = phase + 0.5
-    contact = np.empty((k, 2), dtype=bool)
-    contact[rows, st_row] = True
-    contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
-    converged = ok_ankle & ok_hip & ok_knee_st & ok_knee_sw & ok_foot_sw
-    converged &= rows_finite(positions, local)  # every joint position and rotation finite
-    return WalkerPose(
-        root_position=root,
-        root_rotation=r_pelvis,
-        local=local,
-        positions=positions,
-        rotations=rotations,
-        contact=contact,
-        converged=converged,
-        warm=WarmStart(x_ankle, x_hip, jac_ankle, jac_hip),
-        solves=np.stack([ok_ankle, ok_hip, ok_knee_st, ok_knee_sw, ok_foot_sw], axis=1),
-    )
+    return StanceHalf(side_st, normal, w_swing, phi_st, r_pelvis, root, hip_sw, x_ankle,
+                      ok_ankle, jac_ankle, knee_rel, ok_knee_st, r_thigh_st, toe_angle)
 
 
 def pelvis_shapes(style: GaitStyle, phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
