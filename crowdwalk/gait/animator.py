@@ -74,7 +74,13 @@ from crowdwalk.errors import invalid
 from crowdwalk.gait import animator_kernels as ak
 from crowdwalk.gait.datasets import sample
 from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
-from crowdwalk.gait.elevwalker import GaitStyle, WarmStart, elevwalker_pose, pelvis_shapes
+from crowdwalk.gait.elevwalker import (
+    GaitStyle,
+    StanceHalf,
+    WarmStart,
+    elevwalker_pose,
+    pelvis_shapes,
+)
 from crowdwalk.gait.engine import GroundHeight, PoseFrame
 from crowdwalk.gait.foot import (
     SPIN_HEEL_LIFT,
@@ -960,7 +966,8 @@ class Animator:
                 break
             toe_fix[fix] += more[fix]
             self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
-                                                toe_fix=toe_fix[fix]))
+                                                toe_fix=toe_fix[fix],
+                                                stance=walked.stance.take(fix)))
             self.stats["yaw_fixes"] += fix.size
         pin_fix = None
         if self.style.pin_ball:
@@ -1139,11 +1146,14 @@ class Animator:
 
     def _walk(self, a: np.ndarray, phase: np.ndarray, corrected: bool,
               lift: np.ndarray | None = None, toe_fix: np.ndarray | None = None,
-              pin_fix: np.ndarray | None = None):  # fmt: skip
+              pin_fix: np.ndarray | None = None, stance: StanceHalf | None = None):  # fmt: skip
         """ElevWalker for agents a (k,) at stance phases (k,), with the step corrections
         (and an extra vertical ``lift`` (k,) [m] of the swing ankle goal, a correction
         ``toe_fix`` (k,) [rad] of the swing foot's toe-out, a correction ``pin_fix`` (k, 3)
-        [m] of the pinned push-off ankle's goal)."""
+        [m] of the pinned push-off ankle's goal). ``stance``: the stance half of a walk of
+        the same agents at the same phases within this frame (the warm starts are stored
+        after the frame's last walk, and the lift, toe and pin fixes change only the
+        swing's inputs), taken instead of solved again: the same values."""
         body = self.body.take(a)
         st, sw = self._legs(a, phase)  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
@@ -1210,7 +1220,7 @@ class Animator:
             swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
             swing_toe_angle=toes,
             attributes=None if self.attributes is None else self.attributes.take(a),
-            list_scale=list_scale,
+            list_scale=list_scale, stance=stance,
         )  # fmt: skip
 
     def _trailing_root(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
@@ -1320,7 +1330,8 @@ class Animator:
             rows = pinned[off]
             fix[rows] -= err[off]
             self._merge(walked, rows, self._walk(a[rows], phase[rows], corrected=True,
-                                                 toe_fix=toe_fix[rows], pin_fix=fix[rows]))
+                                                 toe_fix=toe_fix[rows], pin_fix=fix[rows],
+                                                 stance=walked.stance.take(rows)))
             self.stats["pin_fixes"] += rows.size
         return fix
 
@@ -1391,7 +1402,8 @@ class Animator:
             lift[sink] += depth[sink] + _LIFT_MARGIN
             again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink],
                                toe_fix=None if toe_fix is None else toe_fix[sink],
-                               pin_fix=None if pin_fix is None else pin_fix[sink])
+                               pin_fix=None if pin_fix is None else pin_fix[sink],
+                               stance=walked.stance.take(sink))
             self._merge(walked, sink, again)
             depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]

@@ -32,7 +32,7 @@ Conventions: world x east, y north, z up; ψ from +x; angles [rad]; lengths [m].
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -47,21 +47,20 @@ from crowdwalk.body import (
     mirrored_axis,
 )
 from crowdwalk.errors import invalid
+from crowdwalk.gait import elevwalker_kernels as ek
 from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
 from crowdwalk.gait.joints import assemble_joints
 from crowdwalk.gait.posing_kernels import (
     as_rows,
-    pelvis_rotations,
     rows_finite,
-    shifted_stance_leg,
-    upper_body,
 )
 
 __all__ = [
     "GaitStyle",
     "StanceFoot",
+    "StanceHalf",
     "WarmStart",
     "WalkerPose",
     "elevwalker_pose",
@@ -84,6 +83,11 @@ _ELBOWS = np.array([JOINT["l_elbow"], JOINT["r_elbow"]])
 def _vector(values, k: int) -> np.ndarray:
     """``values`` (scalar or (k,)) as a contiguous float (k,) array for the kernels."""
     return as_rows(values, (k,))
+
+
+def _rows(values, k: int, dtype) -> np.ndarray:
+    """``values`` (scalar or (k,)) as a contiguous (k,) array of ``dtype``."""
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(values, dtype=dtype), (k,)))
 
 
 @dataclass(frozen=True)
@@ -225,6 +229,44 @@ class WarmStart:
 
 
 @dataclass(frozen=True, eq=False)
+class StanceHalf:
+    """What :func:`elevwalker_pose` solves for k agents before the swing leg: the stance
+    leg, pelvis and root, which the swing leg's toe-out and ankle goal do not change.
+
+    Attributes
+    ----------
+    side : (k,) +1 where the left leg is the stance leg, else −1.
+    normal : (k, 3) sagittal-plane normal (left).
+    w_swing : (k,) required swing width [m].
+    phi_st : (k, 4) stance elevations followed [rad] (shank and thigh moved by the
+        stance hip's offset).
+    r_pelvis : (k, 3, 3); root, hip_sw : (k, 3) [m].
+    x_ankle, ok_ankle, jac_ankle : the stance ankle solve, (k, 2) [rad], (k,), (k, 2, 2).
+    knee_rel, ok_knee_st : (k,) stance knee [rad] and whether it was solvable.
+    r_thigh_st : (k, 3, 3); toe_angle : (k,) stance toe angle [rad].
+    """
+
+    side: np.ndarray
+    normal: np.ndarray
+    w_swing: np.ndarray
+    phi_st: np.ndarray
+    r_pelvis: np.ndarray
+    root: np.ndarray
+    hip_sw: np.ndarray
+    x_ankle: np.ndarray
+    ok_ankle: np.ndarray
+    jac_ankle: np.ndarray
+    knee_rel: np.ndarray
+    ok_knee_st: np.ndarray
+    r_thigh_st: np.ndarray
+    toe_angle: np.ndarray
+
+    def take(self, rows: np.ndarray) -> StanceHalf:
+        """The agents at ``rows`` (m,)."""
+        return StanceHalf(**{f.name: getattr(self, f.name)[rows] for f in fields(self)})
+
+
+@dataclass(frozen=True, eq=False)
 class WalkerPose:
     """ElevWalker output for k agents.
 
@@ -240,6 +282,8 @@ class WalkerPose:
     warm : WarmStart for the next frame.
     solves : (k, 5) bool, which solve succeeded: stance ankle GN, swing hip GN, stance
         knee, swing knee, swing talocrural (analytic).
+    stance : StanceHalf, the stance half of the pose (for a pose of the same agents at the
+        same phases that changes only the swing's inputs).
     """
 
     root_position: np.ndarray
@@ -251,6 +295,7 @@ class WalkerPose:
     converged: np.ndarray
     warm: WarmStart
     solves: np.ndarray | None = None
+    stance: StanceHalf | None = None
 
 
 # --- geometry helpers -------------------------------------------------------------------
@@ -258,12 +303,6 @@ class WalkerPose:
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("ka,ka->k", a, b)
-
-
-def _frame(heading: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sagittal forward unit vector and sagittal-plane normal (left), each (k, 3)."""
-    c, s, z = np.cos(heading), np.sin(heading), np.zeros_like(heading)
-    return np.stack([c, s, z], axis=-1), np.stack([-s, c, z], axis=-1)
 
 
 def sagittal_elevation(v: np.ndarray, heading: np.ndarray) -> np.ndarray:
@@ -393,6 +432,7 @@ def elevwalker_pose(
     swing_toe_angle: np.ndarray | None = None,
     attributes=None,
     list_scale: np.ndarray | None = None,
+    stance: StanceHalf | None = None,
 ) -> WalkerPose:
     """Full-body poses of k walkers for one frame (§4, §8).
 
@@ -437,6 +477,10 @@ def elevwalker_pose(
         The k walkers' KLAW attributes (:func:`styled`); None: ``style`` alone.
     list_scale : (k,), optional
         Factor [1] on the pelvic list (the Animator starts a walk from a level pelvis).
+    stance : StanceHalf, optional
+        The stance half of a pose of these agents with the same arguments but the swing's
+        (``toe_out``, ``swing_offset``, ``swing_target``, ``swing_blend``, ``swing_goal``,
+        ``swing_toe_angle``): taken instead of solved again (the same values).
 
     Returns
     -------
@@ -444,87 +488,39 @@ def elevwalker_pose(
     """
     style = style or GaitStyle()
     k = len(body)
-    left = np.asarray(stance_left, dtype=bool)
-    side_st = np.where(left, 1.0, -1.0)  # +1: stance leg is the left one
+    left = _rows(stance_left, k, bool)
     st_row = np.where(left, 0, 1)
     sw_row = 1 - st_row
-    heading = np.asarray(heading, dtype=float)
-    phase = np.asarray(phase, dtype=float)
-    fwd, normal = _frame(heading)
-    h = body.height
-    half_hips = 0.5 * body.hip_separation
-    sway = style.sway * h * np.sin(2.0 * np.pi * phase)
-    half_width = 0.5 * (style.step_width * h if attributes is None else attributes.stride_width)
-    list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
-    list_shape, rotation_shape = pelvis_shapes(style, phase)
-    rotation = 0.0 if attributes is None else (
-        -side_st * attributes.pelvic_rotation * rotation_shape)
-    if attributes is not None:
-        dip = _bounce_dip(body, attributes, phase)
-        stance_hip_offset = dip if stance_hip_offset is None else stance_hip_offset + dip
-    w_stance = side_st * (half_width - half_hips - sway)  # Eq. 8's W_st(t), (a - h)·n
-    w_swing = side_st * (half_hips - half_width - sway)
-
-    phi_st = np.asarray(stance_angles, dtype=float)
-    phi_sw = np.asarray(swing_angles, dtype=float)
+    heading = _vector(heading, k)
+    phase = _vector(phase, k)
+    phi_st = as_rows(stance_angles, (k, 4))
+    phi_sw = as_rows(swing_angles, (k, 4))
     toe_out = np.broadcast_to(np.asarray(toe_out, dtype=float), (k,))
-
-    # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
-    #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
-    pitch = np.arctan(np.tan(phi_st[:, 0]) * np.cos(foot.yaw - heading))
-    r_foot, ankle, toe_angle = stance_foot_pose(body, foot, pitch)
-
-    if stance_hip_offset is not None:
-        phi_st = phi_st.copy()
-        offset = np.asarray(stance_hip_offset, dtype=float)
-        phi_st[:, 1], phi_st[:, 2] = _shifted_stance_leg(
-            body, phi_st[:, 1], phi_st[:, 2], heading, offset
-        )
-        w_stance = w_stance - _dot(offset, normal)
-
-    # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
     tc_axis, sub_axis = _TC_AXES[st_row], _SUB_AXES[st_row]
-    x_ankle, ok_ankle, jac_ankle, r_shank_st, knee_rel, ok_knee_st, r_thigh_st, hip_st = (
-        solve_stance_ankle(r_foot, ankle, tc_axis, sub_axis, body.shank, body.thigh, heading,
-                           phi_st[:, 1], phi_st[:, 2], normal, w_stance, warm.ankle,
-                           warm.ankle_jacobian, style.tolerance, style.max_iterations)
-    )  # fmt: skip
-
-    # 3. Hip complex: pelvis from data tilt (exact under list), list and heading.
-    lst = side_st * list_amplitude * list_shape
-    if list_scale is not None:
-        lst = lst * np.asarray(list_scale, dtype=float)
-    tilt_data = 0.5 * (phi_st[:, 3] + phi_sw[:, 3])
-    tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
-    r_pelvis = pelvis_rotations(_vector(heading + rotation, k), _vector(lst, k), _vector(tilt, k))
-    y_pelvis = r_pelvis[:, :, 1]
-    root = hip_st - (side_st * half_hips)[:, None] * y_pelvis
-    hip_sw = root - (side_st * half_hips)[:, None] * y_pelvis
+    if stance is None:
+        stance = _stance_half(body, left, phase, heading, phi_st, phi_sw, foot, warm, style,
+                              stance_hip_offset, attributes, list_scale, tc_axis, sub_axis)
+    # (the stance half: steps 1-3 below but the swing hip, _stance_half)
+    side_st, normal, phi_st, r_pelvis = stance.side, stance.normal, stance.phi_st, stance.r_pelvis
+    hip_sw = stance.hip_sw
+    # 3. (cont.) The swing hip's 3 DOFs: thigh elevation, swing width and toe-out (GN).
     x_hip, ok_hip, jac_hip, r_thigh_sw, knee_sw, ok_knee_sw, r_shank_sw, ankle_sw = (
         solve_swing_hip(r_pelvis, hip_sw, body.thigh, body.shank, heading, phi_sw[:, 1],
-                        phi_sw[:, 2], normal, -side_st, toe_out, w_swing, warm.hip,
+                        phi_sw[:, 2], normal, -side_st, toe_out, stance.w_swing, warm.hip,
                         warm.hip_jacobian, style.tolerance, style.max_iterations)
     )  # fmt: skip
-
-    # Optional swing-ankle goal, reached with two-link IK on the swing leg.
+    # Optional swing-ankle goal, reached with two-link IK on the swing leg (compiled:
+    # ek.swing_goal).
     goal = use = None
-    if (swing_offset is not None or swing_goal is not None
-            or (swing_target is not None and swing_blend is not None)):  # fmt: skip
-        goal = ankle_sw.copy()
-        use = np.zeros(k, dtype=bool)
-        if swing_offset is not None:
-            offset = np.asarray(swing_offset, dtype=float)
-            goal += offset
-            use |= np.any(offset != 0.0, axis=1)
-        if swing_target is not None and swing_blend is not None:
-            blend = np.clip(np.asarray(swing_blend, dtype=float), 0.0, 1.0)
-            goal += blend[:, None] * (np.asarray(swing_target, dtype=float) - goal)
-            use |= blend > 0
-        if swing_goal is not None:
-            absolute = np.asarray(swing_goal, dtype=float)
-            pinned = np.isfinite(absolute).all(axis=1)
-            goal = np.where(pinned[:, None], absolute, goal)
-            use |= pinned
+    blended = swing_target is not None and swing_blend is not None
+    if swing_offset is not None or swing_goal is not None or blended:
+        none3 = np.zeros((k, 3))
+        goal, use = ek.swing_goal(
+            ankle_sw, none3 if swing_offset is None else as_rows(swing_offset, (k, 3)),
+            swing_offset is not None, as_rows(swing_target, (k, 3)) if blended else none3,
+            _vector(swing_blend, k) if blended else np.zeros(k), blended,
+            none3 if swing_goal is None else as_rows(swing_goal, (k, 3)),
+            swing_goal is not None)  # fmt: skip
 
     # Swing IK, swing talocrural (analytic for the data foot elevation; the swing subtalar
     # stays neutral), push-off toes flat on the ground (double support), every joint's
@@ -532,36 +528,86 @@ def elevwalker_pose(
     # thigh) — compiled, per agent.
     toe_given = np.nan if swing_toe_angle is None else swing_toe_angle
     local, knee_sw, ok_foot_sw = assemble_joints(
-        left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_rel, tc_axis,
-        sub_axis, x_ankle, toe_angle, hip_sw, r_thigh_sw, knee_sw, r_shank_sw,
-        _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
+        left, phase, heading, stance_fraction, r_pelvis, stance.r_thigh_st, stance.knee_rel,
+        tc_axis, sub_axis, stance.x_ankle, stance.toe_angle, hip_sw, r_thigh_sw, knee_sw,
+        r_shank_sw, _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
         style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
     )  # fmt: skip
     rows = np.arange(k)
     if attributes is not None:
-        thigh_left = np.where(left, phi_st[:, 2], phi_sw[:, 2])
-        thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
-        _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
+        _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
                            attributes, style)
 
-    positions, rotations = forward_kinematics(body, root, r_pelvis, local)
+    positions, rotations = forward_kinematics(body, stance.root, r_pelvis, local)
     swing_phase = phase + 0.5
     contact = np.empty((k, 2), dtype=bool)
     contact[rows, st_row] = True
     contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
-    converged = ok_ankle & ok_hip & ok_knee_st & ok_knee_sw & ok_foot_sw
+    converged = stance.ok_ankle & ok_hip & stance.ok_knee_st & ok_knee_sw & ok_foot_sw
     converged &= rows_finite(positions, local)  # every joint position and rotation finite
     return WalkerPose(
-        root_position=root,
+        root_position=stance.root,
         root_rotation=r_pelvis,
         local=local,
         positions=positions,
         rotations=rotations,
         contact=contact,
         converged=converged,
-        warm=WarmStart(x_ankle, x_hip, jac_ankle, jac_hip),
-        solves=np.stack([ok_ankle, ok_hip, ok_knee_st, ok_knee_sw, ok_foot_sw], axis=1),
+        warm=WarmStart(stance.x_ankle, x_hip, stance.jac_ankle, jac_hip),
+        solves=np.stack([stance.ok_ankle, ok_hip, stance.ok_knee_st, ok_knee_sw, ok_foot_sw],
+                        axis=1),
+        stance=stance,
     )
+
+
+def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
+                 warm: WarmStart, style: GaitStyle, stance_hip_offset, attributes, list_scale,
+                 tc_axis, sub_axis) -> StanceHalf:
+    """:func:`elevwalker_pose`'s stance leg, pelvis and root (steps 1–3 without the swing
+    hip): arrays (k,) or (k, 4) as it makes them; the stance axes (k, 3)."""
+    k = len(body)
+    h = body.height
+    list_shape, rotation_shape = pelvis_shapes(style, phase)
+    styled = attributes is not None
+    width = style.step_width * h if attributes is None else attributes.stride_width
+    list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
+    # compiled (elevwalker_kernels.stance_terms): the side, Eq. 8's W_st(t) = (a - h)·n and
+    # the swing width, the sway, the pelvis's list and rotation, KLAW's bounce dip added
+    # to the stance hip's offset, the stance leg moved by it (_shifted_stance_leg); the
+    # trigonometric terms numpy's
+    shifted = stance_hip_offset is not None
+    zeros = np.zeros(k)
+    side_st, normal, w_stance, w_swing, phi_st, lst, yaw, tilt_data = ek.stance_terms(
+        left, _vector(h, k), _vector(body.hip_separation, k), _vector(width, k),
+        float(style.sway), np.sin(2.0 * np.pi * phase), _vector(list_amplitude, k),
+        _vector(list_shape, k), zeros if list_scale is None else _vector(list_scale, k),
+        list_scale is not None, _vector(attributes.pelvic_rotation, k) if styled else zeros,
+        _vector(rotation_shape, k), styled,
+        _vector(attributes.bounciness, k) if styled else zeros, BOUNCE_DIP,
+        np.cos(4.0 * np.pi * (phase - BOUNCE_LOW)) if styled else zeros, heading,
+        np.cos(heading), np.sin(heading), phi_st, phi_sw, _vector(body.thigh, k),
+        _vector(body.shank, k), as_rows(stance_hip_offset, (k, 3)) if shifted
+        else np.zeros((k, 3)), shifted)  # fmt: skip
+
+    # 1. Foot–floor interaction (§4.1). The foot's own pitch p gives the data elevation
+    #    in the sagittal plane of ψ: tan φ = tan p / cos(yaw − ψ).
+    pitch = np.arctan(np.tan(phi_st[:, 0]) * np.cos(foot.yaw - heading))
+    r_foot, ankle, toe_angle = stance_foot_pose(body, foot, pitch)
+
+    # 2. Stance ankle complex (§4.3, Eq. 8) with the analytic stance knee inside.
+    x_ankle, ok_ankle, jac_ankle, r_shank_st, knee_rel, ok_knee_st, r_thigh_st, hip_st = (
+        solve_stance_ankle(r_foot, ankle, tc_axis, sub_axis, body.shank, body.thigh, heading,
+                           phi_st[:, 1], phi_st[:, 2], normal, w_stance, warm.ankle,
+                           warm.ankle_jacobian, style.tolerance, style.max_iterations)
+    )  # fmt: skip
+
+    # 3. Hip complex: pelvis from data tilt (exact under list), list and heading; root and
+    #    swing hip half the hip separation along its y axis (compiled: ek.pelvis_hips).
+    tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
+    r_pelvis, root, hip_sw = ek.pelvis_hips(yaw, lst, tilt, hip_st, side_st,
+                                            _vector(body.hip_separation, k))
+    return StanceHalf(side_st, normal, w_swing, phi_st, r_pelvis, root, hip_sw, x_ankle,
+                      ok_ankle, jac_ankle, knee_rel, ok_knee_st, r_thigh_st, toe_angle)
 
 
 def pelvis_shapes(style: GaitStyle, phase: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -582,74 +628,33 @@ THIGH_MID, THIGH_HALF = np.deg2rad(3.97), np.deg2rad(21.38)
 BOUNCE_DIP, BOUNCE_LOW = 0.006, 0.05  # [body heights], stance phase of the lowest hip [1]
 
 
-def _bounce_dip(body: Body, attributes, phase: np.ndarray) -> np.ndarray:
-    """Stance-hip displacement (k, 3) [m]: down by (bounciness − 1) BOUNCE_DIP H at the
-    middle of double support, zero at mid stance (period: one step)."""
-    shape = 0.5 * (1.0 + np.cos(4.0 * np.pi * (phase - BOUNCE_LOW)))
-    out = np.zeros((phase.size, 3))
-    out[:, 2] = -(attributes.bounciness - 1.0) * BOUNCE_DIP * body.height * shape
-    return out
-
-
-def _styled_upper_body(local, r_pelvis, heading, phase, side_st, thigh_left, thigh_right,
-                       attributes, style: GaitStyle | None = None) -> None:
+def _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
+                       attributes, style: GaitStyle) -> None:
     """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
     KLAW attributes: trunk tilt and sway over the stance leg, shoulders against the
     pelvis, arms with the opposite thigh (abducted by arm_out), elbows between their
-    least (arm back) and greatest (arm forward) flexion; the head stays upright."""
-    a = attributes
-    tilt = a.torso_tilt
-    if style is not None and style.trunk_from_data:
+    least (arm back) and greatest (arm forward) flexion; the head stays upright.
+
+    trunk = Rz(heading + shoulder) Rx(sway) Ry(tilt); vl5 = r_pelvisᵀ trunk; skullbase =
+    trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
+    signal); elbows Ry(-elbow): compiled (``elevwalker_kernels.styled_upper_body``), the
+    trunk's measured shapes and the sines numpy's."""
+    a, k = attributes, local.shape[0]
+    from_data = bool(style.trunk_from_data)
+    if from_data:
         from crowdwalk.gait.datasets import trunk_motion
 
         motion = trunk_motion()  # + stance side forward: negative at heel strike
-        shoulder = -side_st * a.shoulder_rotation * motion.rotation_shape(phase)
-        tilt = tilt + motion.tilt_wave(phase)
+        shape, wave = motion.rotation_shape(phase), motion.tilt_wave(phase)
     else:
-        shoulder = side_st * a.shoulder_rotation * np.cos(2.0 * np.pi * phase)
-    sway = -side_st * a.torso_sway * np.sin(2.0 * np.pi * phase)
-    k = local.shape[0]
-    arm_out, swing, elbow = np.empty((k, 2)), np.empty((k, 2)), np.empty((k, 2))
-    for s, (thigh, sign) in enumerate(((thigh_right, 1.0), (thigh_left, -1.0))):  # l, r
-        signal = np.clip((thigh - THIGH_MID) / THIGH_HALF, -1.0, 1.0)
-        arm_out[:, s] = sign * a.arm_out
-        swing[:, s] = -a.arm_swing * signal
-        elbow[:, s] = -(a.elbow_min + (a.elbow_max - a.elbow_min) * 0.5 * (signal + 1.0))
-    # trunk = Rz(heading + shoulder) Rx(sway) Ry(tilt); vl5 = r_pelvisᵀ trunk; skullbase =
-    # trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
-    # signal); elbows Ry(-elbow): compiled, numpy's values (posing_kernels)
-    upper_body(local, np.ascontiguousarray(r_pelvis), _vector(heading + shoulder, k),
-               _vector(sway, k), _vector(tilt, k), _vector(heading, k), arm_out, swing, elbow,
-               JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
-
-
-def _shifted_stance_leg(body: Body, phi_shank, phi_thigh, heading, offset):
-    """Shank and thigh elevations [rad] that move the stance hip by ``offset`` (k, 3) [m]
-    in the sagittal plane: two-link IK from the ankle, knee forward."""
-    k = len(body)
-    if k:  # _shifted_stance_leg_numpy, compiled (its operations; glibc's hypot/arccos)
-        f = as_rows
-        return shifted_stance_leg(f(body.thigh, (k,)), f(body.shank, (k,)),
-                                  f(phi_shank, (k,)), f(phi_thigh, (k,)), f(heading, (k,)),
-                                  f(offset, (k, 3)))
-    return _shifted_stance_leg_numpy(body.thigh, body.shank, phi_shank, phi_thigh, heading,
-                                     offset)
-
-
-def _shifted_stance_leg_numpy(l1, l2, phi_shank, phi_thigh, heading, offset):
-    """:func:`_shifted_stance_leg` in numpy for thigh and shank lengths l1, l2 (k,) [m]
-    (the reference of ``posing_kernels.shifted_stance_leg``)."""
-    ch, sh = np.cos(heading), np.sin(heading)
-    # Data hip relative to the ankle in sagittal coordinates (forward, up).
-    fwd = -l2 * np.sin(phi_shank) - l1 * np.sin(phi_thigh)
-    up = l2 * np.cos(phi_shank) + l1 * np.cos(phi_thigh)
-    fwd = fwd + offset[:, 0] * ch + offset[:, 1] * sh
-    up = up + offset[:, 2]
-    dist = np.clip(np.hypot(fwd, up), np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
-    line = np.arctan2(-fwd, up)  # elevation of the hip→ankle line
-    at_hip = np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1.0, 1.0))
-    at_ankle = np.arccos(np.clip((l2**2 + dist**2 - l1**2) / (2 * l2 * dist), -1.0, 1.0))
-    return line - at_ankle, line + at_hip
+        shape, wave = np.cos(2.0 * np.pi * phase), np.zeros(k)
+    f = _vector
+    ek.styled_upper_body(
+        local, np.ascontiguousarray(r_pelvis), f(heading, k), left, side_st, phi_st, phi_sw,
+        from_data, f(shape, k), f(wave, k), np.sin(2.0 * np.pi * phase),
+        f(a.shoulder_rotation, k), f(a.torso_tilt, k), f(a.torso_sway, k), f(a.arm_out, k),
+        f(a.arm_swing, k), f(a.elbow_min, k), f(a.elbow_max, k), float(THIGH_MID),
+        float(THIGH_HALF), JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
 
 
 # --- measurements on poses ------------------------------------------------------------

@@ -214,3 +214,45 @@ def test_trunk_follows_the_measured_rotation_with_attributes():
     want = -attrs.shoulder_rotation * trunk_motion().rotation_shape(phase)
     np.testing.assert_allclose(yaws[True], want, atol=np.deg2rad(0.2))
     assert np.abs(yaws[True] - yaws[False]).max() > np.deg2rad(0.5)
+
+
+def test_a_stance_half_taken_gives_the_pose_solved_afresh():
+    """``elevwalker_pose(..., stance=...)``: the stance half of a pose whose swing had
+    other inputs (toe-out, ankle goal), for some of its rows, gives those rows' poses as
+    they are solved afresh with the new swing inputs, bit for bit; and the swing's inputs
+    do change the pose (so the half is not the whole)."""
+    from crowdwalk.style import Style
+
+    n = 12
+    rng = np.random.default_rng(5)
+    phase = rng.uniform(0.0, 0.49, n)
+    body = Body.from_heights(rng.uniform(1.5, 1.9, n))
+    attrs = Style.default(body.height, 1.3)
+    psi = rng.uniform(-np.pi, np.pi, n)
+    foot = StanceFoot.from_foothold(body, rng.normal(0.0, 1.0, (n, 3)), psi, np.zeros(n))
+    left = rng.random(n) < 0.5
+    offset = rng.normal(0.0, 0.02, (n, 3))
+
+    def pose(rows, toe_out, goal, stance=None):
+        b = body.take(rows)
+        return elevwalker_pose(
+            b, left[rows], phase[rows], sample(NATURAL, phase[rows]),
+            sample(NATURAL, phase[rows] + 0.5), psi[rows],
+            StanceFoot(foot.ball[rows], foot.yaw[rows], foot.slope[rows]), toe_out[rows],
+            WarmStart.neutral(rows.size), GaitStyle(), stance_hip_offset=offset[rows],
+            swing_goal=goal[rows], attributes=attrs.take(rows), stance=stance)  # fmt: skip
+
+    everyone = np.arange(n)
+    first = pose(everyone, np.full(n, 0.12), np.full((n, 3), np.nan))
+    rows = np.array([1, 4, 5, 10])
+    toe = rng.uniform(-0.3, 0.3, n)
+    pinned = np.where(rng.random((n, 1)) < 0.5, first.positions[:, LEG_JOINTS[0, 2]] + 0.01,
+                      np.nan)  # fmt: skip
+    want = pose(rows, toe, pinned)
+    got = pose(rows, toe, pinned, stance=first.stance.take(rows))
+    for name in ("root_position", "root_rotation", "local", "positions", "rotations",
+                 "contact", "converged", "solves"):  # fmt: skip
+        assert np.array_equal(getattr(got, name), getattr(want, name)), name
+    for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
+        assert np.array_equal(getattr(got.warm, name), getattr(want.warm, name), equal_nan=True)
+    assert not np.array_equal(want.local, first.local[rows])

@@ -156,15 +156,29 @@ def _numpy_is_libm(ufunc, math_fn, *samples) -> bool:
     return np.array_equal(ufunc(*samples), libm)
 
 
+def _shifted_stance_leg_numpy(l1, l2, phi_shank, phi_thigh, heading, offset):
+    """``elevwalker._shifted_stance_leg`` before pose16, in numpy, for thigh and shank
+    lengths l1, l2 (k,) [m] (the reference of ``posing_kernels.shifted_stance_leg``)."""
+    ch, sh = np.cos(heading), np.sin(heading)
+    # Data hip relative to the ankle in sagittal coordinates (forward, up).
+    fwd = -l2 * np.sin(phi_shank) - l1 * np.sin(phi_thigh)
+    up = l2 * np.cos(phi_shank) + l1 * np.cos(phi_thigh)
+    fwd = fwd + offset[:, 0] * ch + offset[:, 1] * sh
+    up = up + offset[:, 2]
+    dist = np.clip(np.hypot(fwd, up), np.abs(l1 - l2) + 1e-6, 0.999 * (l1 + l2))
+    line = np.arctan2(-fwd, up)  # elevation of the hip→ankle line
+    at_hip = np.arccos(np.clip((l1**2 + dist**2 - l2**2) / (2 * l1 * dist), -1.0, 1.0))
+    at_ankle = np.arccos(np.clip((l2**2 + dist**2 - l1**2) / (2 * l2 * dist), -1.0, 1.0))
+    return line - at_ankle, line + at_hip
+
+
 def test_shifted_stance_leg_is_the_numpy_code():
-    """pose16's kernel against ``elevwalker._shifted_stance_leg_numpy``: bitwise where
+    """pose16's kernel against :func:`_shifted_stance_leg_numpy`: bitwise where
     numpy's hypot and arccos are libm's (which numba calls); on a CPU whose numpy uses its
     own SIMD loops (AVX-512: they differ in ~1 % and ~10 % of values) the kernel differs
     from the numpy code in ~7 % of elevations, by at most one ulp of 1 (2.2e-16 rad measured
     on 100,000 rows); the bound asserted is two ulps of π."""
     import math
-
-    from crowdwalk.gait.elevwalker import _shifted_stance_leg_numpy
 
     n = 20000
     l1 = RNG.uniform(0.38, 0.5, n)
