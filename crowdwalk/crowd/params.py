@@ -285,7 +285,7 @@ def parse_overrides(items: Sequence[str]) -> dict[str, object]:
 
 #: Named crowd models (``crowdwalk run`` / ``verify --crowd-model NAME``): the
 #: :class:`CrowdParams` fields each sets over the defaults; every field stays a switch of
-#: its own for experiments. ``"headway_s175"``, the default (session 16: it passes every
+#: its own for experiments. ``"headway_s175"``, the default since session 17 (it passes every
 #: verify case the former default passes, and the ring at all densities; "S175" in
 #: docs/architecture.md, "Overtaking under the headway model"): Seyfried et al. 2005's
 #: headway speed model with the free zone at openings, lane keeping and lining up at
