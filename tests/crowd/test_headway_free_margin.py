@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from crowdwalk.crowd.params import crowd_model
 from crowdwalk.crowd.run import RunOverrides, run_scenario
-from crowdwalk.crowd.simulation import CrowdParams
 from crowdwalk.record import open_run
 from crowdwalk.scenario import Scenario
 from crowdwalk.verify import _bottleneck
@@ -29,7 +29,7 @@ def test_walkers_leave_an_opening_closer_than_the_single_file_headway(tmp_path):
     gaps, summaries = {}, {}
     for margin in (None, 1.0):
         sc = Scenario.model_validate(_bottleneck(0.8, 5, 30))
-        params = replace(CrowdParams(), speed_model="headway", headway_free_margin=margin)
+        params = replace(crowd_model("free"), speed_model="headway", headway_free_margin=margin)
         out = tmp_path / f"margin_{margin}"
         summaries[margin] = run_scenario(sc, out, params=params,
                                          overrides=RunOverrides(poses=False, duration=60.0))

@@ -115,7 +115,7 @@ def test_no_overtaking_where_the_lane_runs_into_a_wall():
     from crowdwalk.world import build_world
 
     world = build_world(sc)
-    params = replace(CrowdParams(), speed_model="headway", headway_same_way="route",
+    params = replace(crowd_model("free"), speed_model="headway", headway_same_way="route",
                      headway_overtake=True, headway_overtake_open_lanes=True)
     pop = Population.from_scenario(sc, world.routes, np.random.default_rng(1))
     sim = CrowdSimulation(world, pop, parts=build_parts(world, pop, params=params),
@@ -188,7 +188,7 @@ def test_a_walker_behind_a_slower_one_steps_out_when_directions_compare_by_speed
 def test_a_fast_walker_overtakes_a_slow_one_in_a_free_corridor(tmp_path):
     """In an empty 3 m corridor a 1.6 m/s walker starting 3 m behind a 0.9 m/s one passes
     it and keeps its free speed with the route lane, same-time scoring and overtaking."""
-    params = replace(CrowdParams(), speed_model="headway", headway_same_way="route",
+    params = replace(crowd_model("free"), speed_model="headway", headway_same_way="route",
                      headway_lane=2.0, headway_overtake=True, headway_route_lane=True,
                      headway_same_time=True)
     s = run_scenario(Scenario.model_validate(_corridor()), tmp_path / "run", params=params,

@@ -7,7 +7,8 @@ from dataclasses import replace
 import numpy as np
 
 from crowdwalk.crowd.neighbours import gather_neighbours
-from crowdwalk.crowd.simulation import CrowdParams, CrowdSimulation, build_parts
+from crowdwalk.crowd.params import crowd_model
+from crowdwalk.crowd.simulation import CrowdSimulation, build_parts
 from crowdwalk.population import Population
 from crowdwalk.scenario import Scenario
 from crowdwalk.verify import _bottleneck
@@ -18,7 +19,7 @@ def test_no_headway_step_is_scored_inside_the_free_zone():
     sc = Scenario.model_validate(_bottleneck(0.8, 4, 30))
     world = build_world(sc)
     pop = Population.from_scenario(sc, world.routes, np.random.default_rng(1))
-    params = replace(CrowdParams(), speed_model="headway", headway_free_margin=1.0,
+    params = replace(crowd_model("free"), speed_model="headway", headway_free_margin=1.0,
                      headway_steer=True)
     sim = CrowdSimulation(world, pop, parts=build_parts(world, pop, params=params),
                           dt=0.05, fps=10.0, duration=10.0, params=params)

@@ -7,7 +7,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from crowdwalk.crowd import CrowdParams
 from crowdwalk.crowd.params import crowd_model
 from crowdwalk.crowd.speed import contact_gap_speed, headway_speed, time_gap_speed
 from crowdwalk.verify import free_speed, ring_corridor_speed, weidmann_speed
@@ -80,7 +79,7 @@ def test_headway_speed_follows_only_the_walker_in_its_lane():
 
 def test_headway_model_follows_weidmann_at_2_per_m2(tmp_path):
     # a and b come from Seyfried et al.'s single-file data; Weidmann is validation
-    params = replace(CrowdParams(), speed_model="headway")
+    params = replace(crowd_model("free"), speed_model="headway")
     density, speed = ring_corridor_speed(2.0, tmp_path, params=params)
     assert 1.4 < density < 2.6
     assert speed == pytest.approx(float(weidmann_speed(density)), abs=0.15)
