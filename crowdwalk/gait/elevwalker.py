@@ -500,7 +500,7 @@ def elevwalker_pose(
     if stance is None:
         stance = _stance_half(body, left, phase, heading, phi_st, phi_sw, foot, warm, style,
                               stance_hip_offset, attributes, list_scale, tc_axis, sub_axis)
-    # (the stance half: steps 1-3 below but the swing hip, _stance_half)
+    # steps 1-3 but the swing hip's solve: the stance half (_stance_half)
     side_st, normal, phi_st, r_pelvis = stance.side, stance.normal, stance.phi_st, stance.r_pelvis
     hip_sw = stance.hip_sw
     # 3. (cont.) The swing hip's 3 DOFs: thigh elevation, swing width and toe-out (GN).
@@ -573,12 +573,12 @@ def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceF
     list_amplitude = style.pelvic_list if attributes is None else attributes.pelvic_list
     # compiled (elevwalker_kernels.stance_terms): the side, Eq. 8's W_st(t) = (a - h)·n and
     # the swing width, the sway, the pelvis's list and rotation, KLAW's bounce dip added
-    # to the stance hip's offset, the stance leg moved by it (_shifted_stance_leg); the
+    # to the stance hip's offset, the stance leg moved by it (shifted_stance_leg); the
     # trigonometric terms numpy's
     shifted = stance_hip_offset is not None
-    zeros = np.zeros(k)
+    zeros, hips = np.zeros(k), _vector(body.hip_separation, k)
     side_st, normal, w_stance, w_swing, phi_st, lst, yaw, tilt_data = ek.stance_terms(
-        left, _vector(h, k), _vector(body.hip_separation, k), _vector(width, k),
+        left, _vector(h, k), hips, _vector(width, k),
         float(style.sway), np.sin(2.0 * np.pi * phase), _vector(list_amplitude, k),
         _vector(list_shape, k), zeros if list_scale is None else _vector(list_scale, k),
         list_scale is not None, _vector(attributes.pelvic_rotation, k) if styled else zeros,
@@ -604,8 +604,7 @@ def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceF
     # 3. Hip complex: pelvis from data tilt (exact under list), list and heading; root and
     #    swing hip half the hip separation along its y axis (compiled: ek.pelvis_hips).
     tilt = np.arctan(np.tan(tilt_data) * np.cos(lst))
-    r_pelvis, root, hip_sw = ek.pelvis_hips(yaw, lst, tilt, hip_st, side_st,
-                                            _vector(body.hip_separation, k))
+    r_pelvis, root, hip_sw = ek.pelvis_hips(yaw, lst, tilt, hip_st, side_st, hips)
     return StanceHalf(side_st, normal, w_swing, phi_st, r_pelvis, root, hip_sw, x_ankle,
                       ok_ankle, jac_ankle, knee_rel, ok_knee_st, r_thigh_st, toe_angle)
 
