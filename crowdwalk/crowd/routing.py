@@ -19,11 +19,6 @@ def _length(line: np.ndarray) -> float:
     return float(np.sum(np.linalg.norm(np.diff(line, axis=0), axis=1)))
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(n > 1e-12, n, 1.0)
-
-
 class Routes:
     """Route polylines of a population on a route graph.
 
@@ -301,30 +296,24 @@ def route_progress(table: RouteTable, *, route: np.ndarray, segment: np.ndarray,
     return RouteProgress(seg, s, gained, arrived)
 
 
-def _first_clear(target: np.ndarray, blind: np.ndarray, b: np.ndarray, candidates,
-                 clear) -> None:
-    """In place: rows ``b`` of ``target`` (k, 2) [m] become the first of the
-    ``candidates`` (each (len(b), 2) [m], in order of preference) that ``clear(cand)``
-    ((len(b),) bool) accepts, and those rows of ``blind`` (k,) False."""
-    found = np.zeros(b.size, bool)
-    for cand in candidates:
-        ok = ~found & clear(cand)
-        target[b[ok]] = cand[ok]
-        found |= ok
-    blind[b[found]] = False
+def _rows(table: RouteTable, route, progress, xy, heading, radius, clearance, params,
+          lane_only: bool):
+    """:func:`~crowdwalk.crowd.routing_kernels.steering_rows` of k walkers: target (k, 2)
+    [m], direction (k, 2) and whether the lane runs into a wall (k,) bool."""
+    from crowdwalk.crowd.routing_kernels import steering_rows
 
-
-def _lane(table: RouteTable, route, progress, xy, radius, clearance, params):
-    """The lane target of :func:`steering_targets`: the route's points at and
-    ``target_distance`` ahead of ``progress`` (k, 2) [m], the target (k, 2) [m] parallel
-    to the route pulled towards its centre line, and (k,) bool whether the lane runs into
-    a wall (the ``clearance`` at the target or halfway below ``radius``)."""
-    on_route = table.point_at(route, progress)
-    ahead = table.point_at(route, progress + params.target_distance)
-    target = xy + (ahead - on_route) + params.centre_pull * (on_route - xy)
-    blind = clearance(target) < radius
-    blind |= clearance(0.5 * (target + xy)) < radius
-    return ahead, target, blind
+    f = np.ascontiguousarray
+    k = len(route)
+    target, direction = np.empty((k, 2)), np.empty((k, 2))
+    blind = np.empty(k, bool)
+    h = np.asarray(heading, float)
+    steering_rows(table.s, f(table.xy), table.start, table.stop, table.s0, table.s1,
+                  clearance.distance, float(clearance.origin[0]), float(clearance.origin[1]),
+                  float(clearance.cell), f(route, np.int64), f(progress, float), f(xy, float),
+                  f(np.cos(h)), f(np.sin(h)), f(radius, float), float(params.target_distance),
+                  float(params.centre_pull), bool(params.lane_keep), bool(params.line_up),
+                  lane_only, target, direction, blind)
+    return target, direction, blind
 
 
 def lane_runs_into_wall(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
@@ -333,7 +322,8 @@ def lane_runs_into_wall(table: RouteTable, *, route: np.ndarray, progress: np.nd
     ``target_distance`` ahead, as :func:`steering_targets` lays it) runs into a wall at its
     end or halfway, closer than the walker's ``radius`` [m] (a door or bend ahead off the
     walker's axis)."""
-    return _lane(table, route, progress, xy, radius, clearance, params)[2]
+    return _rows(table, route, progress, xy, np.zeros(len(route)), radius, clearance, params,
+                 True)[2]
 
 
 def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarray,
@@ -346,42 +336,21 @@ def steering_targets(table: RouteTable, *, route: np.ndarray, progress: np.ndarr
     would funnel everybody into one file — unless that lane runs into a wall (the
     ``clearance`` at the target or halfway is below the agent's ``radius``): then they
     head for the centre line. An agent at its target keeps its ``heading`` [rad].
+
+    ``lane_keep``: where the lane runs into a wall, the lane ahead as far off the centre
+    line as fits (0.6, 0.45, 0.3, 0.2, 0.1 m; its target and halfway clear by the radius):
+    a walker approaching a door off its axis keeps to its side (two interleaved files,
+    the zipper of Hoogendoorn & Daamen 2005 and Seyfried et al. 2009) instead of all
+    funnelling into one. ``line_up`` (where no lane fits): lining up with the door, the
+    centre-line point farthest ahead (1.5, 1.0, 0.6, 0.3 m, down to the walker's own
+    projection, straight across) whose line from the walker clears the walls at its
+    quarters too — not a point under the walker's own body (its projection when the
+    centre line runs beneath it beside a wall: no direction, and it stands for good) —
+    instead of the point ``target_distance`` ahead, whose line grazes the jamb, so that a
+    walker beside an opening moves across to it rather than along the wall into the door
+    post's corner. One compiled loop over the rows
+    (:mod:`crowdwalk.crowd.routing_kernels`).
     """
-    ahead, target, blind = _lane(table, route, progress, xy, radius, clearance, params)
-    b = np.flatnonzero(blind)
-    if b.size and params.lane_keep:
-        # the lane ahead as far off the centre line as fits: a walker approaching a door
-        # off its axis keeps to its side (two interleaved files, the zipper of Hoogendoorn
-        # & Daamen 2005 and Seyfried et al. 2009) instead of all funnelling into one
-        u = target[b] - ahead[b]
-        size = np.maximum(np.linalg.norm(u, axis=1), 1e-9)
-        xb, rb = xy[b], radius[b]
-        _first_clear(target, blind, b, (
-            ahead[b] + u * np.minimum(1.0, cap / size)[:, None]
-            for cap in (0.6, 0.45, 0.3, 0.2, 0.1)),
-            lambda cand: (clearance(cand) >= rb) & (clearance(0.5 * (cand + xb)) >= rb))
-    b = np.flatnonzero(blind)
-    if b.size and params.line_up:
-        # lining up with the door: the centre-line point farthest ahead (up to 1.5 m,
-        # down to the walker's own projection, straight across) whose line from the walker
-        # clears the walls at its quarters too, instead of the point 2 m ahead, whose line
-        # grazes the jamb, so that a walker beside an opening moves across to it rather
-        # than along the wall into the door post's corner
-        xb, rb = xy[b], radius[b]
-
-        def clear(cand):
-            # not a point under the walker's own body (its projection when the centre
-            # line runs beneath it beside a wall): no direction, and it stands for good
-            ok = (clearance(cand) >= rb) & (np.linalg.norm(cand - xb, axis=1) >= rb)
-            for f in (0.25, 0.5, 0.75):
-                ok &= clearance(xb + f * (cand - xb)) >= rb
-            return ok
-
-        _first_clear(target, blind, b, (table.point_at(route[b], progress[b] + reach)
-                                        for reach in (1.5, 1.0, 0.6, 0.3, 0.0)), clear)
-    target[blind] = ahead[blind]
-    direction = _unit(target - xy)
-    still = np.linalg.norm(target - xy, axis=1) < 1e-9
-    heading_dir = np.column_stack([np.cos(heading), np.sin(heading)])
-    direction[still] = heading_dir[still]
+    target, direction, _ = _rows(table, route, progress, xy, heading, radius, clearance,
+                                 params, False)
     return target, direction

@@ -9,6 +9,7 @@ import numpy as np
 import shapely
 
 from crowdwalk.crowd.clearance import ClearanceField
+from crowdwalk.crowd.navigation import RouteTable
 from crowdwalk.crowd.params import CrowdParams, crowd_model
 from crowdwalk.crowd.routing import steering_targets
 
@@ -18,11 +19,11 @@ AREA = shapely.box(-2, -2, 6, 2).difference(
     shapely.union(shapely.box(2.0, 0.45, 2.2, 2), shapely.box(2.0, -2, 2.2, -0.45)))
 
 
-class Line:
-    """A route table of one straight route along +x (``point_at`` only)."""
-
-    def point_at(self, route, s):
-        return np.column_stack([np.asarray(s, float), np.zeros(len(s))])
+def line():
+    """A route table of one straight route along +x, x = -10 ... 10 m (arc length x + 10)."""
+    table = RouteTable()
+    table.add(np.array([[-10.0, 0.0], [10.0, 0.0]]))
+    return table
 
 
 def least_clearance(field, a, b):
@@ -35,7 +36,7 @@ def least_clearance(field, a, b):
 def targets(params, xy):
     field = ClearanceField.from_area(AREA)
     k = len(xy)
-    target, _ = steering_targets(Line(), route=np.zeros(k, int), progress=xy[:, 0].copy(),
+    target, _ = steering_targets(line(), route=np.zeros(k, int), progress=xy[:, 0] + 10.0,
                                  xy=xy, heading=np.zeros(k), radius=np.full(k, 0.2),
                                  clearance=field, params=params)
     return field, target
@@ -78,7 +79,7 @@ def test_lining_up_never_aims_under_the_walkers_own_body():
     xy = np.array([[1.7, 0.0], [1.65, 0.03]])
     k = len(xy)
     params = CrowdParams(lane_keep=True, line_up=True)
-    target, _ = steering_targets(Line(), route=np.zeros(k, int), progress=xy[:, 0].copy(),
+    target, _ = steering_targets(line(), route=np.zeros(k, int), progress=xy[:, 0] + 10.0,
                                  xy=xy, heading=np.zeros(k), radius=np.full(k, 0.2),
                                  clearance=field, params=params)
     assert (np.linalg.norm(target - xy, axis=1) >= 0.2).all(), target
