@@ -13,7 +13,7 @@ from functools import lru_cache
 import numba as nb
 import numpy as np
 
-from planners.lattice import StepTables, run_parts
+from planners.lattice import THREADS, StepTables, run_parts
 from planners.lattice_kernel import (
     config_efficiency,
     config_legal,
@@ -36,7 +36,7 @@ def best_first(tables: StepTables) -> SearchResult:
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
     run_parts(_best_first, A, tables.lattice, orders, which, configs, found, expanded, checks,
-              3)
+              3, *_scratch(tables, True))
     return SearchResult(configs, found, expanded, checks)
 
 
@@ -76,7 +76,7 @@ def find_init(tables: StepTables) -> SearchResult:
     expanded = np.zeros(A, dtype=np.int64)
     checks = np.zeros(A, dtype=np.int64)
     run_parts(_best_first, A, tables.lattice, orders, which, configs, found, expanded, checks,
-              1)
+              1, *_scratch(tables, False))
     return SearchResult(configs, found, expanded, checks)
 
 
@@ -110,8 +110,19 @@ def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
     checks = np.zeros(A, dtype=np.int64)
     orders = np.zeros((1, 1, configs.shape[1]), dtype=np.int8)
     run_parts(_best_first, A, tables.lattice, orders, np.zeros(A, dtype=np.int64), configs,
-              found, expanded, checks, 2)
+              found, expanded, checks, 2, *_scratch(tables, True))
     return SearchResult(configs, found, expanded, checks)
+
+
+def _scratch(tables: StepTables, climbs: bool) -> tuple:
+    """The kernel's scratch, a row per thread (:func:`run_parts`): two configurations
+    (THREADS, 2, n); for BFP (``climbs``) the visited flags (all False), the codes set in
+    them and the OPEN list's codes and efficiencies (THREADS, J**n)."""
+    n, J = tables.struct.n, tables.struct.J
+    size = J**n if climbs else 0
+    return (np.empty((THREADS, 2, n), dtype=np.int64),
+            np.zeros((THREADS, size), dtype=np.bool_), np.empty((THREADS, size), dtype=np.int64),
+            np.empty((THREADS, size), dtype=np.int64), np.empty((THREADS, size)))
 
 
 @nb.njit(cache=True, nogil=True)
@@ -161,24 +172,29 @@ def _fifo(centre, n, J, order):
                 tail += 1
 
 
-@nb.njit(cache=True, nogil=True)
-def _best_first(L, orders, which, configs, found, expanded, checks, phases, part, parts):
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _best_first(L, orders, which, configs, found, expanded, checks, phases, pair, visited,
+                seen, open_code, open_eff, part, parts):
     """FIND_INIT (``phases`` & 1) and BFP (& 2) of every agent
-    (every ``parts``-th from ``part``, :func:`~planners.lattice.run_parts`)."""
+    (every ``parts``-th from ``part``, :func:`~planners.lattice.run_parts`), on the
+    scratch rows ``part`` of :func:`_scratch`. Compiled without numba's runtime: it
+    allocates nothing, so reading an array of ``L`` (or passing it to an evaluation)
+    takes no reference."""
+    q, r = pair[part, 0], pair[part, 1]
     for a in range(part, configs.shape[0], parts):
         if phases & 1:
-            _find_init(L, a, orders[which[a]], configs[a], found, expanded, checks)
+            _find_init(L, a, orders[which[a]], configs[a], found, expanded, checks, q)
         if phases & 2 and found[a]:
-            _bfp(L, a, configs[a], expanded, checks)
+            _bfp(L, a, configs[a], expanded, checks, q, r, visited[part], seen[part],
+                 open_code[part], open_eff[part])
 
 
 @_inline
-def _find_init(L, a, order, config, found, expanded, checks):
+def _find_init(L, a, order, config, found, expanded, checks, q):
     """Walk the FIFO order ``order`` to agent ``a``'s first legal configuration, counting
-    the look-ups and the illegal (expanded) configurations."""
+    the look-ups and the illegal (expanded) configurations (``q`` (n,): scratch)."""
     n = config.size
     J = L.flat_Ej.shape[1]
-    q = np.empty(n, dtype=np.int64)
     sd, rs, wd, wo = L.step_done, L.reason, L.swing_done, L.swing_ok
     so, wf, ws = L.step_offset, L.swing_offset, L.swing_strides
     for i in range(order.shape[0]):
@@ -189,27 +205,26 @@ def _find_init(L, a, order, config, found, expanded, checks):
         if legal < 0:
             legal = config_legal(L, a, q)
         if legal:
-            config[:] = q
+            for k in range(n):
+                config[k] = q[k]
             found[a] = True
             break  # one exit (see the note at lattice_kernel.inline)
         expanded[a] += 1
 
 
 @_inline
-def _bfp(L, a, config, expanded, checks):
-    """BFP from agent ``a``'s legal ``config`` (n,), which it replaces by the result."""
+def _bfp(L, a, config, expanded, checks, q, r, visited, seen, open_code, open_eff):
+    """BFP from agent ``a``'s legal ``config`` (n,), which it replaces by the result.
+    Scratch: ``q``, ``r`` (n,); ``visited`` (J**n,) all False, and left so; ``seen``,
+    ``open_code``, ``open_eff`` (J**n,)."""
     n = config.size
     J = L.flat_Ej.shape[1]
-    total = J**n
     sd, rs, wd, wo = L.step_done, L.reason, L.swing_done, L.swing_ok
     co, pr, so, wf, ws = L.cost, L.progress, L.step_offset, L.swing_offset, L.swing_strides
-    visited = np.zeros(total, dtype=np.bool_)
-    open_code = np.empty(total, dtype=np.int64)
-    open_eff = np.empty(total)
-    q = np.empty(n, dtype=np.int64)
-    r = np.empty(n, dtype=np.int64)
     init = _code(config, J)
     visited[init] = True
+    seen[0] = init
+    marked = 1
     _, e0 = config_efficiency(L, a, config)
     open_code[0] = init
     open_eff[0] = e0
@@ -236,7 +251,8 @@ def _bfp(L, a, config, expanded, checks):
                 v = q[k] + d
                 if v < 0 or v >= J:
                     continue
-                r[:] = q
+                for i in range(n):
+                    r[i] = q[i]
                 r[k] = v
                 checks[a] += 1
                 legal, e2 = _efficiency(L, a, r, sd, rs, wd, wo, co, pr, so, wf, ws, J)
@@ -250,9 +266,13 @@ def _bfp(L, a, config, expanded, checks):
                     open_eff[size] = e2
                     size += 1
                     visited[c2] = True
+                    seen[marked] = c2
+                    marked += 1
         if all_worse:
             result = c
             break
+    for i in range(marked):
+        visited[seen[i]] = False
     _decode(result if result >= 0 else best_code, n, J, config)
 
 

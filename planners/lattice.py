@@ -409,12 +409,10 @@ class StepTables:
         (:func:`run_parts` splits the agents; a search over repeated rows of one agent,
         as the vectorised compositions make, should not run on deferred tables)."""
         L = self.lattice
-        T = L.basis.shape[1]
-        A = self.neutral.size
         return (self.pending, L.swing_ok, L.swing_done, L.swing_back, L.swing_front,
                 L.node_s, L.node_z, L.base, L.legs, L.r_start, L.r_count, L.r_levels,
                 L.r_table, L.r_vcum, L.basis, L.influence, L.fparams, L.iparams,
-                L.controls, L.rounds, L.work, np.empty((A, 3, T)), np.empty((A, 2)))
+                L.controls, L.rounds, L.work, L.scratch, L.summit)
 
     def build_pending(self, agents: np.ndarray | None = None) -> None:
         """Build the pending swing curves of ``agents`` (default all)."""
@@ -599,7 +597,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         np.full((A, Ns), np.inf), np.full((A, Ns), int(Reason.UNREACHED), dtype=np.int64),
         np.full((A, Ns), np.inf), empty((A, Ns)), zeros((A, Ns), dtype=np.bool_),
         zeros((A, Np), dtype=np.bool_), zeros((A, Np, 4, 2)), np.full((A, Np), -1),
-        zeros((A, Np), dtype=np.bool_), zeros((A, 5), dtype=np.int64))
+        zeros((A, Np), dtype=np.bool_), zeros((A, 5), dtype=np.int64),
+        empty((A, 3, basis.shape[1])), empty((A, 2)))
     L = lattice
     tables = StepTables(st, g.lo, g.delta, g.neutral, g.per_metre, L.node_s, L.node_z,
                         L.length, L.rise, L.En, L.Ev, L.Ej, L.E, L.reason, L.swing_ok,

@@ -277,40 +277,42 @@ def _cumulative(s, ds, cost, cum, x):
     return cum[k] + cost[seg] * frac
 
 
-@_jit
+@_leaf
 def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     """GroundProfile.raster(start, start + count*cell) cells: fills their range-maximum
     table ``table`` (levels, count) and the cumulative vertex count per cell
-    ``vertex_cum`` (count + 1,)."""
-    edges = start + cell * np.arange(count + 1)
-    at = np.empty(count + 1)
+    ``vertex_cum`` (count + 1,). Cell edge k is ``start + cell * k`` (as numpy's
+    ``start + cell * np.arange(count + 1)``); nothing is allocated."""
     # _height at each edge, its vertex found by one sweep (the edges increase)
-    i = _right(s, max(edges[0], s[0])) - 1
+    cells = table[0]
+    i = _right(s, max(start, s[0])) - 1
+    previous = 0.0
     for k in range(count + 1):
-        q = max(edges[k], s[0])
+        q = max(start + cell * k, s[0])
         while i + 1 < s.size and s[i + 1] <= q:
             i += 1
-        at[k] = z[i] + slope[i] * (q - s[i])
-    cells = table[0]
-    for k in range(count):
-        cells[k] = max(at[k], at[k + 1])
+        at = z[i] + slope[i] * (q - s[i])
+        if k > 0:
+            cells[k - 1] = max(previous, at)
+        previous = at
     scale = 1.0 / cell
     vertex_cum[:] = 0
+    last = start + cell * count
     for v in range(s.size):
         sv = s[v]
         vertex_cum[_cell(sv, start, cell, scale, count) + 1] += 1
-        if sv < edges[0] or sv > edges[count]:
+        if sv < start or sv > last:
             continue
         k = min(max(int(np.floor((sv - start) * scale)), 0), count)
-        while k > 0 and edges[k] > sv:
+        while k > 0 and start + cell * k > sv:
             k -= 1
-        while k < count and edges[k + 1] <= sv:
+        while k < count and start + cell * (k + 1) <= sv:
             k += 1
         if k == count:
             cells[count - 1] = max(cells[count - 1], z[v])
             continue
         cells[k] = max(cells[k], z[v])
-        if edges[k] == sv and k > 0:
+        if start + cell * k == sv and k > 0:
             cells[k - 1] = max(cells[k - 1], z[v])
     for k in range(count):
         vertex_cum[k + 1] += vertex_cum[k]
@@ -349,7 +351,9 @@ Lattice = namedtuple("Lattice", [
     # tables (planners.lattice.StepTables) and what is evaluated
     "node_s", "node_z", "terminal", "far", "length", "rise", "En", "Ev", "Ej", "E",
     "reason", "cost", "progress", "step_done", "swing_ok", "controls", "rounds",
-    "swing_done", "work"])
+    "swing_done", "work",
+    # per agent scratch of the §5.2 adjustment (A, 3, T), (A, 2)
+    "scratch", "summit"])
 
 
 @_jit
@@ -448,7 +452,7 @@ def eval_step(L, a, t):
                       L.support, L.terminal, L.weights, L.work)
 
 
-@_jit
+@_leaf
 def _eval_step_arrays(a, t, L_E, L_Ej, L_En, L_Ev, L_base, L_bounds, L_consts, L_cost, L_delta,
                       L_far, L_flat_Ej, L_flat_reach, L_fparams, L_iparams, L_legs, L_length,
                       L_lo, L_node_s, L_node_z, L_normal, L_prof_s, L_prof_z, L_progress,
@@ -514,16 +518,16 @@ def eval_swing(L, a, q):
                        L.lo, L.node_m, L.node_s, L.node_z, L.prof_s, L.prof_z, L.r_built,
                        L.r_count, L.r_levels, L.r_start, L.r_table, L.r_vcum, L.rounds,
                        L.slope, L.swing_back, L.swing_done, L.swing_front, L.swing_ok,
-                       L.swing_stride, L.trailing, L.work)
+                       L.swing_stride, L.trailing, L.work, L.scratch, L.summit)
 
 
-@_jit
+@_leaf
 def _eval_swing_arrays(a, q, L_base, L_basis, L_bounds, L_controls, L_delta, L_flat_ctrl,
                        L_flat_ok, L_flat_slack, L_fparams, L_influence, L_iparams, L_legs, L_lo,
                        L_node_m, L_node_s, L_node_z, L_prof_s, L_prof_z, L_r_built, L_r_count,
                        L_r_levels, L_r_start, L_r_table, L_r_vcum, L_rounds, L_slope,
                        L_swing_back, L_swing_done, L_swing_front, L_swing_ok, L_swing_stride,
-                       L_trailing, L_work):
+                       L_trailing, L_work, L_scratch, L_summit):
     """:func:`eval_swing` on the Lattice's arrays (``L_<field>``: see the note at
     :data:`inline`)."""
     if not L_swing_done[a, q]:  # one exit (see the note at inline)
@@ -569,14 +573,11 @@ def _eval_swing_arrays(a, q, L_base, L_basis, L_bounds, L_controls, L_delta, L_f
             if not L_r_built[a]:
                 _raster(s, z, slope, L_r_start[a], cell, count, levels, table, vertex_cum)
                 L_r_built[a] = True
-            T = L_basis.shape[1]
-            scratch = np.empty((3, T))
-            summit = np.empty(2)
             ctrl = L_controls[a, q]
             ok, used = adjust_one(start, z0, end, z1, heel_off, toe_off, ankle, leg[2],
                                   L_r_start[a], cell, table, vertex_cum, L_basis,
                                   L_influence, fparams[10], fparams[4], fparams[11],
-                                  max_slope, L_iparams[3], ctrl, summit, scratch)
+                                  max_slope, L_iparams[3], ctrl, L_summit[a], L_scratch[a])
             for i in range(4):
                 ctrl[i, 0] -= b0
             L_swing_ok[a, q] = ok
