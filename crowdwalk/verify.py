@@ -525,8 +525,11 @@ def rimea_14(fast: bool, tmp: Path) -> list[Check]:
 
 def rimea_15(fast: bool, tmp: Path) -> list[Check]:
     """The same crowd along a short straight, a long straight and a corner corridor whose
-    inner and outer edges have the short and long lengths: the corner's evacuation time
-    lies between the two."""
+    inner and outer edges have the short and long lengths (RiMEA's test 15: the corner's
+    inner edge is the short route, its outer edge the long one; JuPedSim's RiMEA 3.0 test
+    files lay it out so): the corner's evacuation time lies between the two. Each edge
+    runs from the start area to the end area: 18 m inner, 24 m outer (until session 18
+    the corner's second leg reached 1.5 m further, 19.5 / 25.5 m)."""
     n = 40 if fast else 500
     w, leg = 3.0, 12.0
     start = _rect(0, 0, 8, w)
@@ -541,11 +544,11 @@ def rimea_15(fast: bool, tmp: Path) -> list[Check]:
         xc = 8.0 + leg - w / 2
         nodes = [{"name": "start", "xy": [4.0, w / 2], "area": start},
                  {"name": "turn", "xy": [xc, w / 2]},
-                 {"name": "end", "xy": [xc, w / 2 + leg + 2.0],
-                  "area": _rect(xc - w / 2, w / 2 + leg, xc + w / 2, w / 2 + leg + 4)}]
+                 {"name": "end", "xy": [xc, leg + 2.0],
+                  "area": _rect(xc - w / 2, leg, xc + w / 2, leg + 4)}]
         edges = [{"from": "start", "to": "turn", "width": w},
                  {"from": "turn", "to": "end", "width": w}]
-        return nodes, edges, (-1, -1, xc + w, w / 2 + leg + 5)
+        return nodes, edges, (-1, -1, xc + w, leg + 5)
 
     times = {}
     inner, outer = 2 * leg - 2 * w, 2 * leg

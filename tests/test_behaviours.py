@@ -235,3 +235,35 @@ def test_verify_cli_runs_and_names_the_crowd_model(tmp_path):
     bad = CliRunner().invoke(app, ["verify", "--only", "rimea1", "--crowd-model", "fast",
                                    "--out", str(out)])
     assert bad.exit_code == 2 and "crowd.model must be one of" in bad.output
+
+
+def test_rimea_15_corner_edges_have_the_straights_lengths(monkeypatch, tmp_path):
+    """RiMEA 15's corner corridor: its inner edge is as long as the short straight and its
+    outer edge as the long one (from the start area to the end area)."""
+    from crowdwalk import verify
+
+    built = {}
+
+    def fake_run(data, folder, params=None):
+        built[data["name"]] = data
+        summary = {"agents": [{"arrived": True, "start_time_s": 0.0, "travel_time_s": 1.0}]}
+        return verify._Run(folder, summary, None)
+
+    monkeypatch.setattr(verify, "_run", fake_run)
+    verify.rimea_15(True, tmp_path)
+
+    def area(data, name):
+        node = next(n for n in data["routes"]["nodes"] if n["name"] == name)
+        return shapely.Polygon(node["area"]).bounds  # (x0, y0, x1, y1)
+
+    def straight_length(data):
+        return area(data, "end")[0] - area(data, "start")[2]
+
+    corner = built["rimea15_corner"]
+    w = corner["routes"]["edges"][0]["width"]
+    turn = next(n["xy"] for n in corner["routes"]["nodes"] if n["name"] == "turn")
+    x_start, y_end = area(corner, "start")[2], area(corner, "end")[1]
+    outer = (turn[0] + w / 2 - x_start) + (y_end - (turn[1] - w / 2))
+    inner = (turn[0] - w / 2 - x_start) + (y_end - (turn[1] + w / 2))
+    assert inner == pytest.approx(straight_length(built["rimea15_short"]))
+    assert outer == pytest.approx(straight_length(built["rimea15_long"]))
