@@ -183,33 +183,35 @@ def _best_first(L, orders, which, configs, found, expanded, checks, phases, pair
     q, r = pair[part, 0], pair[part, 1]
     for a in range(part, configs.shape[0], parts):
         if phases & 1:
-            _find_init(L, a, orders[which[a]], configs[a], found, expanded, checks, q)
+            _find_init(L, a, orders[which[a]], configs[a], found, expanded, checks)
         if phases & 2 and found[a]:
             _bfp(L, a, configs[a], expanded, checks, q, r, visited[part], seen[part],
                  open_code[part], open_eff[part])
 
 
 @_inline
-def _find_init(L, a, order, config, found, expanded, checks, q):
+def _find_init(L, a, order, config, found, expanded, checks):
     """Walk the FIFO order ``order`` to agent ``a``'s first legal configuration, counting
-    the look-ups and the illegal (expanded) configurations (``q`` (n,): scratch)."""
+    the look-ups (the configurations walked) and the illegal (expanded) ones."""
     n = config.size
     J = L.flat_Ej.shape[1]
     sd, rs, wd, wo = L.step_done, L.reason, L.swing_done, L.swing_ok
     so, wf, ws = L.step_offset, L.swing_offset, L.swing_strides
+    popped = order.shape[0]  # looked up: every configuration, where none is legal
+    hit = False
     for i in range(order.shape[0]):
-        for k in range(n):
-            q[k] = order[i, k]
-        checks[a] += 1
-        legal = probe(sd, rs, wd, wo, so, wf, ws, J, a, q)
+        legal = probe(sd, rs, wd, wo, so, wf, ws, J, a, order[i])
         if legal < 0:
-            legal = config_legal(L, a, q)
+            legal = config_legal(L, a, order[i])
         if legal:
+            popped = i + 1
+            hit = True
             for k in range(n):
-                config[k] = q[k]
+                config[k] = order[i, k]
             found[a] = True
             break  # one exit (see the note at lattice_kernel.inline)
-        expanded[a] += 1
+    checks[a] += popped
+    expanded[a] += popped - 1 if hit else popped  # the illegal ones
 
 
 @_inline
