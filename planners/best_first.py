@@ -13,7 +13,8 @@ from functools import lru_cache
 import numba as nb
 import numpy as np
 
-from planners.lattice import THREADS, StepTables, run_parts
+from planners import lattice
+from planners.lattice import StepTables, run_parts
 from planners.lattice_kernel import (
     config_efficiency,
     config_legal,
@@ -116,13 +117,15 @@ def bfp(tables: StepTables, init: SearchResult) -> SearchResult:
 
 def _scratch(tables: StepTables, climbs: bool) -> tuple:
     """The kernel's scratch, a row per thread (:func:`run_parts`): two configurations
-    (THREADS, 2, n); for BFP (``climbs``) the visited flags (all False), the codes set in
-    them and the OPEN list's codes and efficiencies (THREADS, J**n)."""
-    n, J = tables.struct.n, tables.struct.J
+    (T, 2, n); for BFP (``climbs``) the visited flags (all False), the codes set in
+    them and the OPEN list's codes and efficiencies (T, J**n); T = ``lattice.THREADS``,
+    read now, as :func:`run_parts` reads it (a part writes only its own row: the kernel
+    has no bounds checks, so fewer rows than parts would write past the arrays)."""
+    n, J, T = tables.struct.n, tables.struct.J, lattice.THREADS
     size = J**n if climbs else 0
-    return (np.empty((THREADS, 2, n), dtype=np.int64),
-            np.zeros((THREADS, size), dtype=np.bool_), np.empty((THREADS, size), dtype=np.int64),
-            np.empty((THREADS, size), dtype=np.int64), np.empty((THREADS, size)))
+    return (np.empty((T, 2, n), dtype=np.int64),
+            np.zeros((T, size), dtype=np.bool_), np.empty((T, size), dtype=np.int64),
+            np.empty((T, size), dtype=np.int64), np.empty((T, size)))
 
 
 @nb.njit(cache=True, nogil=True)
