@@ -10,6 +10,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from crowdwalk.crowd.navigation import RouteTable
+from crowdwalk.crowd.routing_kernels import steering_rows
 
 __all__ = ["Routes", "RouteProgress", "route_progress", "steering_targets"]
 
@@ -300,8 +301,6 @@ def _rows(table: RouteTable, route, progress, xy, heading, radius, clearance, pa
           lane_only: bool):
     """:func:`~crowdwalk.crowd.routing_kernels.steering_rows` of k walkers: target (k, 2)
     [m], direction (k, 2) and whether the lane runs into a wall (k,) bool."""
-    from crowdwalk.crowd.routing_kernels import steering_rows
-
     f = np.ascontiguousarray
     k = len(route)
     target, direction = np.empty((k, 2)), np.empty((k, 2))

@@ -132,5 +132,5 @@ def steering_rows(s, xy_tab, start, stop, s0, s1, dist, ox, oy, cell, route, pro
         if n < 1e-9:
             direction[i, 0], direction[i, 1] = cos_h[i], sin_h[i]
         else:
-            d = n if n > 1e-12 else 1.0
+            d = n if n > 1e-12 else 1.0  # a NaN norm divides by 1.0, as the array code did
             direction[i, 0], direction[i, 1] = dx / d, dy / d
