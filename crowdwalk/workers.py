@@ -52,6 +52,11 @@ MIN_SPLIT_ROWS = 400
 #: A call with fewer rows per thread is not split among threads [-] (a part's fixed cost,
 #: ~0.3 ms of Python between numpy calls, against ~60 µs per walker steered).
 MIN_THREAD_ROWS = 32
+#: The same for a light call, a compiled kernel of a few µs per walker (the crowd's
+#: steering targets, neighbour grid queries, clash tests, footing) [-]: at ~100 deciders
+#: per tick, split in two threads, such calls took 2-10 times their one-thread time
+#: (room of 1,000 walkers, ``bench_vs_jupedsim``'s scenario, load 4.5).
+MIN_LIGHT_ROWS = 256
 #: A worker's first-generation garbage-collection threshold (Python's default 700) [-]:
 #: posing allocates millions of small objects per simulated second, and with the default
 #: every 100th first-generation collection may be a full one over the whole heap (numba,

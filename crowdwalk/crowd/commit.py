@@ -12,6 +12,7 @@ import numba as nb
 import numpy as np
 
 from crowdwalk.steps import StepBatch
+from crowdwalk.workers import MIN_LIGHT_ROWS
 
 __all__ = ["take_steps", "swing_bezier"]
 
@@ -75,7 +76,8 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
     # stepped over: at most one longest step (1.05 leg lengths) along the direction
     stride = 1.05 * legs.of(a).length
     kind, on_obstacle = (terrain.footing(foothold, d, stride=stride) if threads is None else
-                         threads.map(terrain.footing, a.size, foothold, d, stride=stride))
+                         threads.map(terrain.footing, a.size, foothold, d, stride=stride,
+                                     min_rows=MIN_LIGHT_ROWS))
     pop = population
     return StepBatch(
         agent=a, step=st.steps[a].copy(), start_time=t0, duration=duration, foot=foot,
