@@ -160,6 +160,11 @@ class CrowdSimulation:
 
             self.free_zone = Openings(world.routes, params.opening_width,
                                       params.headway_free_margin)
+        self.zipper = None  # zipper: lane targets at openings
+        if params.zipper:
+            from crowdwalk.crowd.zipper import ZipperEntry
+
+            self.zipper = ZipperEntry(world.routes, params.opening_width)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -402,6 +407,10 @@ class CrowdSimulation:
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
                                 count=prm.neighbours, reach=prm.neighbour_range,
                                 threads=self.threads)
+        if self.zipper is not None:  # staggered entry: the lane beside the leader's
+            target = self.zipper.targets(table, self.clearance, route=st.route[idx],
+                                         progress=st.progress[idx], xy=pos,
+                                         radius=self.radius[idx], target=target, nbs=nbs)
         outline = self.shape.packed(idx)
         walled = None
         if prm.speed_model == "headway" and prm.headway_overtake_open_lanes:
