@@ -90,11 +90,12 @@ def fifo_order(centre: int, n: int, J: int) -> np.ndarray:
     return order
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=8)
 def fifo_orders(centres: tuple, n: int, J: int) -> np.ndarray:
     """:func:`fifo_order` of each of ``centres`` (K, J**n, n), read-only (cached: a batch's
-    chunks mostly have the same few neutral steps, and stacking them is ~0.6 MB a
-    chunk)."""
+    chunks mostly have the same few neutral steps, and stacking them is ~0.6 MB a chunk;
+    the benchmark's 1,000 walkers have 4 sets in 16 chunks; few entries, as each holds
+    K * J**n * n bytes)."""
     orders = (fifo_order(centres[0], n, J)[None] if len(centres) == 1
               else np.stack([fifo_order(c, n, J) for c in centres]))
     orders.setflags(write=False)
