@@ -41,6 +41,7 @@ from crowdwalk.crowd.conflicts import clashes_with_neighbours, same_tick_yielder
 from crowdwalk.crowd.events import EventTimeline
 from crowdwalk.crowd.holding import WaitingAreas
 from crowdwalk.crowd.neighbours import gather_neighbours
+from crowdwalk.crowd.openings import Openings
 from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import lane_runs_into_wall, route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
@@ -51,6 +52,7 @@ from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
+from crowdwalk.crowd.zipper import ZipperEntry
 from crowdwalk.errors import invalid
 from crowdwalk.gait.datasets import normative
 from crowdwalk.gait.metagait import MetaGait
@@ -150,20 +152,14 @@ class CrowdSimulation:
             if sc.waiting_areas else None
         self.openings = None
         if params.opening_ease:
-            from crowdwalk.crowd.openings import Openings
-
             self.openings = Openings(world.routes, params.opening_width,
                                      params.opening_margin)
         self.free_zone = None  # headway_free_margin: where the headway model is off
         if params.speed_model == "headway" and params.headway_free_margin is not None:
-            from crowdwalk.crowd.openings import Openings
-
             self.free_zone = Openings(world.routes, params.opening_width,
                                       params.headway_free_margin)
         self.zipper = None  # zipper: lane targets at openings
         if params.zipper:
-            from crowdwalk.crowd.zipper import ZipperEntry
-
             self.zipper = ZipperEntry(world.routes, params.opening_width)
         self.gait = gait
         self.workers = workers
