@@ -99,13 +99,15 @@ class RowThreads:
         self._pool = (ThreadPoolExecutor(self.count - 1, thread_name_prefix="crowdwalk-rows")
                       if self.count > 1 else None)
 
-    def map(self, fn: Callable, m: int, /, *args, min_rows: int | None = None, **kwargs):
+    def map(self, fn: Callable, m: int, /, *args, min_rows: int | None = None,
+            light: bool = False, **kwargs):
         """``fn(*args, **kwargs)`` computed on contiguous parts of its m rows at once, one
         part per thread (the last in the calling thread), joined in order: the rules of
         :func:`split_rows` (row-independent ``fn``; arguments with m rows are split).
-        Fewer than ``min_rows`` (default :data:`MIN_THREAD_ROWS`) rows per part: fewer
-        parts."""
-        least = MIN_THREAD_ROWS if min_rows is None else min_rows
+        Fewer than ``min_rows`` (default :data:`MIN_THREAD_ROWS`; a ``light`` call's
+        :data:`MIN_LIGHT_ROWS`) rows per part: fewer parts."""
+        least = (min_rows if min_rows is not None
+                 else MIN_LIGHT_ROWS if light else MIN_THREAD_ROWS)
         parts = min(self.count, m // max(least, 1))
         if parts <= 1 or self._pool is None:
             return fn(*args, **kwargs)

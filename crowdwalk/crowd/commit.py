@@ -12,7 +12,6 @@ import numba as nb
 import numpy as np
 
 from crowdwalk.steps import StepBatch
-from crowdwalk.workers import MIN_LIGHT_ROWS
 
 __all__ = ["take_steps", "swing_bezier"]
 
@@ -77,7 +76,7 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
     stride = 1.05 * legs.of(a).length
     kind, on_obstacle = (terrain.footing(foothold, d, stride=stride) if threads is None else
                          threads.map(terrain.footing, a.size, foothold, d, stride=stride,
-                                     min_rows=MIN_LIGHT_ROWS))
+                                     light=True))
     pop = population
     return StepBatch(
         agent=a, step=st.steps[a].copy(), start_time=t0, duration=duration, foot=foot,

@@ -16,7 +16,6 @@ import numpy as np
 
 from crowdwalk.crowd.shape import BodyShape
 from crowdwalk.crowd.steering import Neighbours
-from crowdwalk.workers import MIN_LIGHT_ROWS
 
 __all__ = ["gather_neighbours"]
 
@@ -40,7 +39,7 @@ def gather_neighbours(state, deciders: np.ndarray, *, t: float, walkers: np.ndar
                      packed=shape.packed(), radius=shape.radius, k=k, reach=reach)
     if threads is None:
         return gather(deciders, me)
-    return threads.map(gather, len(deciders), deciders, me, min_rows=MIN_LIGHT_ROWS)
+    return threads.map(gather, len(deciders), deciders, me, light=True)
 
 
 def _gather(deciders, me, *, state, t, grid, now, walkers, packed, radius, k,

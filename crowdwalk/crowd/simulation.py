@@ -60,7 +60,7 @@ from crowdwalk.population import Population
 from crowdwalk.sinks import Snapshot
 from crowdwalk.steps import StepBatch
 from crowdwalk.style import LOCKS
-from crowdwalk.workers import MIN_LIGHT_ROWS, row_threads, split_rows
+from crowdwalk.workers import row_threads, split_rows
 from planners import normal_mode
 
 __all__ = ["CrowdParams", "CrowdParts", "CrowdSimulation", "build_parts", "WAITING",
@@ -381,7 +381,7 @@ class CrowdSimulation:
         target, route_dir = self.threads.map(
             partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
             route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
-            radius=self.radius[idx], min_rows=MIN_LIGHT_ROWS)
+            radius=self.radius[idx], light=True)
         if np.isfinite(prm.sight_after):
             # stuck for ``sight_after`` with the target behind a wall (pushed into a side
             # room, say): head for the farthest point of the route it sees
@@ -413,7 +413,7 @@ class CrowdSimulation:
             walled = self.threads.map(
                 partial(lane_runs_into_wall, table, clearance=self.clearance, params=prm),
                 idx.size, route=st.route[idx], progress=st.progress[idx], xy=pos,
-                radius=self.radius[idx], min_rows=MIN_LIGHT_ROWS)
+                radius=self.radius[idx], light=True)
         gap = self._gap_steps(idx, pos, nbs, walled)
         rows = dict(
             heading=st.heading[idx], radius=self.radius[idx],
@@ -454,7 +454,7 @@ class CrowdSimulation:
                     partial(clashes_with_neighbours, nbs), go.size, go, start=pos[go], end=end,
                     duration=self._durations(idx[go], plan.take(go)), elapsed=t - te[go],
                     yaw=st.yaw1[idx[go]], yaw_end=choice.yaw[go], shape=outline[go],
-                    min_rows=MIN_LIGHT_ROWS)
+                    light=True)
                 move = plan.move.copy()
                 move[go[clash]] = False
                 plan = plan.with_move(move)
@@ -514,7 +514,7 @@ class CrowdSimulation:
             partial(steering_targets, self.routes.table, clearance=self.clearance,
                     params=self.params), a.size,
             route=st.route[a], progress=st.progress[a] + length, xy=body, heading=heading,
-            radius=self.radius[a], min_rows=MIN_LIGHT_ROWS)
+            radius=self.radius[a], light=True)
         return self.metagait.orient(a, swing_foot=st.foot[a], heading=heading,
                                     heading_next=np.arctan2(ahead[:, 1], ahead[:, 0]),
                                     base_toe_out=self.pop.style.foot_angle[a])
