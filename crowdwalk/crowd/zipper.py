@@ -63,7 +63,8 @@ class ZipperEntry:
             return out
         r, s, p = route[rows], progress[rows], xy[rows]
         ahead = np.arange(0.0, _LOOK + 1e-9, _SAMPLE)
-        line = np.stack([table.point_at(r, s + a) for a in ahead], axis=1)  # (m, j, 2)
+        line = table.point_at(np.repeat(r, ahead.size), (s[:, None] + ahead).ravel()
+                              ).reshape(rows.size, ahead.size, 2)  # (m, j, 2)
         half = clearance(line.reshape(-1, 2)).reshape(line.shape[:2]).min(axis=1)
         here = line[:, 0]
         e = table.point_at(r, s + 0.1) - here
