@@ -404,23 +404,55 @@ class _Landed:
     root_velocity: np.ndarray
 
 
-@dataclass(eq=False)
-class _TrailMemo:
-    """The :meth:`Animator._trailing_root` offsets (n, 3) [m] already found in the frame
-    being posed, at the stance phases (n,) [1] they were found for (``has`` (n,) bool).
+@dataclass(frozen=True, eq=False)
+class _WalkInputs:
+    """What :meth:`Animator._walk` hands ElevWalker for k agents before the re-walks' own
+    fixes (swing ankle ``lift``, ``toe_fix``, ``pin_fix``): the bodies, stance sides,
+    phases (k,), legs ``st``/``sw`` (k, 4), heading ``psi`` (k,), stance ``foot``, the
+    swing's toe-out (k,), warm starts, stance fractions (k,), the step corrections
+    (``offset``, ``target``, ``goal`` (k, 3) [m] without lift or pin fix, ``blend``,
+    ``toes`` (k,), ``hip_fix`` (k, 3); None uncorrected), the push-off rows ``pinned``
+    (k,) bool, the anticipated lift ``envelope`` (k,) [m] or None, styles, list scales.
 
-    Within one :meth:`Animator.pose` nothing they depend on changes (the warm starts are
-    stored after the last walk), and each agent's walk is its own (row-independent
-    kernels), so the re-walks (yaw fixes, lifts) take them instead of posing the free
-    walker again: the same values."""
+    Within one :meth:`Animator.pose` none of them changes between the frame's walk and
+    its re-walks (the warm starts are stored after the last walk; each agent's terms are
+    its own), so the re-walks take their rows (:meth:`take`) instead of computing them
+    again: the same values (``Animator._rewalk``)."""
 
-    has: np.ndarray
+    body: Body
+    stance_left: np.ndarray
     phase: np.ndarray
-    shift: np.ndarray
+    st: np.ndarray
+    sw: np.ndarray
+    psi: np.ndarray
+    foot: StanceFoot
+    toe_out: np.ndarray
+    warm: WarmStart
+    stance_fraction: np.ndarray
+    offset: np.ndarray | None
+    target: np.ndarray | None
+    blend: np.ndarray | None
+    goal: np.ndarray | None
+    toes: np.ndarray | None
+    hip_fix: np.ndarray | None
+    pinned: np.ndarray | None
+    envelope: np.ndarray | None
+    attributes: object
+    list_scale: np.ndarray
 
-    @classmethod
-    def empty(cls, n: int) -> _TrailMemo:
-        return cls(np.zeros(n, bool), np.zeros(n), np.zeros((n, 3)))
+    def take(self, rows: np.ndarray) -> _WalkInputs:
+        """The agents at ``rows`` (m,) (fresh arrays)."""
+        def cut(v):
+            if v is None or isinstance(v, np.ndarray):
+                return None if v is None else v[rows]
+            if isinstance(v, StanceFoot):
+                return StanceFoot(v.ball[rows], v.yaw[rows], v.slope[rows])
+            if isinstance(v, WarmStart):
+                return WarmStart(*(None if x is None else x[rows] for x in
+                                   (v.ankle, v.hip, v.ankle_jacobian, v.hip_jacobian)))
+            return v.take(rows)  # Body, Style
+
+        return _WalkInputs(**{f.name: cut(getattr(self, f.name)) for f in fields(self)})
 
 
 class Animator:
@@ -462,7 +494,6 @@ class Animator:
         self._swing = _SwingState.zeros(n)
         self._warm = _SolverWarmth.zeros(n)
         self._last = _LastPose.zeros(n, nj)
-        self._trail_memo: _TrailMemo | None = None  # set while a frame is posed
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
                       "lifted": 0, "lift_steps": 0, "yaw_fixes": 0, "pin_fixes": 0,
                       "data_toe_offs": 0}  # fmt: skip
@@ -531,7 +562,7 @@ class Animator:
         joins = np.flatnonzero(sw.trail_root[a])
         if joins.size:  # the join starts from the trailing leg's root, not the stance leg's
             aj = a[joins]
-            sw.hip_fix[aj] -= self._trailing_root(aj, np.zeros(aj.size))
+            sw.hip_fix[aj] -= self._trailing_solved(aj, np.zeros(aj.size))
         capped = self._swing_ends(cmd, body, had, data.angles)
         if self.style.data_toe_off and self.ground is not None:
             # where the toe-off hand-over's cap leaves a jump on a short step off stairs:
@@ -902,11 +933,7 @@ class Animator:
         if not np.isfinite(t):
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
-        self._trail_memo = _TrailMemo.empty(n)
-        try:
-            walked = self._posed(a, phase)
-        finally:
-            self._trail_memo = None
+        walked = self._posed(a, phase)
         ok = walked.converged
         warm = self._warm
         warm.ankle[a] = np.where(ok[:, None], walked.warm.ankle, warm.ankle[a])
@@ -957,7 +984,8 @@ class Animator:
     def _posed(self, a: np.ndarray, phase: np.ndarray):
         """The corrected walk of agents a (k,) at stance phases (k,), the trailing
         foot's yaw fixed and a swing sole below the ground lifted (:meth:`pose`)."""
-        walked = self._walk(a, phase, corrected=True)
+        inputs = self._walk_inputs(a, phase, corrected=True)
+        walked = self._walk_from(inputs)
         toe_fix = np.zeros(a.size)
         for _ in range(_YAW_ROUNDS):
             more = self._swing_yaw_fix(a, phase, walked)
@@ -965,14 +993,14 @@ class Animator:
             if fix.size == 0:
                 break
             toe_fix[fix] += more[fix]
-            self._merge(walked, fix, self._walk(a[fix], phase[fix], corrected=True,
-                                                toe_fix=toe_fix[fix],
-                                                stance=walked.stance.take(fix)))
+            self._merge(walked, fix, self._rewalk(a[fix], phase[fix], inputs, fix,
+                                                  toe_fix=toe_fix[fix],
+                                                  stance=walked.stance.take(fix)))
             self.stats["yaw_fixes"] += fix.size
         pin_fix = None
         if self.style.pin_ball:
-            pin_fix = self._pin_ball(a, phase, walked, toe_fix)
-        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix, pin_fix)
+            pin_fix = self._pin_ball(a, phase, walked, toe_fix, inputs)
+        walked, lifted = self._lift_swing_foot(a, phase, walked, toe_fix, pin_fix, inputs)
         self.stats["lifted"] += int(lifted)
         return walked
 
@@ -1154,6 +1182,12 @@ class Animator:
         the same agents at the same phases within this frame (the warm starts are stored
         after the frame's last walk, and the lift, toe and pin fixes change only the
         swing's inputs), taken instead of solved again: the same values."""
+        return self._walk_from(self._walk_inputs(a, phase, corrected), lift, toe_fix,
+                               pin_fix, stance)
+
+    def _walk_inputs(self, a: np.ndarray, phase: np.ndarray, corrected: bool) -> _WalkInputs:
+        """:meth:`_walk`'s ElevWalker arguments for agents a (k,) at stance phases (k,),
+        before the lift, toe and pin fixes (:class:`_WalkInputs`)."""
         body = self.body.take(a)
         st, sw = self._legs(a, phase)  # stance leg at t, swing leg at t + 0.5
         psi = self._heading(a, phase)
@@ -1173,7 +1207,7 @@ class Animator:
             slope = foot.slope.copy()
             slope[spinning] = np.minimum(sub.slope, p_max)
             foot = StanceFoot(foot.ball, foot.yaw, slope)
-        offset = target = blend = goal = toes = hip_fix = None
+        offset = target = blend = goal = toes = hip_fix = pinned = envelope = None
         if corrected:
             # ak.corrections: the swing offset blended from toe-off to the landing, with
             # toe_off_c1 its C¹ hand-over T β h(u), u = (τ − toe-off) / β (starts with the
@@ -1194,50 +1228,57 @@ class Animator:
             if pinned.any():
                 goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
                                                                 sw[pinned])  # fmt: skip
-                if pin_fix is not None:
-                    goal[pinned] += pin_fix[pinned]
             envelope = self._lift_envelope(a, tau)
-            if envelope is not None:
-                lift = envelope if lift is None else lift + envelope
-            if lift is not None:
-                offset[:, 2] += lift
-                target[:, 2] += lift
-                goal[:, 2] += lift
         if corrected:
             trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))
             if trailing.size:
-                hip_fix[trailing] += self._trailing_root(a[trailing], phase[trailing])
+                hip_fix[trailing] += self._trailing_solved(a[trailing], phase[trailing])
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
         # a walk starts from standing: the pelvis is level and lists in over the first step
         list_scale = np.where(self._step.first[a], smoothstep(tau), 1.0)
-        toe_out = self._swing_toe(a, tau, psi)
-        if toe_fix is not None:
-            toe_out = toe_out + toe_fix
+        return _WalkInputs(
+            body, self._step.stance_left[a], phase, st, sw, psi, foot,
+            self._swing_toe(a, tau, psi), warm, self._step.stance_fraction[a], offset, target,
+            blend, goal, toes, hip_fix, pinned, envelope,
+            None if self.attributes is None else self.attributes.take(a), list_scale)
+
+    def _walk_from(self, w: _WalkInputs, lift: np.ndarray | None = None,
+                   toe_fix: np.ndarray | None = None, pin_fix: np.ndarray | None = None,
+                   stance: StanceHalf | None = None):  # fmt: skip
+        """ElevWalker on the arguments ``w`` (:meth:`_walk_inputs`) with the fixes of
+        :meth:`_walk` applied (to copies: ``w`` stays as it was)."""
+        offset, target, goal = w.offset, w.target, w.goal
+        if offset is not None:  # corrected
+            offset, target, goal = offset.copy(), target.copy(), goal.copy()
+            if pin_fix is not None and w.pinned.any():
+                goal[w.pinned] += pin_fix[w.pinned]
+            if w.envelope is not None:
+                lift = w.envelope if lift is None else lift + w.envelope
+            if lift is not None:
+                offset[:, 2] += lift
+                target[:, 2] += lift
+                goal[:, 2] += lift
+        toe_out = w.toe_out if toe_fix is None else w.toe_out + toe_fix
         return elevwalker_pose(
-            body, self._step.stance_left[a], phase, st, sw, psi, foot, toe_out, warm,
-            self.style, self._step.stance_fraction[a], swing_offset=offset, swing_target=target,
-            swing_blend=blend, stance_hip_offset=hip_fix, swing_goal=goal,
-            swing_toe_angle=toes,
-            attributes=None if self.attributes is None else self.attributes.take(a),
-            list_scale=list_scale, stance=stance,
+            w.body, w.stance_left, w.phase, w.st, w.sw, w.psi, w.foot, toe_out, w.warm,
+            self.style, w.stance_fraction, swing_offset=offset, swing_target=target,
+            swing_blend=w.blend, stance_hip_offset=w.hip_fix, swing_goal=goal,
+            swing_toe_angle=w.toes, attributes=w.attributes, list_scale=w.list_scale,
+            stance=stance,
         )  # fmt: skip
 
-    def _trailing_root(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
-        """:meth:`_trailing_solved`, taken from the frame's :class:`_TrailMemo` for the
-        agents (and phases) it has already been found for while a frame is posed."""
-        memo = self._trail_memo
-        if memo is None:
-            return self._trailing_solved(a, phase)
-        hit = memo.has[a] & (memo.phase[a] == phase)
-        out = np.empty((a.size, 3))
-        out[hit] = memo.shift[a[hit]]
-        miss = np.flatnonzero(~hit)
-        if miss.size:
-            am = a[miss]
-            out[miss] = self._trailing_solved(am, phase[miss])
-            memo.has[am], memo.phase[am], memo.shift[am] = True, phase[miss], out[miss]
-        return out
+    def _rewalk(self, a: np.ndarray, phase: np.ndarray, inputs: _WalkInputs | None,
+                rows: np.ndarray, lift: np.ndarray | None = None,
+                toe_fix: np.ndarray | None = None, pin_fix: np.ndarray | None = None,
+                stance: StanceHalf | None = None):  # fmt: skip
+        """A corrected re-walk of agents a (k,) at stance phases (k,) in the frame being
+        posed with the fixes of :meth:`_walk`: the rows ``rows`` (k,) of the frame's walk
+        arguments ``inputs`` taken (the same values), or all found again without them."""
+        if inputs is None:
+            return self._walk(a, phase, corrected=True, lift=lift, toe_fix=toe_fix,
+                              pin_fix=pin_fix, stance=stance)
+        return self._walk_from(inputs.take(rows), lift, toe_fix, pin_fix, stance)
 
     def _trailing_solved(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
         """Root offset (k, 3) [m] along ψ of agents a at stance phases (k,) in the double
@@ -1298,14 +1339,15 @@ class Animator:
         (:meth:`_pinned_foot`)."""
         return self._pinned_foot(a, phase, swing_angles)[:2]
 
-    def _pin_ball(self, a: np.ndarray, phase: np.ndarray, walked,
-                  toe_fix: np.ndarray) -> np.ndarray | None:
+    def _pin_ball(self, a: np.ndarray, phase: np.ndarray, walked, toe_fix: np.ndarray,
+                  inputs: _WalkInputs | None = None) -> np.ndarray | None:
         """``GaitStyle.pin_ball``: corrections (k, 3) [m] of the pinned push-off ankle's goal
         that put the trailing foot's ball horizontally where the pin put it (None: none
         needed), the walk ``walked`` re-solved with them (in place). The swing talocrural
         turns the foot about a skew axis and the subtalar stays neutral, so a foot pitched
         while yawed away from ψ (a turn) rolls and its ball moves sideways off the pinned
-        ankle (up to 19 mm at the corner); each round moves the goal by the ball's error."""
+        ankle (up to 19 mm at the corner); each round moves the goal by the ball's error.
+        ``inputs``: ``walked``'s :class:`_WalkInputs`, whose rows the re-walks take."""
         tau = 2.0 * phase
         pinned = np.flatnonzero(self._swing.has_trail[a] & (tau < self._swing.toe_off[a]))
         if pinned.size == 0:
@@ -1329,9 +1371,9 @@ class Animator:
                 break
             rows = pinned[off]
             fix[rows] -= err[off]
-            self._merge(walked, rows, self._walk(a[rows], phase[rows], corrected=True,
-                                                 toe_fix=toe_fix[rows], pin_fix=fix[rows],
-                                                 stance=walked.stance.take(rows)))
+            self._merge(walked, rows, self._rewalk(
+                a[rows], phase[rows], inputs, rows, toe_fix=toe_fix[rows], pin_fix=fix[rows],
+                stance=walked.stance.take(rows)))
             self.stats["pin_fixes"] += rows.size
         return fix
 
@@ -1387,11 +1429,13 @@ class Animator:
 
     def _lift_swing_foot(self, a: np.ndarray, phase: np.ndarray, walked,
                          toe_fix: np.ndarray | None = None,
-                         pin_fix: np.ndarray | None = None):
+                         pin_fix: np.ndarray | None = None,
+                         inputs: _WalkInputs | None = None):
         """Re-solve agents whose swing sole (heel to toe tip, sampled) dips below the
         ground, the ankle goal raised by the depth (IK on the swing leg); the lifted pose
         is checked again and raised further (the swing leg's IK does not translate the
-        foot exactly: reach, knee plane), up to ``_LIFT_ROUNDS`` times."""
+        foot exactly: reach, knee plane), up to ``_LIFT_ROUNDS`` times. ``inputs``:
+        ``walked``'s :class:`_WalkInputs`, whose rows the re-walks take."""
         depth = self._points_depth(a, self._swing_sole(a, walked))
         sink = np.flatnonzero(depth > 1e-4)
         if sink.size == 0:
@@ -1400,10 +1444,10 @@ class Animator:
         lift = np.zeros(a.size)
         for _ in range(_LIFT_ROUNDS):
             lift[sink] += depth[sink] + _LIFT_MARGIN
-            again = self._walk(a[sink], phase[sink], corrected=True, lift=lift[sink],
-                               toe_fix=None if toe_fix is None else toe_fix[sink],
-                               pin_fix=None if pin_fix is None else pin_fix[sink],
-                               stance=walked.stance.take(sink))
+            again = self._rewalk(a[sink], phase[sink], inputs, sink, lift=lift[sink],
+                                 toe_fix=None if toe_fix is None else toe_fix[sink],
+                                 pin_fix=None if pin_fix is None else pin_fix[sink],
+                                 stance=walked.stance.take(sink))
             self._merge(walked, sink, again)
             depth[sink] = self._points_depth(a[sink], self._swing_sole(a[sink], again))
             sink = sink[depth[sink] > 1e-4]

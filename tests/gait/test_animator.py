@@ -492,13 +492,14 @@ def _turning_walk(animator, k=3, fps=50.0):
     return frames
 
 
-def test_a_frames_rewalks_take_its_trailing_root_and_pose_the_same():
-    """The yaw fixes and lifts of a frame re-walk agents whose trailing-root offset the
-    frame's walk has found (:class:`_TrailMemo`): they take it, and every pose is what
-    finding it again gives."""
+def test_a_frames_rewalks_take_its_walk_inputs_and_pose_the_same():
+    """The yaw fixes, pin fixes and lifts of a frame re-walk agents whose walk arguments
+    the frame's walk has found (:class:`_WalkInputs`: legs, heading, corrections, the
+    trailing-root offset): they take them, and every pose is what finding them again
+    gives."""
     body = Body.from_heights([1.6, 1.75, 1.9])
-    memo, again = Animator(body, ground=_flat), Animator(body, ground=_flat)
-    solved = {"memo": 0, "again": 0}
+    taken, again = Animator(body, ground=_flat), Animator(body, ground=_flat)
+    solved = {"taken": 0, "again": 0}
 
     def counting(animator, key):
         inner = animator._trailing_solved
@@ -508,11 +509,17 @@ def test_a_frames_rewalks_take_its_trailing_root_and_pose_the_same():
             return inner(a, phase)
         return solve
 
-    memo._trailing_solved = counting(memo, "memo")
+    taken._trailing_solved = counting(taken, "taken")
     again._trailing_solved = counting(again, "again")
-    again._trailing_root = again._trailing_solved  # no memo: found again in every re-walk
-    fa, fb = _turning_walk(memo), _turning_walk(again)
-    assert memo.stats["yaw_fixes"] > 0 and solved["memo"] < solved["again"]
+    rewalk = again._rewalk
+
+    def found_again(a, phase, inputs, rows, **fixes):  # every re-walk from the state
+        return rewalk(a, phase, None, rows, **fixes)
+
+    again._rewalk = found_again
+    fa, fb = _turning_walk(taken), _turning_walk(again)
+    assert taken.stats["yaw_fixes"] > 0 and solved["taken"] < solved["again"]
+    assert taken.stats == again.stats
     for a, b in zip(fa, fb, strict=True):
         for name in ("root_position", "joints", "positions", "contact", "fallback"):
             assert np.array_equal(getattr(a, name), getattr(b, name)), name
