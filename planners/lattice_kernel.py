@@ -237,8 +237,11 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
         else:
             g = L0
             rise = dz[i] / max(ds[i], 1e-12) * L0
-        E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
-                    c_thigh, c_calf, constants, lift)
+        if dz[i] == 0.0:  # a level segment: E0's step (the same length, rise and summit)
+            E = E0
+        else:
+            E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
+                        c_thigh, c_calf, constants, lift)
         cost[i] = E - per_metre * g if steep[i] else (E - E0) / L0 * ds[i]
     if nsteep > 1:  # a low obstacle may be stridden over (see terminal_energy)
         for i in range(nseg):
