@@ -320,12 +320,14 @@ def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     for k in range(count):
         vertex_cum[k + 1] += vertex_cum[k]
     width = 1
-    for k in range(1, levels):
+    for k in range(1, levels):  # (rows and a shifted view: the loop is vectorised)
+        prev, row = table[k - 1], table[k]
         split = count - 2 * width + 1
+        ahead = prev[width:width + split]
         for i in range(split):
-            table[k, i] = max(table[k - 1, i], table[k - 1, i + width])
+            row[i] = max(prev[i], ahead[i])
         for i in range(split, count):
-            table[k, i] = table[k - 1, i]
+            row[i] = prev[i]
         width *= 2
 
 
