@@ -182,10 +182,15 @@ def _energy(length, rise, Ej, speed, normal, p):
 
 @_jit
 def _step_E(length, rise, summit_z, leg, speed, normal, p, c_thigh, c_calf, constants,
-            lift):
-    """step_energy(0, 0, length, rise, summit_z, ...)[3]: Eq. 4 of one step [J/kg]."""
-    thigh, calf, _ = key_frame(0.0, 0.0, length, rise, 0.0, summit_z, leg[0], leg[1],
-                               leg[4], leg[5], leg[5] + lift, constants)
+            lift, s1):
+    """step_energy(0, 0, length, rise, summit_z, ...)[3]: Eq. 4 of one step [J/kg];
+    ``s1`` the stance leg at K1 of a foothold at (0, 0) (:func:`stance_leg`, the same
+    for every such step: :func:`key_frame` is this with it)."""
+    ankle = leg[5]
+    s4 = next_swing_leg(length, rise + ankle, max(rise + ankle, 0.0 + ankle), leg[0], leg[1],
+                        ankle + lift, constants)
+    thigh, calf, _ = key_frame_from(0.0, 0.0, length, rise, 0.0, summit_z, leg[0], leg[1],
+                                    leg[4], ankle, constants, s1, s4)
     Ej = c_thigh * thigh + c_calf * calf
     return _energy(length, rise, Ej, speed, normal, p)[2]
 
@@ -220,8 +225,9 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
     length = leg[0] + leg[1]
     lo = min_ratio * length
     longest = max_ratio * length
+    s1 = stance_leg(0.0, 0.0, leg[0], leg[1], leg[5], constants)
     E0 = _step_E(L0, 0.0, 0.0 + (leg[5] + lift), leg, speed, normal, p, c_thigh, c_calf,
-                 constants, lift)
+                 constants, lift, s1)
     cost = np.empty(nseg)
     gap = np.empty(nseg)
     nxt = np.empty(nseg, dtype=np.int64)
@@ -241,7 +247,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
             E = E0
         else:
             E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
-                        c_thigh, c_calf, constants, lift)
+                        c_thigh, c_calf, constants, lift, s1)
         cost[i] = E - per_metre * g if steep[i] else (E - E0) / L0 * ds[i]
     if nsteep > 1:  # a low obstacle may be stridden over (see terminal_energy)
         for i in range(nseg):
@@ -252,7 +258,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
             stride = max(L0, min(gap[i] + leg[2], longest))
             top = max(z[i + 1], z[j]) - z[i]
             Es = _step_E(stride, 0.0, max(top, 0.0) + (leg[5] + lift), leg, speed, normal,
-                         p, c_thigh, c_calf, constants, lift)
+                         p, c_thigh, c_calf, constants, lift, s1)
             both, jump = cost[i] + cost[j], Es - per_metre * stride
             cost[j] = cost[j] if both <= jump else 0.0
             cost[i] = min(both, jump) - cost[j]
