@@ -138,11 +138,15 @@ def _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_sl
 
 @_leaf
 def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
-    """snap_to_support of one foothold [m] (3 edges on each side)."""
+    """snap_to_support of one foothold [m] (3 edges on each side), and the
+    :func:`_support` flags of the foothold returned (-1 where there is no edge: not
+    computed)."""
     E = edges.size
-    if E == 0 or _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance,
-                          max_slope) == 0:
-        return x
+    if E == 0:
+        return x, -1
+    flags = _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope)
+    if flags == 0:
+        return x, 0
     m = margin + 1e-9
     i = _left(edges, x)
     best, best_cost = x, np.inf
@@ -155,7 +159,8 @@ def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, m
                     c, heel_off, toe_off, s, z, slope, edges, margin, tolerance,
                     max_slope) == 0:
                 best, best_cost = c, shift
-    return best
+                flags = 0
+    return best, flags
 
 
 @_leaf
@@ -415,15 +420,17 @@ def prepare(L, a):
     for v in range(Nn):
         depth = L.node_depth[v]
         x = L.trailing[a] if depth == -1 else max(depth, 0) * lo_a + L.node_m[v] * delta_a
+        snapped, flags = 0.0, -1
         if snap and v >= 2:
-            x = _snap(b0 + x, 0.5 * delta_a, heel_off, toe_off, s, z, slope, edges,
-                      margin, tolerance, max_slope) - b0
+            snapped, flags = _snap(b0 + x, 0.5 * delta_a, heel_off, toe_off, s, z, slope,
+                                   edges, margin, tolerance, max_slope)
+            x = snapped - b0
         L.node_s[a, v] = x
         L.node_z[a, v] = _height(s, z, slope, b0 + x)
         L.support[a, v] = 0
-        if v >= 2:
-            L.support[a, v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges,
-                                       margin, tolerance, max_slope)
+        if v >= 2:  # (_snap's flags where they are of this very foothold)
+            L.support[a, v] = flags if flags >= 0 and b0 + x == snapped else _support(
+                b0 + x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope)
         lowest = min(lowest, b0 + x)
         highest = max(highest, b0 + x)
     far_a = -np.inf
@@ -865,14 +872,16 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     for v in range(Nn):
         depth = node_depth[v]
         x = trailing[a] if depth == -1 else max(depth, 0) * lo[a] + node_m[v] * delta[a]
+        snapped, flags = 0.0, -1
         if snap and v >= 2:
-            x = _snap(b0 + x, 0.5 * delta[a], heel_off, toe_off, s, z, slope, edges,
-                      margin, tolerance, max_slope) - b0
+            snapped, flags = _snap(b0 + x, 0.5 * delta[a], heel_off, toe_off, s, z, slope,
+                                   edges, margin, tolerance, max_slope)
+            x = snapped - b0
         node_s[a, v] = x
         node_z[a, v] = _height(s, z, slope, b0 + x)
-        if v >= 2:
-            support[v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges, margin,
-                                  tolerance, max_slope)
+        if v >= 2:  # (_snap's flags where they are of this very foothold)
+            support[v] = flags if flags >= 0 and b0 + x == snapped else _support(
+                b0 + x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope)
     far_a = -np.inf
     for v in range(last0, Nn):
         far_a = max(far_a, node_s[a, v])
