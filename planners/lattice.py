@@ -301,7 +301,8 @@ class StepTables:
         :class:`~planners.legality.Reason` flags; 0 is legal.
     swing_ok : ndarray of bool, shape (A, Np)
     controls : ndarray, shape (A, Np, 4, 2)
-        Swing-ankle Bezier control points (s relative to the stance foot, z) [m].
+        Swing-ankle Bezier control points (s relative to the stance foot, z) [m];
+        undefined where no curve was built in lazy tables (0 in the others).
     rounds : ndarray of int, shape (A, Np)
         §5.2 adjustment rounds (-1 where no curve was computed).
     cost, progress : ndarray, shape (A, Ns)
@@ -596,7 +597,8 @@ def build_tables(profiles, legs, speeds: np.ndarray, trailing: np.ndarray | None
         empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)), empty((A, Ns)),
         np.full((A, Ns), np.inf), np.full((A, Ns), int(Reason.UNREACHED), dtype=np.int64),
         np.full((A, Ns), np.inf), empty((A, Ns)), zeros((A, Ns), dtype=np.bool_),
-        zeros((A, Np), dtype=np.bool_), zeros((A, Np, 4, 2)), np.full((A, Np), -1),
+        zeros((A, Np), dtype=np.bool_), (empty if lazy else zeros)((A, Np, 4, 2)),
+        np.full((A, Np), -1),
         zeros((A, Np), dtype=np.bool_), zeros((A, 5), dtype=np.int64),
         empty((A, 3, basis.shape[1])), empty((A, 2)))
     L = lattice

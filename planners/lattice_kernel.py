@@ -138,11 +138,15 @@ def _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_sl
 
 @_leaf
 def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope):
-    """snap_to_support of one foothold [m] (3 edges on each side)."""
+    """snap_to_support of one foothold [m] (3 edges on each side), and the
+    :func:`_support` flags of the foothold returned (-1 where there is no edge: not
+    computed)."""
     E = edges.size
-    if E == 0 or _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance,
-                          max_slope) == 0:
-        return x
+    if E == 0:
+        return x, -1
+    flags = _support(x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope)
+    if flags == 0:
+        return x, 0
     m = margin + 1e-9
     i = _left(edges, x)
     best, best_cost = x, np.inf
@@ -155,7 +159,8 @@ def _snap(x, window, heel_off, toe_off, s, z, slope, edges, margin, tolerance, m
                     c, heel_off, toe_off, s, z, slope, edges, margin, tolerance,
                     max_slope) == 0:
                 best, best_cost = c, shift
-    return best
+                flags = 0
+    return best, flags
 
 
 @_leaf
@@ -182,10 +187,15 @@ def _energy(length, rise, Ej, speed, normal, p):
 
 @_jit
 def _step_E(length, rise, summit_z, leg, speed, normal, p, c_thigh, c_calf, constants,
-            lift):
-    """step_energy(0, 0, length, rise, summit_z, ...)[3]: Eq. 4 of one step [J/kg]."""
-    thigh, calf, _ = key_frame(0.0, 0.0, length, rise, 0.0, summit_z, leg[0], leg[1],
-                               leg[4], leg[5], leg[5] + lift, constants)
+            lift, s1):
+    """step_energy(0, 0, length, rise, summit_z, ...)[3]: Eq. 4 of one step [J/kg];
+    ``s1`` the stance leg at K1 of a foothold at (0, 0) (:func:`stance_leg`, the same
+    for every such step: :func:`key_frame` is this with it)."""
+    ankle = leg[5]
+    s4 = next_swing_leg(length, rise + ankle, max(rise + ankle, 0.0 + ankle), leg[0], leg[1],
+                        ankle + lift, constants)
+    thigh, calf, _ = key_frame_from(0.0, 0.0, length, rise, 0.0, summit_z, leg[0], leg[1],
+                                    leg[4], ankle, constants, s1, s4)
     Ej = c_thigh * thigh + c_calf * calf
     return _energy(length, rise, Ej, speed, normal, p)[2]
 
@@ -220,8 +230,9 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
     length = leg[0] + leg[1]
     lo = min_ratio * length
     longest = max_ratio * length
+    s1 = stance_leg(0.0, 0.0, leg[0], leg[1], leg[5], constants)
     E0 = _step_E(L0, 0.0, 0.0 + (leg[5] + lift), leg, speed, normal, p, c_thigh, c_calf,
-                 constants, lift)
+                 constants, lift, s1)
     cost = np.empty(nseg)
     gap = np.empty(nseg)
     nxt = np.empty(nseg, dtype=np.int64)
@@ -237,8 +248,11 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
         else:
             g = L0
             rise = dz[i] / max(ds[i], 1e-12) * L0
-        E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
-                    c_thigh, c_calf, constants, lift)
+        if dz[i] == 0.0:  # a level segment: E0's step (the same length, rise and summit)
+            E = E0
+        else:
+            E = _step_E(g, rise, max(rise, 0.0) + (leg[5] + lift), leg, speed, normal, p,
+                        c_thigh, c_calf, constants, lift, s1)
         cost[i] = E - per_metre * g if steep[i] else (E - E0) / L0 * ds[i]
     if nsteep > 1:  # a low obstacle may be stridden over (see terminal_energy)
         for i in range(nseg):
@@ -249,7 +263,7 @@ def _terminal(s, z, lo_i, hi_i, starts, stop, out, leg, speed, normal, per_metre
             stride = max(L0, min(gap[i] + leg[2], longest))
             top = max(z[i + 1], z[j]) - z[i]
             Es = _step_E(stride, 0.0, max(top, 0.0) + (leg[5] + lift), leg, speed, normal,
-                         p, c_thigh, c_calf, constants, lift)
+                         p, c_thigh, c_calf, constants, lift, s1)
             both, jump = cost[i] + cost[j], Es - per_metre * stride
             cost[j] = cost[j] if both <= jump else 0.0
             cost[i] = min(both, jump) - cost[j]
@@ -317,12 +331,14 @@ def _raster(s, z, slope, start, cell, count, levels, table, vertex_cum):
     for k in range(count):
         vertex_cum[k + 1] += vertex_cum[k]
     width = 1
-    for k in range(1, levels):
+    for k in range(1, levels):  # (rows and a shifted view: the loop is vectorised)
+        prev, row = table[k - 1], table[k]
         split = count - 2 * width + 1
+        ahead = prev[width:width + split]
         for i in range(split):
-            table[k, i] = max(table[k - 1, i], table[k - 1, i + width])
+            row[i] = max(prev[i], ahead[i])
         for i in range(split, count):
-            table[k, i] = table[k - 1, i]
+            row[i] = prev[i]
         width *= 2
 
 
@@ -404,15 +420,17 @@ def prepare(L, a):
     for v in range(Nn):
         depth = L.node_depth[v]
         x = L.trailing[a] if depth == -1 else max(depth, 0) * lo_a + L.node_m[v] * delta_a
+        snapped, flags = 0.0, -1
         if snap and v >= 2:
-            x = _snap(b0 + x, 0.5 * delta_a, heel_off, toe_off, s, z, slope, edges,
-                      margin, tolerance, max_slope) - b0
+            snapped, flags = _snap(b0 + x, 0.5 * delta_a, heel_off, toe_off, s, z, slope,
+                                   edges, margin, tolerance, max_slope)
+            x = snapped - b0
         L.node_s[a, v] = x
         L.node_z[a, v] = _height(s, z, slope, b0 + x)
         L.support[a, v] = 0
-        if v >= 2:
-            L.support[a, v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges,
-                                       margin, tolerance, max_slope)
+        if v >= 2:  # (_snap's flags where they are of this very foothold)
+            L.support[a, v] = flags if flags >= 0 and b0 + x == snapped else _support(
+                b0 + x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope)
         lowest = min(lowest, b0 + x)
         highest = max(highest, b0 + x)
     far_a = -np.inf
@@ -854,14 +872,16 @@ def _agent(a, prof_s, prof_z, bounds, base, lo, delta, trailing, speeds, normal,
     for v in range(Nn):
         depth = node_depth[v]
         x = trailing[a] if depth == -1 else max(depth, 0) * lo[a] + node_m[v] * delta[a]
+        snapped, flags = 0.0, -1
         if snap and v >= 2:
-            x = _snap(b0 + x, 0.5 * delta[a], heel_off, toe_off, s, z, slope, edges,
-                      margin, tolerance, max_slope) - b0
+            snapped, flags = _snap(b0 + x, 0.5 * delta[a], heel_off, toe_off, s, z, slope,
+                                   edges, margin, tolerance, max_slope)
+            x = snapped - b0
         node_s[a, v] = x
         node_z[a, v] = _height(s, z, slope, b0 + x)
-        if v >= 2:
-            support[v] = _support(b0 + x, heel_off, toe_off, s, z, slope, edges, margin,
-                                  tolerance, max_slope)
+        if v >= 2:  # (_snap's flags where they are of this very foothold)
+            support[v] = flags if flags >= 0 and b0 + x == snapped else _support(
+                b0 + x, heel_off, toe_off, s, z, slope, edges, margin, tolerance, max_slope)
     far_a = -np.inf
     for v in range(last0, Nn):
         far_a = max(far_a, node_s[a, v])

@@ -352,12 +352,12 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     lengths = tables.length.take(at_step)
     rises = tables.rise.take(at_step)
     controls = tables.controls.reshape(A * Np, 4, 2).take(rows * Np + swings, axis=0)
-    controls[..., 0] += origins[:, None, None]
     leg_length = np.array([leg.length for leg in legs])[:, None]
     terms = {name: getattr(tables, name).take(at_step) for name in ("En", "Ev", "Ej", "E")}
-    # a failed plan's steps beyond its legal prefix may be unevaluated (lazy tables):
-    # their values are garbage and dropped below
+    # a failed plan's steps (and swings) beyond its legal prefix may be unevaluated (lazy
+    # tables): their values are garbage and dropped below
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        controls[..., 0] += origins[:, None, None]
         durations = phase_durations(lengths, speeds[:, None], rises, leg_length)
         efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
     work = tables.lattice.work.tolist()  # TableWork's counters, in the kernels' order
