@@ -43,7 +43,6 @@ from crowdwalk.crowd.holding import WaitingAreas
 from crowdwalk.crowd.neighbours import gather_neighbours
 from crowdwalk.crowd.openings import Openings
 from crowdwalk.crowd.params import CrowdParams
-from crowdwalk.crowd.right_of_way import RightOfWay, with_reservations
 from crowdwalk.crowd.routing import lane_runs_into_wall, route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
 from crowdwalk.crowd.shape import BodyShape
@@ -166,9 +165,6 @@ class CrowdSimulation:
         self.wake = None  # wake_on_step: standing walkers decide at a neighbour's step
         if params.wake_on_step:
             self.wake = WakeOnStep(world.routes, params.opening_width)
-        self.right_of_way = None  # right_of_way: reserved next steps at openings
-        if params.right_of_way:
-            self.right_of_way = RightOfWay(world.routes, params.opening_width)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -360,16 +356,6 @@ class CrowdSimulation:
         return {"wall_scale": np.where(inside, prm.opening_wall_factor, 1.0),
                 "personal_scale": np.where(inside, prm.opening_personal_factor, 1.0)}
 
-    def _reservations(self, idx: np.ndarray, pos: np.ndarray, nbs):
-        """``right_of_way``: the reserved next steps (:class:`~crowdwalk.crowd.steering.
-        Neighbours`, (k, K)) of the deciders ``idx`` at ``pos`` (k, 2) [m] among ``nbs``."""
-        e = self._route_directions()
-        j = nbs.agent
-        step = self.nominal_step[j]
-        return self.right_of_way.reservations(
-            pos, e[idx], nbs, bound=self.shape.bound[idx], nb_direction=e[j], nb_step=step,
-            nb_time=np.maximum(step / self.pop.free_speed[j], self.min_step_time[j]))
-
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
         te = st.t1[idx].copy()  # heel-strike (or wait-end) times, within this tick
@@ -425,9 +411,6 @@ class CrowdSimulation:
             target = self.zipper.targets(table, self.clearance, route=st.route[idx],
                                          progress=st.progress[idx], xy=pos,
                                          radius=self.radius[idx], target=target, nbs=nbs)
-        limits = None
-        if self.right_of_way is not None:  # give way to the walkers ahead at openings
-            limits = with_reservations(nbs, self._reservations(idx, pos, nbs))
         outline = self.shape.packed(idx)
         walled = None
         if prm.speed_model == "headway" and prm.headway_overtake_open_lanes:
@@ -444,7 +427,7 @@ class CrowdSimulation:
             gap=gap if (prm.speed_model == "contact_gap" or prm.headway_steer
                         or prm.headway_overtake) else None,
             score_same_time=prm.headway_same_time,
-            **self._opening_scales(pos), **({} if limits is None else {"limits": limits}))
+            **self._opening_scales(pos))
         if self._steer_on:  # worker processes (given, not posing); the field goes once
             choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],
                                 clearance=self.clearance, params=prm.steering,
