@@ -466,8 +466,10 @@ class CrowdSimulation:
         wake = None
         if self.wake is not None:
             j = nbs.agent
+            e = self._route_directions()
             wake = self.wake.times(t, self.dt, pos, nbs, bound=self.shape.bound[idx],
-                                   nb_bound=self.shape.bound[j], step=self.nominal_step[idx])
+                                   nb_bound=self.shape.bound[j], step=self.nominal_step[idx],
+                                   direction=e[idx], nb_direction=e[j])
         self._commit(idx, te, t, choice.direction, choice.yaw, plan, wake)
 
     def _commit(self, idx, te, t, direction, yaw, plan: StepPlan,

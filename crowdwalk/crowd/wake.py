@@ -7,13 +7,14 @@ end for ever after; that holds only until the neighbour's heel strike, when it c
 its next step and the room it leaves becomes usable (the test is made in time). In the
 dense queue at a narrow door a walker standing for a fixed time misses that moment by
 half a wait on average. Here a standing walker in or within 1 m of an opening decides
-again at the tick after the first heel strike of a walking neighbour that could be in
-its way (within the two holding radii and the walker's nominal step), if that comes
-before the end of its wait: event-driven, as people in a queue move up as soon as the
-one in front moves (the event-driven update of Seitz & Köster 2014, "How update schemes
-influence crowd simulations", J. Stat. Mech. P07002, in which each pedestrian acts at
-its own next event time). Only when a walker decides changes, not what it may do: the
-hard tests are unchanged, so no two bodies overlap.
+again at the tick after the first heel strike of a walking neighbour going the same way
+(route directions within 60°) that could be in its way (within the two holding radii and
+the walker's nominal step), if that comes before the end of its wait: event-driven, as
+people in a queue move up as soon as the one in front moves (the event-driven update of
+Seitz & Köster 2014, "How update schemes influence crowd simulations", J. Stat. Mech.
+P07002, in which each pedestrian acts at its own next event time). Only when a walker
+decides changes, not what it may do: the hard tests are unchanged, so no two bodies
+overlap.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ __all__ = ["ZONE_MARGIN", "WakeOnStep"]
 
 #: how far into the rooms the zone reaches from the openings' ends [m]
 ZONE_MARGIN = 1.0
+#: same way: the route directions' cosine at least this (within 60°)
+SAME_WAY = 0.5
 
 
 class WakeOnStep:
@@ -43,10 +46,13 @@ class WakeOnStep:
         self.zone = Openings(graph, max_width, ZONE_MARGIN)
 
     def times(self, t: float, dt: float, pos: np.ndarray, nbs: Neighbours, *,
-              bound: np.ndarray, nb_bound: np.ndarray, step: np.ndarray) -> np.ndarray:
+              bound: np.ndarray, nb_bound: np.ndarray, step: np.ndarray,
+              direction: np.ndarray, nb_direction: np.ndarray) -> np.ndarray:
         """(m,) the time [s] at which each of m deciders at ``pos`` (m, 2) [m] at tick
         time ``t`` [s] (ticks ``dt`` [s] apart) would decide again if it stands: the tick
-        after the first heel strike of a walking neighbour of ``nbs`` within ``bound`` +
+        after the first heel strike of a walking same-way neighbour of ``nbs`` (route
+        directions ``direction`` (m, 2), ``nb_direction`` (m, K, 2) unit, cosine at least
+        ``SAME_WAY``) within ``bound`` +
         ``nb_bound`` (m,), (m, K) holding radii + ``step`` (m,) [m] of it (inf: none, or
         the decider is outside the zone).
 
@@ -64,7 +70,8 @@ class WakeOnStep:
         near = np.linalg.norm(nbs.now[rows] - pos[rows, None, :], axis=-1) \
             < (bound[rows, None] + nb_bound[rows] + step[rows, None])
         walking = np.einsum("rkj,rkj->rk", nbs.velocity[rows], nbs.velocity[rows]) > 0.0
-        ok = nbs.valid[rows] & near & walking & (nbs.remaining[rows] > 0.0)
+        same = np.einsum("rkj,rj->rk", nb_direction[rows], direction[rows]) >= SAME_WAY
+        ok = nbs.valid[rows] & near & walking & same & (nbs.remaining[rows] > 0.0)
         first = np.where(ok, nbs.remaining[rows], np.inf).min(axis=1)
         has = np.isfinite(first)
         tick = np.ceil((t + first[has]) / dt - 1e-6)  # the neighbour's deciding tick

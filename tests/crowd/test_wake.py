@@ -33,8 +33,10 @@ def test_a_standing_walker_wakes_the_tick_after_a_near_walking_neighbours_step()
     nbs = _neighbours([[7.9, 5.1], [7.9, 5.1], [9.5, 5.0], [4.4, 5.1]],
                       [[1.0, 0.0], [0.0, 0.0], [1.0, 0.0], [1.0, 0.0]],
                       [0.12, 0.12, 0.12, 0.12])
-    got = wake.times(t, dt, pos, nbs, bound=np.full(4, 0.18), nb_bound=np.full((4, 1), 0.18),
-                     step=np.full(4, 0.65))
+    east = np.tile([1.0, 0.0], (4, 1))
+    kw = dict(bound=np.full(4, 0.18), nb_bound=np.full((4, 1), 0.18), step=np.full(4, 0.65),
+              direction=east)
+    got = wake.times(t, dt, pos, nbs, nb_direction=east[:, None, :], **kw)
     # the neighbour's heel strike at 12.12 s falls in the tick ending at 12.15 s, where it
     # decides; the walker decides in the next tick, when the new step is committed
     np.testing.assert_allclose(got[0], 12.2, atol=1e-9)
@@ -42,6 +44,9 @@ def test_a_standing_walker_wakes_the_tick_after_a_near_walking_neighbours_step()
     # a standing neighbour frees no room; a far one is not in the way; away from the
     # opening nobody is woken
     assert np.isinf(got[1:]).all()
+    # nor does a neighbour going the other way (an oncoming walker's step)
+    west = wake.times(t, dt, pos, nbs, nb_direction=-east[:, None, :], **kw)
+    assert np.isinf(west).all()
 
 
 def _woken_stands(on: bool):
