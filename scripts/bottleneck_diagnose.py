@@ -194,7 +194,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         run = _run(_bottleneck(args.width, args.seed, args.count), Path(tmp) / "run", params)
         print(json.dumps({"width": args.width, "seed": args.seed, **fields,
-                          **diagnose(run.traj), **({"stands": counts} if counts else {})}))
+                          **diagnose(run.traj),
+                          "max_overlap_m": run.summary.get("max_overlap_m"),
+                          **({"stands": counts} if counts else {})}))
 
 
 if __name__ == "__main__":

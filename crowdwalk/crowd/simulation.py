@@ -52,6 +52,7 @@ from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
+from crowdwalk.crowd.wake import WakeOnStep
 from crowdwalk.crowd.zipper import ZipperEntry
 from crowdwalk.errors import invalid
 from crowdwalk.gait.datasets import normative
@@ -161,6 +162,9 @@ class CrowdSimulation:
         self.zipper = None  # zipper: lane targets at openings
         if params.zipper:
             self.zipper = ZipperEntry(world.routes, params.opening_width)
+        self.wake = None  # wake_on_step: standing walkers decide at a neighbour's step
+        if params.wake_on_step:
+            self.wake = WakeOnStep(world.routes, params.opening_width)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -459,9 +463,17 @@ class CrowdSimulation:
                 move[go[clash]] = False
                 plan = plan.with_move(move)
                 self.queue.clear(idx[go[clash]])
-        self._commit(idx, te, t, choice.direction, choice.yaw, plan)
+        wake = None
+        if self.wake is not None:
+            j = nbs.agent
+            e = self._route_directions()
+            wake = self.wake.times(t, self.dt, pos, nbs, bound=self.shape.bound[idx],
+                                   nb_bound=self.shape.bound[j], step=self.nominal_step[idx],
+                                   direction=e[idx], nb_direction=e[j])
+        self._commit(idx, te, t, choice.direction, choice.yaw, plan, wake)
 
-    def _commit(self, idx, te, t, direction, yaw, plan: StepPlan) -> None:
+    def _commit(self, idx, te, t, direction, yaw, plan: StepPlan,
+                wake: np.ndarray | None = None) -> None:
         st, prm = self.state, self.params
         mv = np.flatnonzero(plan.move)
         if mv.size > 1:
@@ -480,6 +492,12 @@ class CrowdSimulation:
         if wait.size:
             stand(st, self.queue, agents=wait, t=t, terrain=self.terrain, legs=self.legs,
                   params=prm)
+            if wake is not None:  # wake_on_step: decide again after a neighbour's step
+                early = np.minimum(wake[~plan.move], st.t1[wait])
+                cut = st.t1[wait] - early
+                st.t1[wait] = early
+                st.wait[wait] -= cut
+                st.stuck[wait] -= cut
         # blocked: no progress along the route for ``reroute_after`` seconds (side steps
         # and steps back in a jam do not count)
         blocked = idx[t - st.progress_time[idx] >= prm.reroute_after]
