@@ -392,6 +392,18 @@ class _LastPose:
 
 
 @dataclass(frozen=True, eq=False)
+class _FreeWalk:
+    """Joint positions (k, J, 3) [m] and convergence (k,) of an uncorrected walk of k
+    agents (what :meth:`Animator._trailing_solved` reads of its free walk)."""
+
+    positions: np.ndarray
+    converged: np.ndarray
+
+    def take(self, rows: np.ndarray) -> _FreeWalk:
+        return _FreeWalk(self.positions[rows], self.converged[rows])
+
+
+@dataclass(frozen=True, eq=False)
 class _Landed:
     """Where the previous step of m agents left the root (m, 3) [m] and the landed foot:
     heel (m, 3) [m], yaw (m,) [rad]; the old stance foot's yaw (m,) [rad]; the root's
@@ -541,7 +553,7 @@ class Animator:
         served_before = self._swing.served[a].copy()
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
-        self._join_root(a, had, landed, c1)
+        joined = self._join_root(a, had, landed, c1)
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
         # the root follows the trailing leg where the new data continue it (a short step
@@ -562,7 +574,13 @@ class Animator:
         joins = np.flatnonzero(sw.trail_root[a])
         if joins.size:  # the join starts from the trailing leg's root, not the stance leg's
             aj = a[joins]
-            sw.hip_fix[aj] -= self._trailing_solved(aj, np.zeros(aj.size))
+            # the free walk at phase 0 is the root join's walk of those agents (its rows:
+            # the same arguments, no spin), unless a stance yaw is −0.0 (the join's walk
+            # adds the spin's +0.0 to it)
+            yaw = self._stance.yaw[aj]
+            free = None if np.any(np.signbit(yaw) & (yaw == 0.0)) else joined.take(
+                np.cumsum(had)[joins] - 1)
+            sw.hip_fix[aj] -= self._trailing_solved(aj, np.zeros(aj.size), free)
         capped = self._swing_ends(cmd, body, had, data.angles)
         if self.style.data_toe_off and self.ground is not None:
             # where the toe-off hand-over's cap leaves a jump on a short step off stairs:
@@ -720,14 +738,15 @@ class Animator:
         return out
 
     def _join_root(self, a: np.ndarray, had: np.ndarray, landed: _Landed,
-                   c1: np.ndarray) -> None:
+                   c1: np.ndarray) -> _FreeWalk | None:
         """Root continuity: the stance hip starts where the previous step left the root
         and blends to the data over the first half of the step. On stair steps (``c1``)
         the join is C¹: the offset also starts with the root velocity the data lack at the
         heel strike and loses it over the same blend (docs/architecture.md, "C¹ root join
-        on stair steps")."""
+        on stair steps"). Returns the uncorrected walk of the agents ``a[had]`` at the
+        step's start (:class:`_FreeWalk`), None if none had a step."""
         if not had.any():
-            return
+            return None
         # one walk: the agents' starts, and the c1 agents (a subset) a little later
         ah, ac = a[had], a[c1]
         k = ah.size
@@ -739,6 +758,7 @@ class Animator:
             v_data = (root[k:] - root[:k][c1[had]]) / (
                 2.0 * _VEL_PHASE * self._step.duration[ac])[:, None]
             self._swing.hip_vel[ac] = landed.root_velocity[c1] - v_data
+        return _FreeWalk(walked.positions[:k], walked.converged[:k])
 
     def _swing_ends(self, cmd: StepCommand, body: Body, had: np.ndarray,
                     angles: np.ndarray) -> np.ndarray:
@@ -1280,27 +1300,30 @@ class Animator:
                               pin_fix=pin_fix, stance=stance)
         return self._walk_from(inputs.take(rows), lift, toe_fix, pin_fix, stance)
 
-    def _trailing_solved(self, a: np.ndarray, phase: np.ndarray) -> np.ndarray:
+    def _trailing_solved(self, a: np.ndarray, phase: np.ndarray,
+                         free: _FreeWalk | None = None) -> np.ndarray:
         """Root offset (k, 3) [m] along ψ of agents a at stance phases (k,) in the double
         support that opens a step (``GaitStyle.trailing_root``): (1 − w) times how far
         ahead of the new stance leg's root the trailing leg, pinned on its ball
         (:meth:`_pinned_ankle`) and following its data (the swing leg at t + 0.5), puts
         it; w a smoothstep from 0 at the heel strike to 1 at toe-off. At the heel strike
-        the root moves on as the previous step's stance leg moved it."""
-        body = self.body.take(a)
+        the root moves on as the previous step's stance leg moved it. ``free``: that free
+        walk of the agents at these phases in this state, taken instead of solved again."""
         k = a.size
         st, sw = self._legs(a, phase)
         psi = self._heading(a, phase)
         tau = 2.0 * phase
-        foot = StanceFoot(self._stance.ball[a], self._stance.yaw[a], self._stance.slope[a])
-        warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
-                         self._warm.hip_jacobian[a])  # fmt: skip
-        free = elevwalker_pose(
-            body, self._step.stance_left[a], phase, st, sw, psi, foot, self._swing_toe(a, tau, psi),
-            warm, self.style, self._step.stance_fraction[a],
-            attributes=None if self.attributes is None else self.attributes.take(a),
-            list_scale=np.where(self._step.first[a], smoothstep(tau), 1.0),
-        )  # fmt: skip
+        if free is None:
+            body = self.body.take(a)
+            foot = StanceFoot(self._stance.ball[a], self._stance.yaw[a], self._stance.slope[a])
+            warm = WarmStart(self._warm.ankle[a], self._warm.hip[a],
+                             self._warm.ankle_jacobian[a], self._warm.hip_jacobian[a])
+            free = elevwalker_pose(
+                body, self._step.stance_left[a], phase, st, sw, psi, foot,
+                self._swing_toe(a, tau, psi), warm, self.style, self._step.stance_fraction[a],
+                attributes=None if self.attributes is None else self.attributes.take(a),
+                list_scale=np.where(self._step.first[a], smoothstep(tau), 1.0),
+            )  # fmt: skip
         swing_ankle = free.positions[np.arange(k), LEG_JOINTS[np.where(
             self._step.stance_left[a], 1, 0)][:, 2]]
         gap = self._pinned_ankle(a, phase, sw)[0] - swing_ankle

@@ -914,6 +914,8 @@ class ElevInterp:
         # neighbouring triangle, or only with stronger extrapolation: try the located
         # triangle, then its neighbours, first with a small then a larger weight margin.
         for margin in (cfg.extrapolation, cfg.last_resort_extrapolation):
+            if not np.any(err > tol):  # nothing left to refine (the loops would skip)
+                break
             tris = [simplex] + [space.tri.neighbors[simplex, j] for j in range(3)]
             for tri in tris:
                 rows = np.flatnonzero((err > tol) & (tri >= 0))
@@ -934,8 +936,8 @@ class ElevInterp:
                 verts[take], w[take] = space.tri.simplices[t_rows[better]], w1[better]
                 step[take], err[take] = s1[better], e1[better]
         converged = err <= tol
-        curves = np.einsum("kv,kvnj->knj", w, space.angles[verts])
-        phases = np.einsum("kv,kvp->kp", w, space.phases[verts])
+        curves = _blend(w, space.angles, verts)
+        phases = _blend(w, space.phases, verts)
         good = converged & refine & ~clamped  # step 6: insert what needed the search
         self.stats["inserted"] += space.insert(curves[good], phases[good], cfg.max_inserted)
         flags = np.stack([clamped | ~converged, refine, converged], axis=1)
@@ -967,7 +969,8 @@ def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray
     """
     k, n = curves.shape[:2]
     ankle_h, ball = props[:, 2], props[:, 4]
-    f = sample(curves, np.full(k, 0.5))[:, 0]
+    mid = sample(curves, np.full(k, 0.5))  # (k, 4) the stance leg at t = 0.5
+    f = mid[:, 0]
     radius, beta = np.hypot(ball, ankle_h), np.arctan2(ball, ankle_h)
     z = radius * np.cos(f + beta)
     wanted = np.arccos(np.clip((z + height - step[:, 1]) / radius, -1.0, 1.0)) - beta
@@ -982,7 +985,7 @@ def _heel_rise(curves: np.ndarray, stance_fraction: np.ndarray, step: np.ndarray
     closed[:, :, 0] += delta[:, None] * window
     if knee:
         rest = height - step[:, 1] - (radius * np.cos(f + delta + beta) - z)
-        shank, thigh = sample(curves, np.full(k, 0.5))[:, 1:3].T
+        shank, thigh = mid[:, 1:3].T
         lifted = -np.arccos(np.clip(np.cos(shank) + np.maximum(rest, 0.0) / props[:, 1],
                                     -1.0, 1.0))
         extend = np.where((rest > 0.0) & (f <= 0.0) & (shank < 0.0),
@@ -1121,9 +1124,31 @@ def _lift_swing_toe_kernel(out, thigh, shank, ankle_h, heel, ball, toe, clearanc
 def _blend_step(space: _ShapeSpace, simplex: np.ndarray, weights: np.ndarray,
                 props: np.ndarray) -> np.ndarray:
     """Step (k, 2) [leg lengths] of the Eq. 9 blends of the given triangles (Eq. 10)."""
-    keys = space.keys[space.tri.simplices[simplex]]  # (k, 3, 2, 4): rows t = 0.5, t = 0
-    blend = np.einsum("kv,kvrj->krj", weights, keys)
+    blend = _blend(weights, space.keys, space.tri.simplices[simplex])  # rows t = 0.5, t = 0
     return step_of(blend[:, 0], blend[:, 1], _leg_of(props))
+
+
+def _blend(weights: np.ndarray, table: np.ndarray, verts: np.ndarray) -> np.ndarray:
+    """Eq. 9's blend (k, ...) of rows ``verts`` (k, v) of ``table`` (m, ...) by ``weights``
+    (k, v): ``np.einsum("kv,kv...->k...", weights, table[verts])``'s values (summed from
+    0 in vertex order), without the (k, v, ...) gather (:func:`_blend_kernel`)."""
+    flat = table.reshape(table.shape[0], -1)
+    out = np.empty((len(verts), flat.shape[1]))
+    _blend_kernel(np.ascontiguousarray(weights, dtype=float), np.ascontiguousarray(flat),
+                  np.ascontiguousarray(verts, dtype=np.int64), out)
+    return out.reshape((len(verts), *table.shape[1:]))
+
+
+@nb.njit(cache=True, nogil=True)
+def _blend_kernel(weights, table, verts, out):
+    """out[r] = 0 + Σ_v weights[r, v] · table[verts[r, v]], v in order (einsum's sum)."""
+    for r in range(out.shape[0]):
+        for i in range(out.shape[1]):
+            out[r, i] = 0.0
+        for v in range(verts.shape[1]):
+            wv, row = weights[r, v], table[verts[r, v]]
+            for i in range(out.shape[1]):
+                out[r, i] += wv * row[i]
 
 
 @nb.njit(cache=True, nogil=True)

@@ -504,9 +504,9 @@ def test_a_frames_rewalks_take_its_walk_inputs_and_pose_the_same():
     def counting(animator, key):
         inner = animator._trailing_solved
 
-        def solve(a, phase):
+        def solve(a, phase, free=None):
             solved[key] += a.size
-            return inner(a, phase)
+            return inner(a, phase, free)
         return solve
 
     taken._trailing_solved = counting(taken, "taken")
@@ -521,6 +521,43 @@ def test_a_frames_rewalks_take_its_walk_inputs_and_pose_the_same():
     assert taken.stats["yaw_fixes"] > 0 and solved["taken"] < solved["again"]
     assert taken.stats == again.stats
     for a, b in zip(fa, fb, strict=True):
+        for name in ("root_position", "joints", "positions", "contact", "fallback"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+
+
+def test_a_commands_trailing_root_takes_its_root_joins_walk_and_poses_the_same():
+    """At a step command the trailing-root offset at the heel strike takes its free walk
+    from the root join's walk of the same agents (the same arguments): every pose and
+    counter is what solving it again gives."""
+    body = Body.from_heights([1.6, 1.75, 1.9])
+    taken, again = Animator(body, ground=_flat), Animator(body, ground=_flat)
+    given = {"taken": 0, "again": 0}
+
+    def tracking(animator, key, drop):
+        inner = animator._trailing_solved
+
+        def solve(a, phase, free=None):
+            given[key] += 0 if free is None else a.size
+            return inner(a, phase, None if drop else free)
+        return solve
+
+    taken._trailing_solved = tracking(taken, "taken", False)
+    again._trailing_solved = tracking(again, "again", True)
+    k = 3
+    agents = np.arange(k)
+    lanes = np.column_stack([np.zeros(k), np.arange(k) * 1.0, np.zeros(k)])
+    frames = {"taken": [], "again": []}
+    for key, animator in (("taken", taken), ("again", again)):
+        foot, start = 1, np.array([0.0, 0.045, 0.0])
+        for s in range(4):
+            target = start + np.array([0.65, -0.09 if foot else 0.09, 0.0])
+            animator.command(_command(agents, 0.5 * s, foot, start + lanes, target + lanes,
+                                      duration=0.5))
+            frames[key] += [animator.pose(0.5 * s + f / 50.0) for f in range(25)]
+            foot, start = 1 - foot, target
+    assert given["taken"] > 0 and given["again"] == given["taken"]
+    assert taken.stats == again.stats
+    for a, b in zip(frames["taken"], frames["again"], strict=True):
         for name in ("root_position", "joints", "positions", "contact", "fallback"):
             assert np.array_equal(getattr(a, name), getattr(b, name)), name
 

@@ -47,6 +47,29 @@ def test_compiled_blend_step_equals_step_of():
         np.testing.assert_allclose(out, expected, atol=1e-12)
 
 
+def test_compiled_blend_gives_einsums_values_bit_for_bit():
+    """_blend (Eq. 9 without the gather) is the einsum of the gathered rows, bit for bit:
+    signed zeros, tiny and large magnitudes, repeated vertices, one row and many."""
+    from crowdwalk.gait.elevinterp import _blend
+
+    rng = np.random.default_rng(5)
+    for k, tail in ((1, (100, 4)), (7, (2, 4)), (300, (100, 4)), (40, (2,))):
+        table = rng.normal(size=(25, *tail)) * 10.0 ** rng.integers(-8, 4, size=(25, *tail))
+        table[rng.random(table.shape) < 0.1] = 0.0
+        table[rng.random(table.shape) < 0.1] *= -0.0
+        verts = rng.integers(0, 25, size=(k, 3)).astype(np.int32)
+        w = rng.normal(size=(k, 3))
+        w[rng.random(w.shape) < 0.1] = -0.0
+        expected = np.einsum("kv,kv...->k...", w, table[verts])
+        got = _blend(w, table, verts)
+        assert got.shape == expected.shape
+        assert got.tobytes() == expected.tobytes()
+    # all products -0.0: the sum from 0 is +0.0, as einsum's
+    minus = np.full((3, 2), -0.0)
+    got = _blend(np.ones((1, 3)), minus, np.array([[0, 1, 2]]))
+    assert got.tobytes() == np.einsum("kv,kvp->kp", np.ones((1, 3)), minus[[[0, 1, 2]]]).tobytes()
+
+
 def test_standing_upright_is_a_zero_step():
     zero = np.zeros(4)
     np.testing.assert_allclose(step_of(zero, zero, leg(1.75)), [0.0, 0.0], atol=1e-12)
