@@ -133,6 +133,7 @@ _TOE_OFF_RISE = 0.035  # data_toe_off: the data's swing sole risen this far is o
 _TOE_OFF_SHORT = 0.75  # ... on steps shorter than this [leg lengths] (park's: <= 0.74)
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
+_SETTLE_DECEL = 10.0  # a stopping walker's root comes to rest at this [m/s²] (stop_settle)
 
 
 def _toe_off_shape(u: np.ndarray) -> np.ndarray:
@@ -346,6 +347,7 @@ class _SwingState:
     hip_vel: np.ndarray  # (n, 3) root velocity jump the offset starts with [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
     join_long: np.ndarray  # (n,) bool, hip_fix blends out over the whole step (clamped_join)
+    join_whole: np.ndarray  # (n,) bool, ... and hip_vel too (a restart: stop_settle)
     toe_vel: np.ndarray  # (n, 3) pinned ankle's velocity less the data's at toe-off [m/s]
 
     @classmethod
@@ -354,7 +356,8 @@ class _SwingState:
                    np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool),
                    np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool), np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool), np.zeros(n, bool),
+                   np.zeros((n, 3)))
 
 
 @dataclass(eq=False)
@@ -402,6 +405,36 @@ class _Landed:
     yaw: np.ndarray
     old_yaw: np.ndarray
     root_velocity: np.ndarray
+
+
+@dataclass(eq=False)
+class _Settle:
+    """The stop settle of n agents (``GaitStyle.stop_settle``): per step, whether the
+    root's velocity (n, 3) [m/s] and the landed (swing) ankle (n, 3) [m] at its end are
+    measured (``has`` (n,) bool); per walk, the agents settling (``on`` (n,) bool) and
+    their root offsets (n, 3) [m] from the step's end pose."""
+
+    has: np.ndarray
+    velocity: np.ndarray
+    ankle: np.ndarray
+    on: np.ndarray
+    shift: np.ndarray
+
+    @classmethod
+    def zeros(cls, n: int) -> _Settle:
+        return cls(np.zeros(n, bool), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool),
+                   np.zeros((n, 3)))
+
+
+def _settled(velocity: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Root offset (k, 3) [m] and velocity (k, 3) [m/s] u (k,) [s] after a stop that
+    began with ``velocity`` (k, 3) [m/s]: its horizontal part brought to rest at the
+    constant deceleration _SETTLE_DECEL (the root's height stays the step end's)."""
+    v = velocity * np.array([1.0, 1.0, 0.0])
+    rest = np.linalg.norm(v, axis=1) / _SETTLE_DECEL  # time to rest [s]
+    w = np.minimum(u, rest)[:, None]
+    frac = np.where(rest > 0.0, 1.0 / np.maximum(rest, 1e-12), 0.0)[:, None]
+    return v * (w - 0.5 * w * w * frac), v * (1.0 - w * frac)
 
 
 @dataclass(eq=False)
@@ -463,6 +496,7 @@ class Animator:
         self._warm = _SolverWarmth.zeros(n)
         self._last = _LastPose.zeros(n, nj)
         self._trail_memo: _TrailMemo | None = None  # set while a frame is posed
+        self._settle = _Settle.zeros(n)
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
                       "lifted": 0, "lift_steps": 0, "yaw_fixes": 0, "pin_fixes": 0,
                       "data_toe_offs": 0}  # fmt: skip
@@ -500,7 +534,12 @@ class Animator:
         # stair steps (this one or the last rises or falls _C1_RISE): C¹ root join
         c1 = had & ((np.abs(self._step.rise[a]) >= _C1_RISE)
                     | (np.abs(cmd.step_height) >= _C1_RISE))
-        landed = self._landed(a, had, c1)
+        # walkers that stood since their last step's end (stop_settle): the root settled
+        stopped = had & (cmd.time > self._step.t0[a] + self._step.duration[a])
+        stopped &= self.style.stop_settle
+        landed = self._landed(a, had, c1 | stopped, cmd.time, stopped)
+        c1 |= stopped
+        self._settle.has[a] = False
         st = self._stance
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
         half = self._step.angles.shape[1] // 2
@@ -519,12 +558,14 @@ class Animator:
         continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
         turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
         self._swing.join_long[a] = had & ~served_before & self.style.clamped_join
+        self._swing.join_whole[a] = stopped
         self._swing.served[a] = ~data.clamped
         self._swing.trail_root[a] = (had & self.style.trailing_root & flat_before & ~bumpy
                                      & served_before & ~data.clamped
                                      & (np.abs(cmd.step_height) < _LEVEL_RISE)
                                      & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
-                                     & ~spun_before & (self._stance.spin[a] == 0.0))
+                                     & ~spun_before & (self._stance.spin[a] == 0.0)
+                                     & ~stopped)
         sw = self._swing
         sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
         sw.has_trail[a] = had
@@ -548,12 +589,31 @@ class Animator:
             self._anticipate_lift(a[bumpy])
         self.stats["commands"] += a.size
 
-    def _landed(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray) -> _Landed:
+    def _landed(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray, t=None,
+                stopped: np.ndarray | None = None) -> _Landed:
         """Where the previous step (of the agents ``had`` a step) left the root and the
-        foot that landed, at its end; the root's velocity there for the agents ``c1``."""
+        foot that landed, at its end; the root's velocity there for the agents ``c1``.
+        The agents ``stopped`` (a subset of c1) are where their settle has taken the root
+        by time ``t`` (k,) [s] (:meth:`_settling`), at its velocity then."""
         m = a.size
         out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m),
                       np.zeros((m, 3)))
+        settling = stopped is not None and stopped.any()
+        if settling:
+            as_ = a[stopped]
+            velocity = self._settling(as_, t[stopped] - self._step.t0[as_]
+                                      - self._step.duration[as_])
+        try:
+            self._landed_walk(a, had, c1, out)
+        finally:
+            self._settle.on[:] = False
+        if settling:
+            out.root_velocity[stopped] = velocity
+        return out
+
+    def _landed_walk(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray,
+                     out: _Landed) -> None:
+        """:meth:`_landed`'s walk, into ``out``."""
         if had.any():
             # one walk: the agents' ends, and the c1 agents (a subset) a little earlier
             # (each agent's walk is its own: the values of separate walks)
@@ -574,7 +634,29 @@ class Animator:
             toward = new_st[:, 1] - new_st[:, 0]
             out.yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
             out.old_yaw[had] = self._stance.yaw[ah] + self._stance.spin[ah]
-        return out
+
+    def _settling(self, a: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Turn the stop settle on for agents a (k,), u (k,) [s] after their step's end
+        (the next walks carry their roots on, the landed ankles kept where they were;
+        ``_settle.on`` is cleared by the caller); the root velocity (k, 3) [m/s] then.
+        The step end's root velocity and landed ankle are measured once per step."""
+        s = self._settle
+        new = a[~s.has[a]]
+        if new.size:
+            k = new.size
+            walked = self._walk(np.concatenate([new, new]), np.concatenate(
+                [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
+                corrected=True)
+            root = walked.root_position
+            s.velocity[new] = (root[:k] - root[k:]) / (
+                2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
+            landing = LEG_JOINTS[np.where(self._step.stance_left[new], 1, 0)][:, 2]
+            s.ankle[new] = walked.positions[np.arange(k), landing]
+            s.has[new] = True
+        shift, velocity = _settled(s.velocity[a], u)
+        s.shift[a] = shift
+        s.on[a] = True
+        return velocity
 
     def _own_toe(self, a: np.ndarray) -> np.ndarray:
         """The walkers' own toe-out (k,) [rad]: the style's foot angle, else GaitStyle's."""
@@ -902,11 +984,16 @@ class Animator:
         if not np.isfinite(t):
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
-        self._trail_memo = _TrailMemo.empty(n)
+        over = t - self._step.t0[a] - self._step.duration[a]
+        stood = np.flatnonzero(over > 0.0) if self.style.stop_settle else np.zeros(0, int)
         try:
+            if stood.size:  # stopped walkers settle (GaitStyle.stop_settle)
+                self._settling(a[stood], over[stood])
+            self._trail_memo = _TrailMemo.empty(n)
             walked = self._posed(a, phase)
         finally:
             self._trail_memo = None
+            self._settle.on[:] = False
         ok = walked.converged
         warm = self._warm
         warm.ankle[a] = np.where(ok[:, None], walked.warm.ankle, warm.ankle[a])
@@ -1186,9 +1273,9 @@ class Animator:
             u = ak.toe_off_progress(rows, tau_, sw_.toe_off, _TOE_OFF_BLEND)
             offset, blend, pinned, toes, hip_fix = ak.corrections(
                 rows, tau_, sw_.toe_off, sw_.d0, sw_.d1, sw_.toe_vel, self._step.duration,
-                sw_.use_bezier, sw_.has_trail, sw_.join_long, sw_.hip_fix, sw_.hip_vel,
-                sw_.hip_drop, bool(self.style.toe_off_c1), _toe_off_shape(u), _TOE_OFF_BLEND,
-                _BEZIER_IN, _BEZIER_OUT, _HIP_BLEND, _HIP_BLEND_CLAMPED)
+                sw_.use_bezier, sw_.has_trail, sw_.join_long, sw_.join_whole, sw_.hip_fix,
+                sw_.hip_vel, sw_.hip_drop, bool(self.style.toe_off_c1), _toe_off_shape(u),
+                _TOE_OFF_BLEND, _BEZIER_IN, _BEZIER_OUT, _HIP_BLEND, _HIP_BLEND_CLAMPED)
             target = _bezier(self._swing.bezier[a], tau)
             goal = np.full((a.size, 3), np.nan)
             if pinned.any():
@@ -1207,6 +1294,10 @@ class Animator:
             trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))
             if trailing.size:
                 hip_fix[trailing] += self._trailing_root(a[trailing], phase[trailing])
+            settling = np.flatnonzero(self._settle.on[a])
+            if settling.size:  # a stopped walker's root carried on, the landed foot kept
+                hip_fix[settling] += self._settle.shift[a[settling]]
+                goal[settling] = self._settle.ankle[a[settling]]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
         # a walk starts from standing: the pelvis is level and lists in over the first step
