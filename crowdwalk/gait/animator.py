@@ -134,6 +134,7 @@ _TOE_OFF_SHORT = 0.75  # ... on steps shorter than this [leg lengths] (park's: <
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
 _SETTLE_DECEL = 10.0  # a stopping walker's root comes to rest at this [m/s²] (stop_settle)
+_SETTLE_SPEED = 1.25  # ... from at most this times its last step's speed [1]
 
 
 def _toe_off_shape(u: np.ndarray) -> np.ndarray:
@@ -428,9 +429,9 @@ class _Settle:
 
 def _settled(velocity: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Root offset (k, 3) [m] and velocity (k, 3) [m/s] u (k,) [s] after a stop that
-    began with ``velocity`` (k, 3) [m/s]: its horizontal part brought to rest at the
-    constant deceleration _SETTLE_DECEL (the root's height stays the step end's)."""
-    v = velocity * np.array([1.0, 1.0, 0.0])
+    began with ``velocity`` (k, 3) [m/s]: brought to rest at the constant deceleration
+    _SETTLE_DECEL."""
+    v = velocity
     rest = np.linalg.norm(v, axis=1) / _SETTLE_DECEL  # time to rest [s]
     w = np.minimum(u, rest)[:, None]
     frac = np.where(rest > 0.0, 1.0 / np.maximum(rest, 1e-12), 0.0)[:, None]
@@ -550,6 +551,12 @@ class Animator:
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
         self._join_root(a, had, landed, c1)
+        if stopped.any():  # the restart's C¹ term at most _SETTLE_SPEED times the step's
+            ast = a[stopped]
+            cap = _SETTLE_SPEED * np.linalg.norm(
+                (cmd.target - cmd.start)[stopped, :2], axis=1) / cmd.duration[stopped]
+            jump = np.linalg.norm(self._swing.hip_vel[ast], axis=1)
+            self._swing.hip_vel[ast] *= np.minimum(1.0, cap / np.maximum(jump, 1e-12))[:, None]
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
         # the root follows the trailing leg where the new data continue it (a short step
@@ -648,8 +655,15 @@ class Animator:
                 [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
                 corrected=True)
             root = walked.root_position
-            s.velocity[new] = (root[:k] - root[k:]) / (
-                2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
+            v = (root[:k] - root[k:]) / (2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
+            v[:, 2] = 0.0  # the root's height stays the step end's
+            # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
+            # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
+            cap = _SETTLE_SPEED * np.linalg.norm(
+                (self._stance.target[new] - self._stance.start[new])[:, :2], axis=1
+            ) / self._step.duration[new]
+            speed = np.linalg.norm(v, axis=1)
+            s.velocity[new] = v * np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
             landing = LEG_JOINTS[np.where(self._step.stance_left[new], 1, 0)][:, 2]
             s.ankle[new] = walked.positions[np.arange(k), landing]
             s.has[new] = True
