@@ -651,11 +651,11 @@ class Animator:
         new = a[~s.has[a]]
         if new.size:
             k = new.size
-            walked = self._walk(np.concatenate([new, new]), np.concatenate(
-                [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
-                corrected=True)
-            root = walked.root_position
-            v = (root[:k] - root[k:]) / (2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
+            # the end pose as a frame poses it (the landed foot's yaw fixed and lift made)
+            walked = self._posed(new, np.full(k, _PHASE_END))
+            before = self._walk(new, np.full(k, _PHASE_END - _VEL_PHASE), corrected=True)
+            v = (walked.root_position - before.root_position) / (
+                2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
             v[:, 2] = 0.0  # the root's height stays the step end's
             # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
             # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
@@ -1297,6 +1297,10 @@ class Animator:
                                                                 sw[pinned])  # fmt: skip
                 if pin_fix is not None:
                     goal[pinned] += pin_fix[pinned]
+            settling = np.flatnonzero(self._settle.on[a])
+            if settling.size:  # a stopped walker's root carried on, the landed foot kept
+                hip_fix[settling] += self._settle.shift[a[settling]]
+                goal[settling] = self._settle.ankle[a[settling]]
             envelope = self._lift_envelope(a, tau)
             if envelope is not None:
                 lift = envelope if lift is None else lift + envelope
@@ -1308,10 +1312,6 @@ class Animator:
             trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))
             if trailing.size:
                 hip_fix[trailing] += self._trailing_root(a[trailing], phase[trailing])
-            settling = np.flatnonzero(self._settle.on[a])
-            if settling.size:  # a stopped walker's root carried on, the landed foot kept
-                hip_fix[settling] += self._settle.shift[a[settling]]
-                goal[settling] = self._settle.ankle[a[settling]]
         warm = WarmStart(self._warm.ankle[a], self._warm.hip[a], self._warm.ankle_jacobian[a],
                          self._warm.hip_jacobian[a])  # fmt: skip
         # a walk starts from standing: the pelvis is level and lists in over the first step
