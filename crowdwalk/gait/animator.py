@@ -651,11 +651,11 @@ class Animator:
         new = a[~s.has[a]]
         if new.size:
             k = new.size
-            # the end pose as a frame poses it (the landed foot's yaw fixed and lift made)
-            walked = self._posed(new, np.full(k, _PHASE_END))
-            before = self._walk(new, np.full(k, _PHASE_END - _VEL_PHASE), corrected=True)
-            v = (walked.root_position - before.root_position) / (
-                2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
+            walked = self._walk(np.concatenate([new, new]), np.concatenate(
+                [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
+                corrected=True)
+            root = walked.root_position
+            v = (root[:k] - root[k:]) / (2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
             v[:, 2] = 0.0  # the root's height stays the step end's
             # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
             # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
