@@ -52,6 +52,10 @@ Around the walker the Animator adds what a crowd needs:
 - **Step-downs beyond the data.** When the landing foothold is out of the swing leg's
   reach, the stance leg bends and lowers the pelvis toward it over the second half of
   the step.
+- **Stops (``GaitStyle.stop_settle``).** A walker whose step ends without a next one
+  (the crowd stands it) carries its root on from the heel strike and brings it to rest
+  at 10 m/s², both feet where they landed; its next step joins the root C¹ from there
+  (docs/architecture.md "Stop settle").
 - **Robustness (item 10).** An agent whose solve did not converge, or produced a
   non-finite value, keeps its previous frame's pose and is flagged in
   :attr:`PoseFrame.fallback`; no NaN reaches the output.
@@ -431,11 +435,10 @@ def _settled(velocity: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarra
     """Root offset (k, 3) [m] and velocity (k, 3) [m/s] u (k,) [s] after a stop that
     began with ``velocity`` (k, 3) [m/s]: brought to rest at the constant deceleration
     _SETTLE_DECEL."""
-    v = velocity
-    rest = np.linalg.norm(v, axis=1) / _SETTLE_DECEL  # time to rest [s]
+    rest = np.linalg.norm(velocity, axis=1) / _SETTLE_DECEL  # time to rest [s]
     w = np.minimum(u, rest)[:, None]
     frac = np.where(rest > 0.0, 1.0 / np.maximum(rest, 1e-12), 0.0)[:, None]
-    return v * (w - 0.5 * w * w * frac), v * (1.0 - w * frac)
+    return velocity * (w - 0.5 * w * w * frac), velocity * (1.0 - w * frac)
 
 
 @dataclass(eq=False)
