@@ -52,6 +52,11 @@ MIN_SPLIT_ROWS = 400
 #: A call with fewer rows per thread is not split among threads [-] (a part's fixed cost,
 #: ~0.3 ms of Python between numpy calls, against ~60 µs per walker steered).
 MIN_THREAD_ROWS = 32
+#: The same for a light call, a compiled kernel of a few µs per walker (the crowd's
+#: steering targets, neighbour grid queries, clash tests, footing) [-]: at ~100 deciders
+#: per tick, split in two threads, such calls took 2-10 times their one-thread time
+#: (room of 1,000 walkers, ``bench_vs_jupedsim``'s scenario, load 4.5).
+MIN_LIGHT_ROWS = 256
 #: A worker's first-generation garbage-collection threshold (Python's default 700) [-]:
 #: posing allocates millions of small objects per simulated second, and with the default
 #: every 100th first-generation collection may be a full one over the whole heap (numba,
@@ -94,13 +99,15 @@ class RowThreads:
         self._pool = (ThreadPoolExecutor(self.count - 1, thread_name_prefix="crowdwalk-rows")
                       if self.count > 1 else None)
 
-    def map(self, fn: Callable, m: int, /, *args, min_rows: int | None = None, **kwargs):
+    def map(self, fn: Callable, m: int, /, *args, min_rows: int | None = None,
+            light: bool = False, **kwargs):
         """``fn(*args, **kwargs)`` computed on contiguous parts of its m rows at once, one
         part per thread (the last in the calling thread), joined in order: the rules of
         :func:`split_rows` (row-independent ``fn``; arguments with m rows are split).
-        Fewer than ``min_rows`` (default :data:`MIN_THREAD_ROWS`) rows per part: fewer
-        parts."""
-        least = MIN_THREAD_ROWS if min_rows is None else min_rows
+        Fewer than ``min_rows`` (default :data:`MIN_THREAD_ROWS`; a ``light`` call's
+        :data:`MIN_LIGHT_ROWS`) rows per part: fewer parts."""
+        least = (min_rows if min_rows is not None
+                 else MIN_LIGHT_ROWS if light else MIN_THREAD_ROWS)
         parts = min(self.count, m // max(least, 1))
         if parts <= 1 or self._pool is None:
             return fn(*args, **kwargs)

@@ -362,28 +362,38 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
         efficiency = lengths.sum(axis=1) / terms["E"].sum(axis=1)
     work = tables.lattice.work.tolist()  # TableWork's counters, in the kernels' order
     expanded, checks = result.expanded.tolist(), result.checks.tolist()
+    # per-agent numbers and rows taken out in whole-array passes (Python floats and row
+    # views, as indexing agent by agent gave them)
+    step_min, step_delta = tables.step_min.tolist(), tables.step_delta.tolist()
+    neutral_step = (tables.step_min + tables.step_delta * tables.neutral).tolist()
+    reach = (tables.reach + origins).tolist()
+    terminal = tables.terminal.take(rows[:, 0] * tables.terminal.shape[1]
+                                    + foot_nodes[:, -1]).tolist()
+    trailing = (tables.node_s[:, 0] + origins).tolist()
+    efficiencies, speed = efficiency.tolist(), speeds.tolist()
+    ok_rows = zip(foot_s, foot_z, lengths, rises, controls, durations, terms["En"],
+                  terms["Ev"], terms["Ej"], terms["E"], np.zeros((A, st.n)), strict=True)
     plans = []
-    for a in range(A):
+    for a, row in enumerate(ok_rows):
         key_frames, built, reused, adjustments, steps_done = work[a]
         stats = {
-            "nodes_expanded": int(expanded[a]),
-            "legality_checks": int(checks[a]),
+            "nodes_expanded": expanded[a],
+            "legality_checks": checks[a],
             "lattice_steps": steps_done,
             "key_frame_solves": key_frames,
             "swing_curves": built,
             "swing_curves_reused": reused,
             "swing_adjustments": adjustments,
             "time_s": elapsed,
-            "step_min": float(tables.step_min[a]),
-            "step_increment": float(tables.step_delta[a]),
-            "neutral_step": float(tables.step_min[a]
-                                  + tables.step_delta[a] * tables.neutral[a]),
+            "step_min": step_min[a],
+            "step_increment": step_delta[a],
+            "neutral_step": neutral_step[a],
             # the horizon's common end and the estimated energy of walking on to it from
             # the last foothold (PlannerConfig.terminal_cost; 0 without it)
-            "reach": float(tables.reach[a] + origins[a]),
-            "terminal_energy": float(tables.terminal[a, foot_nodes[a, -1]]),
+            "reach": reach[a],
+            "terminal_energy": terminal[a],
         }
-        trailing_s = float(tables.node_s[a, 0] + origins[a])
+        trailing_s = trailing[a]
         if a in messages:
             message, k = messages[a]
             e = terms["E"][a, :k]
@@ -392,12 +402,11 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
                               foot_z[a, :k + 1], lengths[a, :k], rises[a, :k],
                               controls[a, :k], durations[a, :k], terms["En"][a, :k],
                               terms["Ev"][a, :k], terms["Ej"][a, :k], e, eff, stats,
-                              float(speeds[a]), trailing_s, np.zeros(k)))
+                              speed[a], trailing_s, np.zeros(k)))
             continue
-        plans.append(Plan(OK, "", planner, foot_s[a], foot_z[a], lengths[a], rises[a],
-                          controls[a], durations[a], terms["En"][a], terms["Ev"][a],
-                          terms["Ej"][a], terms["E"][a], float(efficiency[a]), stats,
-                          float(speeds[a]), trailing_s, np.zeros(st.n)))
+        s, z, length, rise, control, duration, En, Ev, Ej, E, rotations = row
+        plans.append(Plan(OK, "", planner, s, z, length, rise, control, duration, En, Ev,
+                          Ej, E, efficiencies[a], stats, speed[a], trailing_s, rotations))
     return plans
 
 

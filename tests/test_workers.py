@@ -138,11 +138,12 @@ def test_a_run_with_workers_writes_the_same_run_folder(tmp_path, monkeypatch):
 
 
 def test_a_run_steered_in_threads_writes_the_same_run_folder(tmp_path, monkeypatch):
-    """Neighbours and steering split among three threads (every tick, however few
-    decide) give the run folder of a run in one thread."""
+    """Neighbours, steering, clash tests and footing split among three threads (every
+    tick, however few decide) give the run folder of a run in one thread."""
     import crowdwalk.crowd.simulation as S
 
     monkeypatch.setattr(W, "MIN_THREAD_ROWS", 1)
+    monkeypatch.setattr(W, "MIN_LIGHT_ROWS", 1)  # the light kernels too
     scenario = ROOT / "scenarios" / "bottleneck.yaml"
     runs = {}
     for count in (1, 3):

@@ -75,7 +75,8 @@ def take_steps(state, queue, *, agents: np.ndarray, start_time: np.ndarray,
     # stepped over: at most one longest step (1.05 leg lengths) along the direction
     stride = 1.05 * legs.of(a).length
     kind, on_obstacle = (terrain.footing(foothold, d, stride=stride) if threads is None else
-                         threads.map(terrain.footing, a.size, foothold, d, stride=stride))
+                         threads.map(terrain.footing, a.size, foothold, d, stride=stride,
+                                     light=True))
     pop = population
     return StepBatch(
         agent=a, step=st.steps[a].copy(), start_time=t0, duration=duration, foot=foot,

@@ -39,7 +39,7 @@ def gather_neighbours(state, deciders: np.ndarray, *, t: float, walkers: np.ndar
                      packed=shape.packed(), radius=shape.radius, k=k, reach=reach)
     if threads is None:
         return gather(deciders, me)
-    return threads.map(gather, len(deciders), deciders, me)
+    return threads.map(gather, len(deciders), deciders, me, light=True)
 
 
 def _gather(deciders, me, *, state, t, grid, now, walkers, packed, radius, k,

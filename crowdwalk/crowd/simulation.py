@@ -41,6 +41,7 @@ from crowdwalk.crowd.conflicts import clashes_with_neighbours, same_tick_yielder
 from crowdwalk.crowd.events import EventTimeline
 from crowdwalk.crowd.holding import WaitingAreas
 from crowdwalk.crowd.neighbours import gather_neighbours
+from crowdwalk.crowd.openings import Openings
 from crowdwalk.crowd.params import CrowdParams
 from crowdwalk.crowd.routing import lane_runs_into_wall, route_progress, steering_targets
 from crowdwalk.crowd.setup import CrowdParts, build_parts
@@ -51,6 +52,7 @@ from crowdwalk.crowd.state import ACTIVE, ARRIVED, WAITING, AgentState
 from crowdwalk.crowd.steering import choose_steps
 from crowdwalk.crowd.stepping import PlanQueue, StepPlan, next_steps
 from crowdwalk.crowd.waiting import stand
+from crowdwalk.crowd.zipper import ZipperEntry
 from crowdwalk.errors import invalid
 from crowdwalk.gait.datasets import normative
 from crowdwalk.gait.metagait import MetaGait
@@ -150,16 +152,15 @@ class CrowdSimulation:
             if sc.waiting_areas else None
         self.openings = None
         if params.opening_ease:
-            from crowdwalk.crowd.openings import Openings
-
             self.openings = Openings(world.routes, params.opening_width,
                                      params.opening_margin)
         self.free_zone = None  # headway_free_margin: where the headway model is off
         if params.speed_model == "headway" and params.headway_free_margin is not None:
-            from crowdwalk.crowd.openings import Openings
-
             self.free_zone = Openings(world.routes, params.opening_width,
                                       params.headway_free_margin)
+        self.zipper = None  # zipper: lane targets at openings
+        if params.zipper:
+            self.zipper = ZipperEntry(world.routes, params.opening_width)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -380,7 +381,7 @@ class CrowdSimulation:
         target, route_dir = self.threads.map(
             partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
             route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
-            radius=self.radius[idx])
+            radius=self.radius[idx], light=True)
         if np.isfinite(prm.sight_after):
             # stuck for ``sight_after`` with the target behind a wall (pushed into a side
             # room, say): head for the farthest point of the route it sees
@@ -402,13 +403,17 @@ class CrowdSimulation:
         nbs = gather_neighbours(st, idx, t=t, walkers=self.active, shape=self.shape,
                                 count=prm.neighbours, reach=prm.neighbour_range,
                                 threads=self.threads)
+        if self.zipper is not None:  # staggered entry: the lane beside the leader's
+            target = self.zipper.targets(table, self.clearance, route=st.route[idx],
+                                         progress=st.progress[idx], xy=pos,
+                                         radius=self.radius[idx], target=target, nbs=nbs)
         outline = self.shape.packed(idx)
         walled = None
         if prm.speed_model == "headway" and prm.headway_overtake_open_lanes:
             walled = self.threads.map(
                 partial(lane_runs_into_wall, table, clearance=self.clearance, params=prm),
                 idx.size, route=st.route[idx], progress=st.progress[idx], xy=pos,
-                radius=self.radius[idx])
+                radius=self.radius[idx], light=True)
         gap = self._gap_steps(idx, pos, nbs, walled)
         rows = dict(
             heading=st.heading[idx], radius=self.radius[idx],
@@ -448,7 +453,8 @@ class CrowdSimulation:
                 clash = self.threads.map(
                     partial(clashes_with_neighbours, nbs), go.size, go, start=pos[go], end=end,
                     duration=self._durations(idx[go], plan.take(go)), elapsed=t - te[go],
-                    yaw=st.yaw1[idx[go]], yaw_end=choice.yaw[go], shape=outline[go])
+                    yaw=st.yaw1[idx[go]], yaw_end=choice.yaw[go], shape=outline[go],
+                    light=True)
                 move = plan.move.copy()
                 move[go[clash]] = False
                 plan = plan.with_move(move)
@@ -508,7 +514,7 @@ class CrowdSimulation:
             partial(steering_targets, self.routes.table, clearance=self.clearance,
                     params=self.params), a.size,
             route=st.route[a], progress=st.progress[a] + length, xy=body, heading=heading,
-            radius=self.radius[a])
+            radius=self.radius[a], light=True)
         return self.metagait.orient(a, swing_foot=st.foot[a], heading=heading,
                                     heading_next=np.arctan2(ahead[:, 1], ahead[:, 0]),
                                     base_toe_out=self.pop.style.foot_angle[a])

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from crowdwalk.crowd.speed_kernels import route_lane_headway
 from planners import normal_mode
 
 __all__ = ["STAIR_UP_FACTOR", "STAIR_DOWN_FACTOR", "step_durations", "time_gap_speed",
@@ -146,11 +147,12 @@ def headway_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.nda
     into (:func:`_route_lane_headway`).
     """
     d = direction if direction.ndim == 3 else direction[:, None, :]
+    if lane_direction is not None:
+        return _route_lane_headway(position, d, others, radius, others_radius, valid,
+                                   free_speed, time_gap, lane, lane_direction, shift,
+                                   direction.ndim)
     rel = (others - position[:, None, :])[:, None, :, :]  # (k, 1, m, 2)
     need = (radius[:, None] + others_radius)[:, None, :]
-    if lane_direction is not None:
-        return _route_lane_headway(d, rel, need, valid, free_speed, time_gap, lane,
-                                   lane_direction, shift, direction.ndim)
     along = np.einsum("kcmj,kcj->kcm", rel, d)
     lateral = rel[..., 0] * d[:, :, None, 1] - rel[..., 1] * d[:, :, None, 0]
     ahead = valid[:, None, :] & (along > 0) & (np.abs(lateral) < lane[:, None, None])
@@ -159,24 +161,21 @@ def headway_speed(*, position: np.ndarray, direction: np.ndarray, radius: np.nda
     return v if direction.ndim == 3 else v[:, 0]
 
 
-def _route_lane_headway(d, rel, need, valid, free_speed, time_gap, lane, e, shift, ndim):
+def _route_lane_headway(position, d, others, radius, others_radius, valid, free_speed,
+                        time_gap, lane, e, shift, ndim):
     """:func:`headway_speed` in the route lane the step goes into (``headway_route_lane``):
     the leader is the nearest neighbour ahead along the route direction ``e`` (k, 2)
     whose centre is within ``lane`` of the line parallel to ``e`` through the step's end
     (``shift`` (k,) [m] along each candidate ``d`` (k, C, 2)), and Seyfried's relation
     limits the speed along ``e`` only: v = min(v0, ((s − a) / b) / (d · e)), free for a
-    step across or back (d · e ≤ 0)."""
-    along = np.einsum("kcmj,kj->kcm", rel, e)  # (k, 1, m)
-    lateral = rel[..., 0] * e[:, None, None, 1] - rel[..., 1] * e[:, None, None, 0]
-    end = shift[:, None] * (d[..., 0] * e[:, None, 1] - d[..., 1] * e[:, None, 0])  # (k, C)
-    ahead = (valid[:, None, :] & (along > 0)
-             & (np.abs(lateral - end[:, :, None]) < lane[:, None, None]))
-    gap = np.where(ahead, along - need, np.inf).min(axis=2)  # (k, C)
-    forward = np.einsum("kcj,kj->kc", d, e)
-    v_e = np.maximum(gap, 0.0) / time_gap
-    v = np.where(forward > 1e-3, np.minimum(free_speed[:, None],
-                                            v_e / np.maximum(forward, 1e-3)),
-                 free_speed[:, None])
+    step across or back (d · e ≤ 0). One compiled loop
+    (:func:`~crowdwalk.crowd.speed_kernels.route_lane_headway`)."""
+    f = np.ascontiguousarray
+    v = np.empty(d.shape[:2])
+    route_lane_headway(f(position, float), f(others, float), f(radius, float),
+                       f(others_radius, float), f(valid, bool), f(d, float), f(e, float),
+                       f(shift, float), f(lane, float), f(free_speed, float),
+                       float(time_gap), v)
     return v if ndim == 3 else v[:, 0]
 
 
