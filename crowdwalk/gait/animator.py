@@ -81,6 +81,7 @@ from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
 from crowdwalk.gait.elevwalker import (
     GaitStyle,
     StanceHalf,
+    WalkerPose,
     WarmStart,
     elevwalker_pose,
     pelvis_shapes,
@@ -417,18 +418,24 @@ class _Settle:
     """The stop settle of n agents (``GaitStyle.stop_settle``): per step, whether the
     root's velocity (n, 3) [m/s] and the landed (swing) ankle (n, 3) [m] at its end are
     measured (``has`` (n,) bool); per walk, the agents settling (``on`` (n,) bool) and
-    their root offsets (n, 3) [m] from the step's end pose."""
+    their root offsets (n, 3) [m] from the step's end pose; the time (n,) [s] each agent
+    was last posed at; per stop, the last offset (n, 3) [m] its pose was solved with
+    (``good``) and whether the root is held there (``held`` (n,) bool: a solve failed
+    beyond it)."""
 
     has: np.ndarray
     velocity: np.ndarray
     ankle: np.ndarray
     on: np.ndarray
     shift: np.ndarray
+    seen: np.ndarray
+    good: np.ndarray
+    held: np.ndarray
 
     @classmethod
     def zeros(cls, n: int) -> _Settle:
         return cls(np.zeros(n, bool), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool),
-                   np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.full(n, -np.inf), np.zeros((n, 3)), np.zeros(n, bool))
 
 
 def _settled(velocity: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -439,6 +446,18 @@ def _settled(velocity: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarra
     w = np.minimum(u, rest)[:, None]
     frac = np.where(rest > 0.0, 1.0 / np.maximum(rest, 1e-12), 0.0)[:, None]
     return velocity * (w - 0.5 * w * w * frac), velocity * (1.0 - w * frac)
+
+
+def _first_rows(walked: WalkerPose, k: int) -> WalkerPose:
+    """The first k rows of a walk (views)."""
+    w = walked.warm
+    return WalkerPose(
+        walked.root_position[:k], walked.root_rotation[:k], walked.local[:k],
+        walked.positions[:k], walked.rotations[:k], walked.contact[:k], walked.converged[:k],
+        WarmStart(*(None if x is None else x[:k] for x in (w.ankle, w.hip, w.ankle_jacobian,
+                                                           w.hip_jacobian))),
+        None if walked.solves is None else walked.solves[:k],
+        None if walked.stance is None else walked.stance.take(slice(0, k)))
 
 
 @dataclass(eq=False)
@@ -543,7 +562,8 @@ class Animator:
         stopped &= self.style.stop_settle
         landed = self._landed(a, had, c1 | stopped, cmd.time, stopped)
         c1 |= stopped
-        self._settle.has[a] = False
+        self._settle.has[a] = self._settle.held[a] = False
+        self._settle.good[a] = 0.0
         st = self._stance
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
         half = self._step.angles.shape[1] // 2
@@ -652,28 +672,50 @@ class Animator:
         The step end's root velocity and landed ankle are measured once per step."""
         s = self._settle
         new = a[~s.has[a]]
-        if new.size:
+        if new.size:  # not measured in the frame before (pose's step ends ahead)
             k = new.size
             walked = self._walk(np.concatenate([new, new]), np.concatenate(
                 [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
                 corrected=True)
-            root = walked.root_position
-            v = (root[:k] - root[k:]) / (2.0 * _VEL_PHASE * self._step.duration[new])[:, None]
-            v[:, 2] = 0.0  # the root's height stays the step end's
-            # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
-            # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
-            cap = _SETTLE_SPEED * np.linalg.norm(
-                (self._stance.target[new] - self._stance.start[new])[:, :2], axis=1
-            ) / self._step.duration[new]
-            speed = np.linalg.norm(v, axis=1)
-            s.velocity[new] = v * np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
-            landing = LEG_JOINTS[np.where(self._step.stance_left[new], 1, 0)][:, 2]
-            s.ankle[new] = walked.positions[np.arange(k), landing]
-            s.has[new] = True
+            self._settle_ends(new, walked.root_position, walked.positions)
         shift, velocity = _settled(s.velocity[a], u)
-        s.shift[a] = shift
+        held = s.held[a]
+        s.shift[a] = np.where(held[:, None], s.good[a], shift)
         s.on[a] = True
-        return velocity
+        return np.where(held[:, None], 0.0, velocity)
+
+    def _hold_settle(self, a: np.ndarray, phase: np.ndarray, stood: np.ndarray,
+                     walked) -> None:
+        """The settling rows ``stood`` of the frame's walk ``walked`` of agents a (k,) at
+        ``phase`` (k,): where a solve failed, the root is held at the last offset solved
+        (those rows posed again, in place); where it converged, that offset is kept."""
+        s = self._settle
+        fail = stood[~walked.converged[stood] & ~s.held[a[stood]]]
+        if fail.size:
+            af = a[fail]
+            s.held[af] = True
+            s.shift[af] = s.good[af]
+            self._merge(walked, fail, self._posed(af, phase[fail]))
+        ok = stood[walked.converged[stood]]
+        s.good[a[ok]] = s.shift[a[ok]]
+
+    def _settle_ends(self, a: np.ndarray, root: np.ndarray, positions: np.ndarray) -> None:
+        """Keep, for a stop of agents a (k,), their step end's root velocity and landed
+        ankle from a walk of rows [a at _PHASE_END, a at _PHASE_END − _VEL_PHASE]: its
+        roots (2k, 3) [m] and joint positions (2k, J, 3) [m]."""
+        s, k = self._settle, a.size
+        v = (root[:k] - root[k:]) / (2.0 * _VEL_PHASE * self._step.duration[a])[:, None]
+        v[:, 2] = 0.0  # the root's height stays the step end's
+        # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
+        # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
+        cap = _SETTLE_SPEED * np.linalg.norm(
+            (self._stance.target[a] - self._stance.start[a])[:, :2], axis=1
+        ) / self._step.duration[a]
+        speed = np.linalg.norm(v, axis=1)
+        s.velocity[a] = v * np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
+        landing = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)][:, 2]
+        s.ankle[a] = positions[np.arange(k), landing]
+        s.has[a] = True
 
     def _own_toe(self, a: np.ndarray) -> np.ndarray:
         """The walkers' own toe-out (k,) [rad]: the style's foot angle, else GaitStyle's."""
@@ -1002,12 +1044,23 @@ class Animator:
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
         over = t - self._step.t0[a] - self._step.duration[a]
-        stood = np.flatnonzero(over > 0.0) if self.style.stop_settle else np.zeros(0, int)
+        stood = ends = np.zeros(0, int)
+        if self.style.stop_settle:
+            stood = np.flatnonzero(over > 0.0)
+            # steps that end before the walker's next frame (one frame interval on): their
+            # ends measured in this frame's walk, for a stop (no walk of their own then)
+            s = self._settle
+            gap = t - s.seen[a]
+            ends = np.flatnonzero((over <= 0.0) & np.isfinite(gap) & (over + gap > 0.0)
+                                  & ~s.has[a])
+            s.seen[a] = t
         try:
             if stood.size:  # stopped walkers settle (GaitStyle.stop_settle)
                 self._settling(a[stood], over[stood])
             self._trail_memo = _TrailMemo.empty(n)
-            walked = self._posed(a, phase)
+            walked = self._posed(a, phase, ends)
+            if stood.size:  # a settle whose solve fails holds the root where it last solved
+                self._hold_settle(a, phase, stood, walked)
         finally:
             self._trail_memo = None
             self._settle.on[:] = False
@@ -1058,10 +1111,20 @@ class Animator:
             stance_left=self._step.stance_left[a].copy(),
         )
 
-    def _posed(self, a: np.ndarray, phase: np.ndarray):
+    def _posed(self, a: np.ndarray, phase: np.ndarray, ends: np.ndarray | None = None):
         """The corrected walk of agents a (k,) at stance phases (k,), the trailing
-        foot's yaw fixed and a swing sole below the ground lifted (:meth:`pose`)."""
-        walked = self._walk(a, phase, corrected=True)
+        foot's yaw fixed and a swing sole below the ground lifted (:meth:`pose`). The
+        step ends of the rows ``ends`` (m,) of a are measured in the same first walk
+        (:meth:`_settle_ends`)."""
+        if ends is None or ends.size == 0:
+            walked = self._walk(a, phase, corrected=True)
+        else:
+            k, m = a.size, ends.size
+            both = self._walk(np.concatenate([a, a[ends], a[ends]]), np.concatenate(
+                [phase, np.full(m, _PHASE_END), np.full(m, _PHASE_END - _VEL_PHASE)]),
+                corrected=True)
+            self._settle_ends(a[ends], both.root_position[k:], both.positions[k:])
+            walked = _first_rows(both, k)
         toe_fix = np.zeros(a.size)
         for _ in range(_YAW_ROUNDS):
             more = self._swing_yaw_fix(a, phase, walked)
