@@ -677,7 +677,8 @@ class Animator:
             walked = self._walk(np.concatenate([new, new]), np.concatenate(
                 [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
                 corrected=True)
-            self._settle_ends(new, walked.root_position, walked.positions)
+            self._settle_ends(new, walked.root_position[:k], walked.root_position[k:],
+                              np.full(k, _VEL_PHASE), walked.positions[:k])
         shift, velocity = _settled(s.velocity[a], u)
         held = s.held[a]
         s.shift[a] = np.where(held[:, None], s.good[a], shift)
@@ -699,12 +700,13 @@ class Animator:
         ok = stood[walked.converged[stood]]
         s.good[a[ok]] = s.shift[a[ok]]
 
-    def _settle_ends(self, a: np.ndarray, root: np.ndarray, positions: np.ndarray) -> None:
+    def _settle_ends(self, a: np.ndarray, root: np.ndarray, before: np.ndarray,
+                     dphase: np.ndarray, positions: np.ndarray) -> None:
         """Keep, for a stop of agents a (k,), their step end's root velocity and landed
-        ankle from a walk of rows [a at _PHASE_END, a at _PHASE_END − _VEL_PHASE]: its
-        roots (2k, 3) [m] and joint positions (2k, J, 3) [m]."""
+        ankle: the root (k, 3) [m] and joint positions (k, J, 3) [m] at _PHASE_END, the
+        root ``before`` (k, 3) [m] ``dphase`` (k,) [1] of stance phase earlier."""
         s, k = self._settle, a.size
-        v = (root[:k] - root[k:]) / (2.0 * _VEL_PHASE * self._step.duration[a])[:, None]
+        v = (root - before) / (2.0 * dphase * self._step.duration[a])[:, None]
         v[:, 2] = 0.0  # the root's height stays the step end's
         # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
         # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
@@ -1119,11 +1121,20 @@ class Animator:
         if ends is None or ends.size == 0:
             walked = self._walk(a, phase, corrected=True)
         else:
+            # the root's velocity from this frame's to the end's, or over _VEL_PHASE
+            # where this frame is nearer the end than a quarter of that
             k, m = a.size, ends.size
-            both = self._walk(np.concatenate([a, a[ends], a[ends]]), np.concatenate(
-                [phase, np.full(m, _PHASE_END), np.full(m, _PHASE_END - _VEL_PHASE)]),
+            dphase = _PHASE_END - phase[ends]
+            near = ends[dphase < 0.25 * _VEL_PHASE]
+            both = self._walk(np.concatenate([a, a[ends], a[near]]), np.concatenate(
+                [phase, np.full(m, _PHASE_END), np.full(near.size, _PHASE_END - _VEL_PHASE)]),
                 corrected=True)
-            self._settle_ends(a[ends], both.root_position[k:], both.positions[k:])
+            before = both.root_position[ends]
+            j = np.flatnonzero(dphase < 0.25 * _VEL_PHASE)
+            before[j] = both.root_position[k + m:]
+            dphase[j] = _VEL_PHASE
+            self._settle_ends(a[ends], both.root_position[k:k + m], before, dphase,
+                              both.positions[k:k + m])
             walked = _first_rows(both, k)
         toe_fix = np.zeros(a.size)
         for _ in range(_YAW_ROUNDS):

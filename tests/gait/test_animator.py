@@ -762,3 +762,40 @@ def test_a_stopping_walker_settles_with_its_feet_planted_and_starts_again_smooth
         assert np.abs(feet - feet[0]).max() < 1e-3  # both feet planted
         moved = np.linalg.norm(roots[standing][-1] - roots[standing][0])
         assert moved > 0.05  # the root carried on (it did not freeze)
+
+
+def test_a_stop_posed_at_a_steady_frame_rate_needs_no_walk_of_its_own():
+    """The step end a stop settles from (its root velocity, the landed ankle) is measured
+    in the walker's last frame before the end, as rows of that frame's walk: the first
+    frame of the stand makes no more ElevWalker calls than the standing frames after it
+    (gait16's own measuring walk made one more)."""
+    calls = []
+
+    class Counting(Animator):
+        def pose(self, t, agents=None):
+            calls.append(0)
+            return super().pose(t, agents)
+
+        def _walk(self, *args, **kwargs):
+            if calls:
+                calls[-1] += 1
+            return super()._walk(*args, **kwargs)
+
+    animator = Counting(Body.from_heights([1.75]), ground=_flat, style=GaitStyle())
+    duration, sl = 0.45, 0.7
+    for s in range(3):
+        left_stance = s % 2 == 0
+        y = 0.045 if left_stance else -0.045
+        animator.command(_command([0], s * duration, 1 if left_stance else 0,
+                                  [[s * sl, y, 0.0]], [[(s + 1) * sl, -y, 0.0]],
+                                  duration=duration))
+        t = 0.013 + np.ceil((s * duration - 0.013) * 25.0) / 25.0
+        while t < (s + 1) * duration:
+            animator.pose(t)
+            t += 0.04
+    first = len(calls)
+    for _ in range(3):  # standing
+        animator.pose(t)
+        t += 0.04
+    assert animator._settle.has[0]  # measured before the stand's first frame
+    assert calls[first] <= calls[first + 1] == calls[first + 2]
