@@ -689,7 +689,8 @@ class Animator:
                      walked) -> None:
         """The settling rows ``stood`` of the frame's walk ``walked`` of agents a (k,) at
         ``phase`` (k,): where a solve failed, the root is held at the last offset solved
-        (those rows posed again, in place); where it converged, that offset is kept."""
+        (those rows posed again, in place); where it converged, that offset and the
+        landed ankle as posed are kept."""
         s = self._settle
         fail = stood[~walked.converged[stood] & ~s.held[a[stood]]]
         if fail.size:
@@ -699,6 +700,9 @@ class Animator:
             self._merge(walked, fail, self._posed(af, phase[fail]))
         ok = stood[walked.converged[stood]]
         s.good[a[ok]] = s.shift[a[ok]]
+        # the landed ankle kept where it was posed (a lift raised it once, not every frame)
+        landing = LEG_JOINTS[np.where(self._step.stance_left[a[ok]], 1, 0)][:, 2]
+        s.ankle[a[ok]] = walked.positions[ok, landing]
 
     def _settle_ends(self, a: np.ndarray, root: np.ndarray, before: np.ndarray,
                      dphase: np.ndarray, positions: np.ndarray) -> None:
