@@ -52,7 +52,7 @@ Around the walker the Animator adds what a crowd needs:
 - **Step-downs beyond the data.** When the landing foothold is out of the swing leg's
   reach, the stance leg bends and lowers the pelvis toward it over the second half of
   the step.
-- **Stops (``GaitStyle.stop_settle``).** A walker whose step ends without a next one
+- **Stops (``GaitStyle.stop_settle``, off by default).** A walker whose step ends without a next one
   (the crowd stands it) carries its root on from the heel strike and brings it to rest
   at 10 m/s², both feet where they landed; its next step joins the root C¹ from there
   (docs/architecture.md "Stop settle").

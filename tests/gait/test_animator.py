@@ -793,7 +793,7 @@ def test_a_stopping_walker_settles_with_its_feet_planted_and_starts_again_smooth
     the restart). With it the root comes to rest at 10 m/s², both feet where they
     landed (2.6 cm, the stance leg's reach lowering the pelvis as it moves on), and the
     next step joins it C¹ (2.0 cm)."""
-    for style, bound in ((GaitStyle(), 0.03), (GaitStyle(stop_settle=False), None)):
+    for style, bound in ((GaitStyle(stop_settle=True), 0.03), (GaitStyle(), None)):
         roots, ankles, times, (t_stop, t_go) = _stop_and_go(style)
         d2 = np.linalg.norm(roots[2:] - 2.0 * roots[1:-1] + roots[:-2], axis=1)
         if bound is None:
@@ -820,12 +820,13 @@ def test_a_stop_posed_at_a_steady_frame_rate_needs_no_walk_of_its_own():
             calls.append(0)
             return super().pose(t, agents)
 
-        def _walk(self, *args, **kwargs):
+        def _walk_from(self, *args, **kwargs):  # the walks and re-walks of a frame
             if calls:
                 calls[-1] += 1
-            return super()._walk(*args, **kwargs)
+            return super()._walk_from(*args, **kwargs)
 
-    animator = Counting(Body.from_heights([1.75]), ground=_flat, style=GaitStyle())
+    animator = Counting(Body.from_heights([1.75]), ground=_flat,
+                        style=GaitStyle(stop_settle=True))
     duration, sl = 0.45, 0.7
     for s in range(3):
         left_stance = s % 2 == 0
