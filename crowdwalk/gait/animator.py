@@ -52,6 +52,10 @@ Around the walker the Animator adds what a crowd needs:
 - **Step-downs beyond the data.** When the landing foothold is out of the swing leg's
   reach, the stance leg bends and lowers the pelvis toward it over the second half of
   the step.
+- **Stops (``GaitStyle.stop_settle``, off by default).** A walker whose step ends without a next one
+  (the crowd stands it) carries its root on from the heel strike and brings it to rest
+  at 10 m/s², both feet where they landed; its next step joins the root C¹ from there
+  (docs/architecture.md "Stop settle").
 - **Robustness (item 10).** An agent whose solve did not converge, or produced a
   non-finite value, keeps its previous frame's pose and is flagged in
   :attr:`PoseFrame.fallback`; no NaN reaches the output.
@@ -77,6 +81,7 @@ from crowdwalk.gait.elevinterp import ElevInterp, lift_swing_toe
 from crowdwalk.gait.elevwalker import (
     GaitStyle,
     StanceHalf,
+    WalkerPose,
     WarmStart,
     elevwalker_pose,
     pelvis_shapes,
@@ -133,6 +138,8 @@ _TOE_OFF_RISE = 0.035  # data_toe_off: the data's swing sole risen this far is o
 _TOE_OFF_SHORT = 0.75  # ... on steps shorter than this [leg lengths] (park's: <= 0.74)
 _PIN_ROUNDS = 2  # corrections of the pinned push-off ankle's goal per frame ...
 _PIN_TOLERANCE = 0.002  # ... while its ball is farther than this from the pin's [m]
+_SETTLE_DECEL = 10.0  # a stopping walker's root comes to rest at this [m/s²] (stop_settle)
+_SETTLE_SPEED = 1.25  # ... from at most this times its last step's speed [1]
 
 
 def _toe_off_shape(u: np.ndarray) -> np.ndarray:
@@ -346,6 +353,7 @@ class _SwingState:
     hip_vel: np.ndarray  # (n, 3) root velocity jump the offset starts with [m/s]
     hip_drop: np.ndarray  # (n, 3) pelvis drop toward an out-of-reach landing [m]
     join_long: np.ndarray  # (n,) bool, hip_fix blends out over the whole step (clamped_join)
+    join_whole: np.ndarray  # (n,) bool, ... and hip_vel too (a restart: stop_settle)
     toe_vel: np.ndarray  # (n, 3) pinned ankle's velocity less the data's at toe-off [m/s]
 
     @classmethod
@@ -354,7 +362,8 @@ class _SwingState:
                    np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool),
                    np.zeros(n), np.zeros((n, 4, 3)),
                    np.zeros(n, bool), np.zeros((n, _LIFT_GRID.size)), np.zeros((n, 3)),
-                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool), np.zeros((n, 3)))
+                   np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool), np.zeros(n, bool),
+                   np.zeros((n, 3)))
 
 
 @dataclass(eq=False)
@@ -416,6 +425,53 @@ class _Landed:
     root_velocity: np.ndarray
 
 
+@dataclass(eq=False)
+class _Settle:
+    """The stop settle of n agents (``GaitStyle.stop_settle``): per step, whether the
+    root's velocity (n, 3) [m/s] and the landed (swing) ankle (n, 3) [m] at its end are
+    measured (``has`` (n,) bool); per walk, the agents settling (``on`` (n,) bool) and
+    their root offsets (n, 3) [m] from the step's end pose; the time (n,) [s] each agent
+    was last posed at; per stop, the last offset (n, 3) [m] its pose was solved with
+    (``good``) and whether the root is held there (``held`` (n,) bool: a solve failed
+    beyond it)."""
+
+    has: np.ndarray
+    velocity: np.ndarray
+    ankle: np.ndarray
+    on: np.ndarray
+    shift: np.ndarray
+    seen: np.ndarray
+    good: np.ndarray
+    held: np.ndarray
+
+    @classmethod
+    def zeros(cls, n: int) -> _Settle:
+        return cls(np.zeros(n, bool), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n, bool),
+                   np.zeros((n, 3)), np.full(n, -np.inf), np.zeros((n, 3)), np.zeros(n, bool))
+
+
+def _settled(velocity: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Root offset (k, 3) [m] and velocity (k, 3) [m/s] u (k,) [s] after a stop that
+    began with ``velocity`` (k, 3) [m/s]: brought to rest at the constant deceleration
+    _SETTLE_DECEL."""
+    rest = np.linalg.norm(velocity, axis=1) / _SETTLE_DECEL  # time to rest [s]
+    w = np.minimum(u, rest)[:, None]
+    frac = np.where(rest > 0.0, 1.0 / np.maximum(rest, 1e-12), 0.0)[:, None]
+    return velocity * (w - 0.5 * w * w * frac), velocity * (1.0 - w * frac)
+
+
+def _first_rows(walked: WalkerPose, k: int) -> WalkerPose:
+    """The first k rows of a walk (views)."""
+    w = walked.warm
+    return WalkerPose(
+        walked.root_position[:k], walked.root_rotation[:k], walked.local[:k],
+        walked.positions[:k], walked.rotations[:k], walked.contact[:k], walked.converged[:k],
+        WarmStart(*(None if x is None else x[:k] for x in (w.ankle, w.hip, w.ankle_jacobian,
+                                                           w.hip_jacobian))),
+        None if walked.solves is None else walked.solves[:k],
+        None if walked.stance is None else walked.stance.take(slice(0, k)))
+
+
 @dataclass(frozen=True, eq=False)
 class _WalkInputs:
     """What :meth:`Animator._walk` hands ElevWalker for k agents before the re-walks' own
@@ -424,7 +480,8 @@ class _WalkInputs:
     swing's toe-out (k,), warm starts, stance fractions (k,), the step corrections
     (``offset``, ``target``, ``goal`` (k, 3) [m] without lift or pin fix, ``blend``,
     ``toes`` (k,), ``hip_fix`` (k, 3); None uncorrected), the push-off rows ``pinned``
-    (k,) bool, the anticipated lift ``envelope`` (k,) [m] or None, styles, list scales.
+    (k,) bool (whose goal takes the pin fix: not a settling row's), the anticipated
+    lift ``envelope`` (k,) [m] or None, styles, list scales.
 
     Within one :meth:`Animator.pose` none of them changes between the frame's walk and
     its re-walks (the warm starts are stored after the last walk; each agent's terms are
@@ -506,6 +563,7 @@ class Animator:
         self._swing = _SwingState.zeros(n)
         self._warm = _SolverWarmth.zeros(n)
         self._last = _LastPose.zeros(n, nj)
+        self._settle = _Settle.zeros(n)
         self.stats = {"commands": 0, "poses": 0, "fallbacks": 0, "bezier_steps": 0,
                       "lifted": 0, "lift_steps": 0, "yaw_fixes": 0, "pin_fixes": 0,
                       "data_toe_offs": 0}  # fmt: skip
@@ -543,7 +601,13 @@ class Animator:
         # stair steps (this one or the last rises or falls _C1_RISE): C¹ root join
         c1 = had & ((np.abs(self._step.rise[a]) >= _C1_RISE)
                     | (np.abs(cmd.step_height) >= _C1_RISE))
-        landed = self._landed(a, had, c1)
+        # walkers that stood since their last step's end (stop_settle): the root settled
+        stopped = had & (cmd.time > self._step.t0[a] + self._step.duration[a])
+        stopped &= self.style.stop_settle
+        landed = self._landed(a, had, c1 | stopped, cmd.time, stopped)
+        c1 |= stopped
+        self._settle.has[a] = self._settle.held[a] = False
+        self._settle.good[a] = 0.0
         st = self._stance
         trail = (st.ball[a].copy(), st.yaw[a] + st.spin[a], st.slope[a].copy())
         half = self._step.angles.shape[1] // 2
@@ -554,6 +618,12 @@ class Animator:
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
         joined = self._join_root(a, had, landed, c1)
+        if stopped.any():  # the restart's C¹ term at most _SETTLE_SPEED times the step's
+            ast = a[stopped]
+            cap = _SETTLE_SPEED * np.linalg.norm(
+                (cmd.target - cmd.start)[stopped, :2], axis=1) / cmd.duration[stopped]
+            jump = np.linalg.norm(self._swing.hip_vel[ast], axis=1)
+            self._swing.hip_vel[ast] *= np.minimum(1.0, cap / np.maximum(jump, 1e-12))[:, None]
         swing_from = np.where(had[:, None], trail[0], cmd.start)
         bumpy = self._uneven(cmd, body, swing_from)
         # the root follows the trailing leg where the new data continue it (a short step
@@ -562,12 +632,14 @@ class Animator:
         continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
         turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
         self._swing.join_long[a] = had & ~served_before & self.style.clamped_join
+        self._swing.join_whole[a] = stopped
         self._swing.served[a] = ~data.clamped
         self._swing.trail_root[a] = (had & self.style.trailing_root & flat_before & ~bumpy
                                      & served_before & ~data.clamped
                                      & (np.abs(cmd.step_height) < _LEVEL_RISE)
                                      & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
-                                     & ~spun_before & (self._stance.spin[a] == 0.0))
+                                     & ~spun_before & (self._stance.spin[a] == 0.0)
+                                     & ~stopped)
         sw = self._swing
         sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
         sw.has_trail[a] = had
@@ -597,12 +669,31 @@ class Animator:
             self._anticipate_lift(a[bumpy])
         self.stats["commands"] += a.size
 
-    def _landed(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray) -> _Landed:
+    def _landed(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray, t=None,
+                stopped: np.ndarray | None = None) -> _Landed:
         """Where the previous step (of the agents ``had`` a step) left the root and the
-        foot that landed, at its end; the root's velocity there for the agents ``c1``."""
+        foot that landed, at its end; the root's velocity there for the agents ``c1``.
+        The agents ``stopped`` (a subset of c1) are where their settle has taken the root
+        by time ``t`` (k,) [s] (:meth:`_settling`), at its velocity then."""
         m = a.size
         out = _Landed(np.zeros((m, 3)), np.zeros((m, 3)), np.zeros(m), np.zeros(m),
                       np.zeros((m, 3)))
+        settling = stopped is not None and stopped.any()
+        if settling:
+            as_ = a[stopped]
+            velocity = self._settling(as_, t[stopped] - self._step.t0[as_]
+                                      - self._step.duration[as_])
+        try:
+            self._landed_walk(a, had, c1, out)
+        finally:
+            self._settle.on[:] = False
+        if settling:
+            out.root_velocity[stopped] = velocity
+        return out
+
+    def _landed_walk(self, a: np.ndarray, had: np.ndarray, c1: np.ndarray,
+                     out: _Landed) -> None:
+        """:meth:`_landed`'s walk, into ``out``."""
         if had.any():
             # one walk: the agents' ends, and the c1 agents (a subset) a little earlier
             # (each agent's walk is its own: the values of separate walks)
@@ -623,7 +714,64 @@ class Animator:
             toward = new_st[:, 1] - new_st[:, 0]
             out.yaw[had] = np.arctan2(toward[:, 1], toward[:, 0])
             out.old_yaw[had] = self._stance.yaw[ah] + self._stance.spin[ah]
-        return out
+
+    def _settling(self, a: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Turn the stop settle on for agents a (k,), u (k,) [s] after their step's end
+        (the next walks carry their roots on, the landed ankles kept where they were;
+        ``_settle.on`` is cleared by the caller); the root velocity (k, 3) [m/s] then.
+        The step end's root velocity and landed ankle are measured once per step."""
+        s = self._settle
+        new = a[~s.has[a]]
+        if new.size:  # not measured in the frame before (pose's step ends ahead)
+            k = new.size
+            walked = self._walk(np.concatenate([new, new]), np.concatenate(
+                [np.full(k, _PHASE_END), np.full(k, _PHASE_END - _VEL_PHASE)]),
+                corrected=True)
+            self._settle_ends(new, walked.root_position[:k], walked.root_position[k:],
+                              np.full(k, _VEL_PHASE), walked.positions[:k])
+        shift, velocity = _settled(s.velocity[a], u)
+        held = s.held[a]
+        s.shift[a] = np.where(held[:, None], s.good[a], shift)
+        s.on[a] = True
+        return np.where(held[:, None], 0.0, velocity)
+
+    def _hold_settle(self, a: np.ndarray, phase: np.ndarray, stood: np.ndarray,
+                     walked) -> None:
+        """The settling rows ``stood`` of the frame's walk ``walked`` of agents a (k,) at
+        ``phase`` (k,): where a solve failed, the root is held at the last offset solved
+        (those rows posed again, in place); where it converged, that offset and the
+        landed ankle as posed are kept."""
+        s = self._settle
+        fail = stood[~walked.converged[stood] & ~s.held[a[stood]]]
+        if fail.size:
+            af = a[fail]
+            s.held[af] = True
+            s.shift[af] = s.good[af]
+            self._merge(walked, fail, self._posed(af, phase[fail]))
+        ok = stood[walked.converged[stood]]
+        s.good[a[ok]] = s.shift[a[ok]]
+        # the landed ankle kept where it was posed (a lift raised it once, not every frame)
+        landing = LEG_JOINTS[np.where(self._step.stance_left[a[ok]], 1, 0)][:, 2]
+        s.ankle[a[ok]] = walked.positions[ok, landing]
+
+    def _settle_ends(self, a: np.ndarray, root: np.ndarray, before: np.ndarray,
+                     dphase: np.ndarray, positions: np.ndarray) -> None:
+        """Keep, for a stop of agents a (k,), their step end's root velocity and landed
+        ankle: the root (k, 3) [m] and joint positions (k, J, 3) [m] at _PHASE_END, the
+        root ``before`` (k, 3) [m] ``dphase`` (k,) [1] of stance phase earlier."""
+        s, k = self._settle, a.size
+        v = (root - before) / (2.0 * dphase * self._step.duration[a])[:, None]
+        v[:, 2] = 0.0  # the root's height stays the step end's
+        # at most _SETTLE_SPEED times the step's own speed (squeezed crowds' poses
+        # jump: root velocities up to 12 m/s at a step's end in the bottleneck)
+        cap = _SETTLE_SPEED * np.linalg.norm(
+            (self._stance.target[a] - self._stance.start[a])[:, :2], axis=1
+        ) / self._step.duration[a]
+        speed = np.linalg.norm(v, axis=1)
+        s.velocity[a] = v * np.minimum(1.0, cap / np.maximum(speed, 1e-12))[:, None]
+        landing = LEG_JOINTS[np.where(self._step.stance_left[a], 1, 0)][:, 2]
+        s.ankle[a] = positions[np.arange(k), landing]
+        s.has[a] = True
 
     def _own_toe(self, a: np.ndarray) -> np.ndarray:
         """The walkers' own toe-out (k,) [rad]: the style's foot angle, else GaitStyle's."""
@@ -953,7 +1101,25 @@ class Animator:
         if not np.isfinite(t):
             raise invalid("Animator", "t", "finite [s]", t)
         phase = np.clip(0.5 * (t - self._step.t0[a]) / self._step.duration[a], 0.0, _PHASE_END)
-        walked = self._posed(a, phase)
+        over = t - self._step.t0[a] - self._step.duration[a]
+        stood = ends = np.zeros(0, int)
+        if self.style.stop_settle:
+            stood = np.flatnonzero(over > 0.0)
+            # steps that end before the walker's next frame (one frame interval on): their
+            # ends measured in this frame's walk, for a stop (no walk of their own then)
+            s = self._settle
+            gap = t - s.seen[a]
+            ends = np.flatnonzero((over <= 0.0) & np.isfinite(gap) & (over + gap > 0.0)
+                                  & ~s.has[a])
+            s.seen[a] = t
+        try:
+            if stood.size:  # stopped walkers settle (GaitStyle.stop_settle)
+                self._settling(a[stood], over[stood])
+            walked = self._posed(a, phase, ends)
+            if stood.size:  # a settle whose solve fails holds the root where it last solved
+                self._hold_settle(a, phase, stood, walked)
+        finally:
+            self._settle.on[:] = False
         ok = walked.converged
         warm = self._warm
         warm.ankle[a] = np.where(ok[:, None], walked.warm.ankle, warm.ankle[a])
@@ -1001,11 +1167,32 @@ class Animator:
             stance_left=self._step.stance_left[a].copy(),
         )
 
-    def _posed(self, a: np.ndarray, phase: np.ndarray):
+    def _posed(self, a: np.ndarray, phase: np.ndarray, ends: np.ndarray | None = None):
         """The corrected walk of agents a (k,) at stance phases (k,), the trailing
-        foot's yaw fixed and a swing sole below the ground lifted (:meth:`pose`)."""
-        inputs = self._walk_inputs(a, phase, corrected=True)
-        walked = self._walk_from(inputs)
+        foot's yaw fixed and a swing sole below the ground lifted (:meth:`pose`). The
+        step ends of the rows ``ends`` (m,) of a are measured in the same first walk
+        (:meth:`_settle_ends`)."""
+        if ends is None or ends.size == 0:
+            inputs = self._walk_inputs(a, phase, corrected=True)
+            walked = self._walk_from(inputs)
+        else:
+            # the root's velocity from this frame's to the end's, or over _VEL_PHASE
+            # where this frame is nearer the end than a quarter of that
+            k, m = a.size, ends.size
+            dphase = _PHASE_END - phase[ends]
+            near = ends[dphase < 0.25 * _VEL_PHASE]
+            # the re-walks take rows < k of these arguments (the frame's own)
+            inputs = self._walk_inputs(np.concatenate([a, a[ends], a[near]]), np.concatenate(
+                [phase, np.full(m, _PHASE_END), np.full(near.size, _PHASE_END - _VEL_PHASE)]),
+                corrected=True)
+            both = self._walk_from(inputs)
+            before = both.root_position[ends]
+            j = np.flatnonzero(dphase < 0.25 * _VEL_PHASE)
+            before[j] = both.root_position[k + m:]
+            dphase[j] = _VEL_PHASE
+            self._settle_ends(a[ends], both.root_position[k:k + m], before, dphase,
+                              both.positions[k:k + m])
+            walked = _first_rows(both, k)
         toe_fix = np.zeros(a.size)
         for _ in range(_YAW_ROUNDS):
             more = self._swing_yaw_fix(a, phase, walked)
@@ -1240,14 +1427,19 @@ class Animator:
             u = ak.toe_off_progress(rows, tau_, sw_.toe_off, _TOE_OFF_BLEND)
             offset, blend, pinned, toes, hip_fix = ak.corrections(
                 rows, tau_, sw_.toe_off, sw_.d0, sw_.d1, sw_.toe_vel, self._step.duration,
-                sw_.use_bezier, sw_.has_trail, sw_.join_long, sw_.hip_fix, sw_.hip_vel,
-                sw_.hip_drop, bool(self.style.toe_off_c1), _toe_off_shape(u), _TOE_OFF_BLEND,
-                _BEZIER_IN, _BEZIER_OUT, _HIP_BLEND, _HIP_BLEND_CLAMPED)
+                sw_.use_bezier, sw_.has_trail, sw_.join_long, sw_.join_whole, sw_.hip_fix,
+                sw_.hip_vel, sw_.hip_drop, bool(self.style.toe_off_c1), _toe_off_shape(u),
+                _TOE_OFF_BLEND, _BEZIER_IN, _BEZIER_OUT, _HIP_BLEND, _HIP_BLEND_CLAMPED)
             target = _bezier(self._swing.bezier[a], tau)
             goal = np.full((a.size, 3), np.nan)
             if pinned.any():
                 goal[pinned], toes[pinned] = self._pinned_ankle(a[pinned], phase[pinned],
                                                                 sw[pinned])  # fmt: skip
+            settling = np.flatnonzero(self._settle.on[a])
+            if settling.size:  # a stopped walker's root carried on, the landed foot kept
+                hip_fix[settling] += self._settle.shift[a[settling]]
+                goal[settling] = self._settle.ankle[a[settling]]
+                pinned[settling] = False  # (its goal takes no pin fix in _walk_from)
             envelope = self._lift_envelope(a, tau)
         if corrected:
             trailing = np.flatnonzero(self._swing.trail_root[a] & (tau < self._swing.toe_off[a]))

@@ -132,14 +132,15 @@ def toe_off_progress(a, tau, toe_off, toe_off_blend):  # pragma: no cover - comp
 
 @_jit
 def corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier, has_trail,
-                join_long, hip_fix0, hip_vel, hip_drop, toe_off_c1, shape,
+                join_long, join_whole, hip_fix0, hip_vel, hip_drop, toe_off_c1, shape,
                 toe_off_blend, bezier_in, bezier_out, hip_blend, hip_blend_clamped
                 ):  # pragma: no cover - compiled
     """The step corrections of ``Animator._walk`` for agents a (k,) at step phases tau
     (k,): swing-ankle offset (k, 3) [m] (toe-off blend and, with ``toe_off_c1``, the C¹
     hand-over, its shape h(u) (k,) at :func:`toe_off_progress` u given), Bezier blend
     (k,), pinned rows (k,) bool, rigid-toe angle (k,) (0 or NaN), stance-hip offset
-    (k, 3) [m] (continuity, its C¹ term, the drop toward the landing)."""
+    (k, 3) [m] (continuity, its C¹ term, the drop toward the landing; both join terms
+    over ``hip_blend_clamped`` where ``join_whole``, the restart after a stop)."""
     k = a.shape[0]
     offset, hip_fix = np.empty((k, 3)), np.empty((k, 3))
     blend, toes = np.empty(k), np.empty(k)
@@ -162,10 +163,11 @@ def corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier, has_trai
         blend[r] = ramp if use_bezier[i] else 0.0
         pinned[r] = has_trail[i] and t < t_off
         toes[r] = 0.0 if has_trail[i] else np.nan
-        over = hip_blend_clamped if join_long[i] else hip_blend
+        over = hip_blend_clamped if (join_long[i] or join_whole[i]) else hip_blend
         keep = 1.0 - _smooth(t / over)
-        x = _clip(t / hip_blend, 0.0, 1.0)
-        c1 = duration[i] * hip_blend * x * (1.0 - x) ** 2
+        b = hip_blend_clamped if join_whole[i] else hip_blend
+        x = _clip(t / b, 0.0, 1.0)
+        c1 = duration[i] * b * x * (1.0 - x) ** 2
         drop = _smooth((t - 0.4) / 0.6)
         for c in range(3):
             v = hip_fix0[i, c] * keep

@@ -760,3 +760,87 @@ def test_data_toe_off_lets_the_foot_go_where_the_data_have_lifted_it(monkeypatch
     kept, animator = _level_toe_offs(GaitStyle(data_toe_off=True))
     assert animator.stats["data_toe_offs"] == 0
     np.testing.assert_array_equal(kept, base)
+
+
+def _stop_and_go(style, sl=0.7, duration=0.45, wait=0.3, fps=25.0):
+    """A 1.75 m walker (1.56 m/s) takes three steps, stands ``wait`` [s] and walks two
+    more: root positions (F, 3) [m], both ankles (F, 2, 3) [m] at frames 1/fps apart,
+    the frames' times (F,) [s], and the stand's start and end [s]."""
+    animator = Animator(Body.from_heights([1.75]), ground=_flat, style=style)
+    starts = [s * duration for s in range(3)] + [3 * duration + wait + s * duration
+                                                 for s in range(2)]
+    stand = (3 * duration, 3 * duration + wait)
+    times, roots, ankles = [], [], []
+    t = 0.013
+    for s, t0 in enumerate(starts):
+        left_stance = s % 2 == 0
+        y = 0.045 if left_stance else -0.045
+        animator.command(_command([0], t0, 1 if left_stance else 0, [[s * sl, y, 0.0]],
+                                  [[(s + 1) * sl, -y, 0.0]], duration=duration))
+        end = starts[s + 1] if s + 1 < len(starts) else t0 + duration
+        while t < end:
+            frame = animator.pose(t)
+            times.append(t)
+            roots.append(frame.root_position[0])
+            ankles.append(frame.positions[0, LEG_JOINTS[:, 2]])
+            t += 1.0 / fps
+    return np.array(roots), np.array(ankles), np.array(times), stand
+
+
+def test_a_stopping_walker_settles_with_its_feet_planted_and_starts_again_smoothly():
+    """Without ``stop_settle`` the pose freezes at the last heel strike: the root goes
+    from 1.56 m/s to standing in one frame (4.0 cm of second difference at 25 fps; 6.7 at
+    the restart). With it the root comes to rest at 10 m/s², both feet where they
+    landed (2.6 cm, the stance leg's reach lowering the pelvis as it moves on), and the
+    next step joins it C¹ (2.0 cm)."""
+    for style, bound in ((GaitStyle(stop_settle=True), 0.03), (GaitStyle(), None)):
+        roots, ankles, times, (t_stop, t_go) = _stop_and_go(style)
+        d2 = np.linalg.norm(roots[2:] - 2.0 * roots[1:-1] + roots[:-2], axis=1)
+        if bound is None:
+            assert d2.max() > 0.04
+            continue
+        assert d2.max() < bound
+        standing = (times > t_stop) & (times < t_go)
+        assert standing.sum() >= 6
+        feet = ankles[standing]
+        assert np.abs(feet - feet[0]).max() < 1e-3  # both feet planted
+        moved = np.linalg.norm(roots[standing][-1] - roots[standing][0])
+        assert moved > 0.05  # the root carried on (it did not freeze)
+
+
+def test_a_stop_posed_at_a_steady_frame_rate_needs_no_walk_of_its_own():
+    """The step end a stop settles from (its root velocity, the landed ankle) is measured
+    in the walker's last frame before the end, as rows of that frame's walk: the first
+    frame of the stand makes no more ElevWalker calls than the standing frames after it
+    (gait16's own measuring walk made one more)."""
+    calls = []
+
+    class Counting(Animator):
+        def pose(self, t, agents=None):
+            calls.append(0)
+            return super().pose(t, agents)
+
+        def _walk_from(self, *args, **kwargs):  # the walks and re-walks of a frame
+            if calls:
+                calls[-1] += 1
+            return super()._walk_from(*args, **kwargs)
+
+    animator = Counting(Body.from_heights([1.75]), ground=_flat,
+                        style=GaitStyle(stop_settle=True))
+    duration, sl = 0.45, 0.7
+    for s in range(3):
+        left_stance = s % 2 == 0
+        y = 0.045 if left_stance else -0.045
+        animator.command(_command([0], s * duration, 1 if left_stance else 0,
+                                  [[s * sl, y, 0.0]], [[(s + 1) * sl, -y, 0.0]],
+                                  duration=duration))
+        t = 0.013 + np.ceil((s * duration - 0.013) * 25.0) / 25.0
+        while t < (s + 1) * duration:
+            animator.pose(t)
+            t += 0.04
+    first = len(calls)
+    for _ in range(3):  # standing
+        animator.pose(t)
+        t += 0.04
+    assert animator._settle.has[0]  # measured before the stand's first frame
+    assert calls[first] <= calls[first + 1] == calls[first + 2]

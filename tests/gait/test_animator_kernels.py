@@ -94,7 +94,7 @@ def test_corrections_are_the_numpy_code():
     d0, d1, toe_vel = (RNG.normal(size=(N, 3)) for _ in range(3))
     hip_fix0, hip_vel, hip_drop = (RNG.normal(size=(N, 3)) for _ in range(3))
     duration = RNG.uniform(0.3, 0.8, N)
-    use_bezier, has_trail, join_long = (RNG.random(N) < 0.5 for _ in range(3))
+    use_bezier, has_trail, join_long, join_whole = (RNG.random(N) < 0.5 for _ in range(4))
     a, tau = _agents(K), _phases(K, 1.0)
     blend_, in_, out_, half, whole = 0.7, 0.5, 0.3, 0.5, 1.0
     for c1 in (True, False):
@@ -112,16 +112,17 @@ def test_corrections_are_the_numpy_code():
         blend = np.where(use_bezier[a], ramp, 0.0)
         pinned = has_trail[a] & (tau < t_off)
         toes = np.where(has_trail[a], 0.0, np.nan)
-        over = np.where(join_long[a], whole, half)
+        over = np.where(join_long[a] | join_whole[a], whole, half)
         hip_fix = hip_fix0[a] * (1.0 - smoothstep(tau / over))[:, None]
-        x = np.clip(tau / half, 0.0, 1.0)
-        hip_fix += hip_vel[a] * (duration[a] * half * x * (1.0 - x) ** 2)[:, None]
+        b = np.where(join_whole[a], whole, half)
+        x = np.clip(tau / b, 0.0, 1.0)
+        hip_fix += hip_vel[a] * (duration[a] * b * x * (1.0 - x) ** 2)[:, None]
         hip_fix += hip_drop[a] * smoothstep((tau - 0.4) / 0.6)[:, None]
         progress = ak.toe_off_progress(a, tau, toe_off, blend_)
         if c1:
             _same(progress, u)
         got = ak.corrections(a, tau, toe_off, d0, d1, toe_vel, duration, use_bezier,
-                             has_trail, join_long, hip_fix0, hip_vel, hip_drop, c1,
+                             has_trail, join_long, join_whole, hip_fix0, hip_vel, hip_drop, c1,
                              _toe_off_shape(progress), blend_, in_, out_, half, whole)
         for g, w in zip(got, (offset, blend, pinned, toes, hip_fix), strict=True):
             _same(g, w)
