@@ -226,6 +226,14 @@ class CrowdParams:
         0.55–0.77) and the lanes are 0.43 m apart at 1.0 m (H&D 0.45), but the flows at
         0.8–1.2 m are 1.29 / 1.44 / 1.61 / 1.86 / 1.96 /s (off 1.27 / 1.44 / 1.74 /
         1.91 / 2.21; full, seeds 4–6): the pace of the queue at the mouth limits them.
+    mouth_priority : bool
+        Priority in front of narrow openings (:mod:`crowdwalk.crowd.mouth_priority`): a
+        walker within 1 m in front of an opening's mouth keeps its step clear of the next
+        step (one nominal step on from the committed one) of every same-way neighbour
+        there nearer the mouth point (ties by index), so that of the two walkers at the
+        wall corners one goes first and the one on the axis behind them before both
+        (Kirchner et al. 2003's conflicts resolved without friction). Only the hard test
+        gains constraints (no body overlaps).
     wake_on_step : bool
         A walker standing in or within 1 m of an opening decides again at the tick after
         the first heel strike of a walking same-way neighbour that could be in its way,
@@ -276,6 +284,7 @@ class CrowdParams:
     opening_wall_factor: float = 0.0
     opening_personal_factor: float = 1.0
     zipper: bool = False
+    mouth_priority: bool = False
     wake_on_step: bool = False
     steering: SteeringParams = field(default_factory=SteeringParams)
 
