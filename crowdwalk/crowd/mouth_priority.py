@@ -71,28 +71,40 @@ class MouthPriority:
             return np.full(len(xy), np.inf)
         return shapely.distance(self.axis, shapely.points(xy))
 
-    def approach(self, xy: np.ndarray) -> np.ndarray:
-        """(k,) whether points (k, 2) lie in front of a mouth: in an opening zone, not in
-        the narrow corridor."""
-        return (self.zone.inside(xy) & ~self.narrow.inside(xy)
-                & (self.mouth_distance(xy) <= REACH))
+    def approach(self, xy: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """(k,) whether walkers at points (k, 2) [m] of route direction ``direction``
+        (k, 2) unit are in front of a mouth, heading into it: in an opening zone, not in
+        the narrow corridor, within ``REACH`` of the mouth point and the route direction
+        within 60° (``SAME_WAY``) of the way to it."""
+        xy = np.asarray(xy, float).reshape(-1, 2)
+        out = self.zone.inside(xy) & ~self.narrow.inside(xy)
+        if not out.any():
+            return out
+        rows = np.flatnonzero(out)
+        ends = shapely.get_coordinates(
+            shapely.shortest_line(shapely.points(xy[rows]), self.axis)).reshape(-1, 2, 2)
+        way = ends[:, 1] - xy[rows]
+        dist = np.linalg.norm(way, axis=1)
+        into = np.einsum("kj,kj->k", way, direction[rows]) >= SAME_WAY * dist
+        out[rows] = (dist <= REACH) & into
+        return out
 
     def priority(self, me: np.ndarray, pos: np.ndarray, direction: np.ndarray,
                  nbs: Neighbours, nb_direction: np.ndarray) -> np.ndarray:
         """(m, K) whether each neighbour of ``nbs`` (``agent`` set) has priority over the
         decider ``me`` (m,) (agent indices) at ``pos`` (m, 2) [m], of route direction
-        ``direction`` (m, 2) unit: both in front of a mouth, the same way (``nb_direction``
-        (m, K, 2) unit), the neighbour nearer the mouth point (within ``TIE``: of lower
-        index)."""
+        ``direction`` (m, 2) unit: both in front of a mouth heading into it
+        (:meth:`approach`), the same way (``nb_direction`` (m, K, 2) unit), the neighbour
+        nearer the mouth point (within ``TIE``: of lower index)."""
         m, k = nbs.valid.shape
         valid = np.zeros((m, k), bool)
-        front = self.approach(pos)
+        front = self.approach(pos, direction)
         if front.any() and k:
             rows = np.flatnonzero(front)
             near = nbs.valid[rows]
             nb_xy = nbs.now[rows][near]
             nb_front = np.zeros(near.shape, bool)
-            nb_front[near] = self.approach(nb_xy)
+            nb_front[near] = self.approach(nb_xy, nb_direction[rows][near])
             nb_d = np.full(near.shape, np.inf)
             nb_d[near] = self.mouth_distance(nb_xy)
             d = self.mouth_distance(pos[rows])[:, None]

@@ -52,6 +52,11 @@ def test_priority_is_a_strict_order_by_distance_to_the_mouth_point():
     # nor do walkers going the other way
     west = mp.priority(np.arange(5), _WALKERS, east, nbs, -nb_east)
     assert not west.any()
+    # nor walkers passing the mouth rather than heading into it (walking along the wall)
+    north = np.tile([0.0, 1.0], (5, 1))
+    assert not mp.priority(np.arange(5), _WALKERS, north, nbs,
+                           np.broadcast_to(north[0], nb_east.shape)).any()
+    assert mp.approach(_WALKERS, east).tolist() == [True, True, True, False, False]
     d = mp.mouth_distance(_WALKERS[:3])
     np.testing.assert_allclose(d, [np.hypot(0.15, 0.25)] * 2 + [0.45], atol=1e-6)
 
