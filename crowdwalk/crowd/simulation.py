@@ -40,6 +40,7 @@ from crowdwalk.crowd.commit import take_steps
 from crowdwalk.crowd.conflicts import clashes_with_neighbours, same_tick_yielders
 from crowdwalk.crowd.events import EventTimeline
 from crowdwalk.crowd.holding import WaitingAreas
+from crowdwalk.crowd.mouth_priority import MouthPriority, with_reservations
 from crowdwalk.crowd.neighbours import gather_neighbours
 from crowdwalk.crowd.openings import Openings
 from crowdwalk.crowd.params import CrowdParams
@@ -165,6 +166,9 @@ class CrowdSimulation:
         self.wake = None  # wake_on_step: standing walkers decide at a neighbour's step
         if params.wake_on_step:
             self.wake = WakeOnStep(world.routes, params.opening_width)
+        self.mouth_priority = None  # mouth_priority: reserved next steps at mouths
+        if params.mouth_priority:
+            self.mouth_priority = MouthPriority(world.routes, params.opening_width)
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads
@@ -356,6 +360,16 @@ class CrowdSimulation:
         return {"wall_scale": np.where(inside, prm.opening_wall_factor, 1.0),
                 "personal_scale": np.where(inside, prm.opening_personal_factor, 1.0)}
 
+    def _reservations(self, idx: np.ndarray, pos: np.ndarray, nbs):
+        """``mouth_priority``: the reserved next steps (:class:`~crowdwalk.crowd.steering.
+        Neighbours`, (k, K)) of the deciders ``idx`` at ``pos`` (k, 2) [m] among ``nbs``."""
+        e = self._route_directions()
+        j = nbs.agent
+        step = self.nominal_step[j]
+        return self.mouth_priority.reservations(
+            idx, pos, e[idx], nbs, bound=self.shape.bound[idx], nb_direction=e[j], nb_step=step,
+            nb_time=np.maximum(step / self.pop.free_speed[j], self.min_step_time[j]))
+
     def _decide(self, idx: np.ndarray, t: float) -> None:
         st, prm, table = self.state, self.params, self.routes.table
         te = st.t1[idx].copy()  # heel-strike (or wait-end) times, within this tick
@@ -411,6 +425,9 @@ class CrowdSimulation:
             target = self.zipper.targets(table, self.clearance, route=st.route[idx],
                                          progress=st.progress[idx], xy=pos,
                                          radius=self.radius[idx], target=target, nbs=nbs)
+        limits = None
+        if self.mouth_priority is not None:  # give way to those nearer the mouth
+            limits = with_reservations(nbs, self._reservations(idx, pos, nbs))
         outline = self.shape.packed(idx)
         walled = None
         if prm.speed_model == "headway" and prm.headway_overtake_open_lanes:
@@ -427,7 +444,7 @@ class CrowdSimulation:
             gap=gap if (prm.speed_model == "contact_gap" or prm.headway_steer
                         or prm.headway_overtake) else None,
             score_same_time=prm.headway_same_time,
-            **self._opening_scales(pos))
+            **self._opening_scales(pos), **({} if limits is None else {"limits": limits}))
         if self._steer_on:  # worker processes (given, not posing); the field goes once
             choice = split_rows(self.workers, choose_steps, idx.size, pos, st.stance[idx],
                                 clearance=self.clearance, params=prm.steering,

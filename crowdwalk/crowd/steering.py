@@ -247,6 +247,7 @@ def choose_steps(
     wall_scale: np.ndarray | None = None,
     personal_scale: np.ndarray | None = None,
     score_same_time: bool = False,
+    limits: Neighbours | None = None,
 ) -> StepChoice:
     """Choose the next step direction for m deciding agents.
 
@@ -304,6 +305,11 @@ def choose_steps(
         With ``gap``: each direction is scored at the distance its allowed speed covers
         in one step at the free cadence (``GapSteps.along(same_time=True)``), so that
         directions compare by speed (``CrowdParams.headway_same_time``).
+    limits : Neighbours, optional
+        The bodies of the hard step test (m, K'), when they are not ``neighbours``
+        (``CrowdParams.mouth_priority``: the neighbours and the reserved next steps of
+        those with priority, :mod:`~crowdwalk.crowd.mouth_priority`); the soft terms
+        use ``neighbours``.
 
     Returns
     -------
@@ -322,10 +328,12 @@ def choose_steps(
              else f(shape, float))
     speed = 2.0 * nominal_step if speed is None else f(speed, float)
     nbs = neighbours
-    timed = nbs.remaining is not None and step_time is not None
+    hard = nbs if limits is None else limits
+    timed = hard.remaining is not None and step_time is not None
     n_k = nbs.valid.shape[1]
-    nb_yaw_now, nb_yaw_end = nbs.yaws()
+    nb_yaw_now, nb_yaw_end = hard.yaws()
     none = np.zeros((m, n_k))
+    none_hard = none if hard is nbs else np.zeros(hard.valid.shape)
     prm = params
     field = (clearance.distance, float(clearance.origin[0]), float(clearance.origin[1]),
              float(clearance.cell))
@@ -334,9 +342,9 @@ def choose_steps(
         position, stance, heading, f(route_direction, float), yaw, radius, shape, speed,
         f(step_time, float) if timed else np.zeros(m),
         np.zeros(m) if lag is None else f(lag, float), nominal_step, timed,
-        f(nbs.valid, bool), f(nbs.now, float), f(nbs.end, float), f(nbs.radius, float),
+        f(hard.valid, bool), f(hard.now, float), f(hard.end, float), f(hard.radius, float),
         f(nb_yaw_now, float), f(nb_yaw_end, float),
-        f(nbs.remaining, float) if timed else none, f(nbs.outlines(), float), field[0],
+        f(hard.remaining, float) if timed else none_hard, f(hard.outlines(), float), field[0],
         clearance.block_least, *field[1:], np.deg2rad(prm.offsets_deg),
         np.asarray(prm.step_lengths, float), float(prm.foot_clearance),
         float(np.deg2rad(25.0) + 1e-9), bool(prm.keep_facing), np.deg2rad(prm.twists_deg))
