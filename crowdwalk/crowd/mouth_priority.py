@@ -28,20 +28,16 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from crowdwalk.crowd.openings import Openings
+from crowdwalk.crowd.openings import ZONE_MARGIN, Openings
 from crowdwalk.crowd.steering import Neighbours
+from crowdwalk.crowd.wake import SAME_WAY
 
 __all__ = ["REACH", "TIE", "ZONE_MARGIN", "MouthPriority", "with_reservations"]
 
-#: how far into the rooms the zone reaches from the openings' ends [m] (the zipper's and
-#: the headway free zone's margin)
-ZONE_MARGIN = 1.0
 #: only walkers this close to the mouth point take part [m] (the zone's margin)
 REACH = 1.0
 #: two walkers this close in distance to the mouth point are ordered by index [m]
 TIE = 0.05
-#: same way: the two route directions' cosine at least this (within 60°)
-SAME_WAY = 0.5
 
 
 class MouthPriority:

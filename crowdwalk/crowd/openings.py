@@ -15,7 +15,11 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-__all__ = ["Openings"]
+__all__ = ["ZONE_MARGIN", "Openings"]
+
+#: how far into the rooms the door rules' zones (zipper, wake, mouth priority) reach from an
+#: opening's ends [m]
+ZONE_MARGIN = 1.0
 
 
 class Openings:

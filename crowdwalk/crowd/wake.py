@@ -21,13 +21,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from crowdwalk.crowd.openings import Openings
+from crowdwalk.crowd.openings import ZONE_MARGIN, Openings
 from crowdwalk.crowd.steering import Neighbours
 
 __all__ = ["ZONE_MARGIN", "WakeOnStep"]
 
-#: how far into the rooms the zone reaches from the openings' ends [m]
-ZONE_MARGIN = 1.0
 #: same way: the route directions' cosine at least this (within 60°)
 SAME_WAY = 0.5
 

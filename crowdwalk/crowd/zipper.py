@@ -20,12 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from crowdwalk.crowd.openings import Openings
+from crowdwalk.crowd.openings import ZONE_MARGIN, Openings
 
 __all__ = ["REACH", "ZONE_MARGIN", "ZipperEntry"]
 
-#: how far into the rooms the entry zone reaches from the opening's ends [m]
-ZONE_MARGIN = 1.0
 #: how far ahead along the route the lane target lies [m]
 REACH = 1.0
 #: the centre line is sampled this often between the walker and its target to find the
