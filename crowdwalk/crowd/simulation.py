@@ -342,13 +342,16 @@ class CrowdSimulation:
         return GapSteps(pos, self.radius[idx], nbs.end, nbs.radius, nbs.valid, followed,
                         free, leg, prm.contact_time_gap)
 
-    def _route_directions(self) -> np.ndarray:
-        """Every agent's desired direction (n, 2): the unit direction of its current
-        route segment."""
+    def _route_directions(self, agents: np.ndarray | None = None) -> np.ndarray:
+        """The desired directions (..., 2) of ``agents`` (an index array of any shape;
+        default every agent, (n, 2)): the unit direction of each one's current route
+        segment."""
         st, table = self.state, self.routes.table
-        seg = np.minimum(st.segment, table.stop[st.route] - 1)
+        segment, route = ((st.segment, st.route) if agents is None
+                          else (st.segment[agents], st.route[agents]))
+        seg = np.minimum(segment, table.stop[route] - 1)
         d = table.xy[seg + 1] - table.xy[seg]
-        return d / np.maximum(np.linalg.norm(d, axis=1), 1e-12)[:, None]
+        return d / np.maximum(np.linalg.norm(d, axis=-1), 1e-12)[..., None]
 
     def _opening_scales(self, pos: np.ndarray) -> dict:
         """``opening_ease``: the factors on the soft wall and neighbour terms (k,) for
@@ -363,11 +366,11 @@ class CrowdSimulation:
     def _reservations(self, idx: np.ndarray, pos: np.ndarray, nbs):
         """``mouth_priority``: the reserved next steps (:class:`~crowdwalk.crowd.steering.
         Neighbours`, (k, K)) of the deciders ``idx`` at ``pos`` (k, 2) [m] among ``nbs``."""
-        e = self._route_directions()
         j = nbs.agent
         step = self.nominal_step[j]
         return self.mouth_priority.reservations(
-            idx, pos, e[idx], nbs, bound=self.shape.bound[idx], nb_direction=e[j], nb_step=step,
+            idx, pos, self._route_directions(idx), nbs, bound=self.shape.bound[idx],
+            nb_direction=self._route_directions(j), nb_step=step,
             nb_time=np.maximum(step / self.pop.free_speed[j], self.min_step_time[j]))
 
     def _decide(self, idx: np.ndarray, t: float) -> None:
@@ -483,10 +486,10 @@ class CrowdSimulation:
         wake = None
         if self.wake is not None:
             j = nbs.agent
-            e = self._route_directions()
             wake = self.wake.times(t, self.dt, pos, nbs, bound=self.shape.bound[idx],
                                    nb_bound=self.shape.bound[j], step=self.nominal_step[idx],
-                                   direction=e[idx], nb_direction=e[j])
+                                   direction=self._route_directions(idx),
+                                   nb_direction=self._route_directions(j))
         self._commit(idx, te, t, choice.direction, choice.yaw, plan, wake)
 
     def _commit(self, idx, te, t, direction, yaw, plan: StepPlan,
@@ -508,13 +511,7 @@ class CrowdSimulation:
         wait = idx[~plan.move]
         if wait.size:
             stand(st, self.queue, agents=wait, t=t, terrain=self.terrain, legs=self.legs,
-                  params=prm)
-            if wake is not None:  # wake_on_step: decide again after a neighbour's step
-                early = np.minimum(wake[~plan.move], st.t1[wait])
-                cut = st.t1[wait] - early
-                st.t1[wait] = early
-                st.wait[wait] -= cut
-                st.stuck[wait] -= cut
+                  params=prm, wake=None if wake is None else wake[~plan.move])
         # blocked: no progress along the route for ``reroute_after`` seconds (side steps
         # and steps back in a jam do not count)
         blocked = idx[t - st.progress_time[idx] >= prm.reroute_after]

@@ -13,9 +13,11 @@ import numpy as np
 __all__ = ["stand"]
 
 
-def stand(state, queue, *, agents: np.ndarray, t: float, terrain, legs, params) -> None:
-    """Let ``agents`` (k,) stand from their heel strike until ``t + wait_time`` [s]
-    (``state`` updated in place; their queued plans are dropped). ``legs`` is the crowd's
+def stand(state, queue, *, agents: np.ndarray, t: float, terrain, legs, params,
+          wake: np.ndarray | None = None) -> None:
+    """Let ``agents`` (k,) stand from their heel strike until ``t + wait_time`` [s], or
+    until ``wake`` (k,) [s] where that is sooner (``wake_on_step``) (``state`` updated in
+    place; their queued plans are dropped). ``legs`` is the crowd's
     :class:`~crowdwalk.crowd.legs.LegTable`, ``params`` its ``CrowdParams``."""
     st, wait = state, agents
     queue.clear(wait)
@@ -23,7 +25,8 @@ def stand(state, queue, *, agents: np.ndarray, t: float, terrain, legs, params) 
     st.z0[wait] = st.z1[wait]
     st.yaw0[wait] = st.yaw1[wait]
     st.t0[wait] = st.t1[wait]
-    st.t1[wait] = t + params.wait_time
+    end = t + params.wait_time
+    st.t1[wait] = end if wake is None else np.minimum(wake, end)
     apart = wait[np.linalg.norm(st.stance[wait] - st.trail[wait], axis=1) > 1e-6]
     if apart.size:
         here = st.pos1[apart]
@@ -44,6 +47,6 @@ def stand(state, queue, *, agents: np.ndarray, t: float, terrain, legs, params) 
                                                    st.stance_z[swap].copy())
             st.foot[swap] = 1 - st.foot[swap]
             queue.clear(swap)
-    dur = t + params.wait_time - st.t0[wait]
+    dur = st.t1[wait] - st.t0[wait]
     st.wait[wait] += dur
     st.stuck[wait] += dur
