@@ -3,6 +3,7 @@ after a walking neighbour in its way takes its next step (not only after ``wait_
 the hard tests are unchanged, so bodies never overlap."""
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -11,6 +12,7 @@ from crowdwalk.crowd.simulation import ACTIVE, CrowdParams
 from crowdwalk.crowd.steering import Neighbours
 from crowdwalk.crowd.wake import WakeOnStep
 from crowdwalk.scenario import Scenario
+from crowdwalk.sinks import OverlapMonitor
 from crowdwalk.verify import _bottleneck
 from crowdwalk.world import build_world
 
@@ -52,13 +54,15 @@ def test_a_standing_walker_wakes_the_tick_after_a_near_walking_neighbours_step()
 def _woken_stands(on: bool):
     """Run the 0.8 m bottleneck (20 walkers, 25 s) tick by tick: (the stands that end
     before ``wait_time``, as (agent, end tick, position)), the walking deciders of each
-    tick (tick -> positions), the stand count, and the least distance between two body
-    centres over the frames minus the two radii [m]."""
+    tick (tick -> positions), the stand count, and the largest overlap of two body
+    outlines over the frames [m] (the run summary's ``max_overlap_m``)."""
     sc = Scenario.model_validate(_bottleneck(0.8, 5, 20))
     params = replace(CrowdParams(), wake_on_step=on, zipper=True)
     _, _, sim, _, _ = prepare(sc, RunOverrides(poses=False, duration=25.0), params=params)
     st, dt, wait = sim.state, sim.dt, params.wait_time
-    woken, walking, stands, least = [], {}, 0, np.inf
+    woken, walking, stands = [], {}, 0
+    overlap = OverlapMonitor()
+    overlap.begin(SimpleNamespace(shape=sim.shape))
     while not sim.finished:
         t = (sim.tick + 1) * dt
         deciding = np.flatnonzero((st.status == ACTIVE) & (st.t1 <= t + 1e-9))
@@ -66,30 +70,24 @@ def _woken_stands(on: bool):
                                > 0]
         walking[sim.tick + 1] = st.pos1[was_walking].copy()
         if sim.step():
-            snap = sim.snapshot()
-            if len(snap.agents) > 1:
-                d = np.linalg.norm(snap.xy[:, None] - snap.xy[None], axis=-1)
-                r = sim.radius[snap.agents]
-                gap = d - r[:, None] - r[None]
-                np.fill_diagonal(gap, np.inf)
-                least = min(least, float(gap.min()))
+            overlap.frame(sim.time, sim.snapshot(), None)
         stood = deciding[(st.status[deciding] == ACTIVE) & (st.t0[deciding] <= t + 1e-9)
                          & (np.linalg.norm(st.pos1[deciding] - st.pos0[deciding], axis=1)
                             == 0) & (st.t1[deciding] > t + 1e-9)]
         stands += stood.size
         for a in stood[st.t1[stood] < t + wait - 1e-9]:
             woken.append((int(a), int(round(st.t1[a] / dt)), st.pos1[a].copy(), t))
-    return woken, walking, stands, least
+    return woken, walking, stands, overlap.max_overlap
 
 
 def test_woken_walkers_decide_one_tick_after_a_near_neighbour_steps_and_never_overlap():
-    woken_off, _, stands_off, least_off = _woken_stands(False)
+    woken_off, _, stands_off, over_off = _woken_stands(False)
     assert stands_off > 0 and not woken_off  # off: every stand lasts wait_time
-    woken, walking, stands, least = _woken_stands(True)
+    woken, walking, stands, over = _woken_stands(True)
     assert len(woken) > 0.1 * stands, (len(woken), stands)
     for agent, tick, xy, t in woken:
         assert tick * 0.05 >= t + 0.05 - 1e-9  # never in the tick it stood
         # in the tick before it decides again a walking neighbour near it stepped
         near = walking.get(tick - 1, np.zeros((0, 2)))
         assert (np.linalg.norm(near - xy, axis=1) < 0.18 + 0.18 + 0.65 + 0.6).any(), (agent, tick)
-    assert least >= -0.01 and least_off >= -0.01
+    assert over <= 0.01 and over_off <= 0.01
