@@ -371,10 +371,10 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
                                     + foot_nodes[:, -1]).tolist()
     trailing = (tables.node_s[:, 0] + origins).tolist()
     efficiencies, speed = efficiency.tolist(), speeds.tolist()
-    ok_rows = zip(foot_s, foot_z, lengths, rises, controls, durations, terms["En"],
+    agent_rows = zip(foot_s, foot_z, lengths, rises, controls, durations, terms["En"],
                   terms["Ev"], terms["Ej"], terms["E"], np.zeros((A, st.n)), strict=True)
     plans = []
-    for a, row in enumerate(ok_rows):
+    for a, row in enumerate(agent_rows):
         key_frames, built, reused, adjustments, steps_done = work[a]
         stats = {
             "nodes_expanded": expanded[a],

@@ -1180,14 +1180,14 @@ class Animator:
             # where this frame is nearer the end than a quarter of that
             k, m = a.size, ends.size
             dphase = _PHASE_END - phase[ends]
-            near = ends[dphase < 0.25 * _VEL_PHASE]
+            j = np.flatnonzero(dphase < 0.25 * _VEL_PHASE)
+            near = ends[j]
             # the re-walks take rows < k of these arguments (the frame's own)
             inputs = self._walk_inputs(np.concatenate([a, a[ends], a[near]]), np.concatenate(
                 [phase, np.full(m, _PHASE_END), np.full(near.size, _PHASE_END - _VEL_PHASE)]),
                 corrected=True)
             both = self._walk_from(inputs)
             before = both.root_position[ends]
-            j = np.flatnonzero(dphase < 0.25 * _VEL_PHASE)
             before[j] = both.root_position[k + m:]
             dphase[j] = _VEL_PHASE
             self._settle_ends(a[ends], both.root_position[k:k + m], before, dphase,
