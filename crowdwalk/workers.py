@@ -111,12 +111,17 @@ class RowThreads:
         parts = min(self.count, m // max(least, 1))
         if parts <= 1 or self._pool is None:
             return fn(*args, **kwargs)
-        bounds = np.linspace(0, m, parts + 1).round().astype(int)
-        cuts = [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        # np.linspace(0, m, parts + 1).round()'s bounds (i · (m / parts), half to even)
+        step = m / parts
+        bounds = [round(i * step) for i in range(parts)] + [m]
+        cuts = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+        # which arguments are split is found once for all parts (_part's rules)
+        split = [_splits(a, m) for a in args]
+        named = {k: _splits(v, m) for k, v in kwargs.items()}
 
         def part(rows):
-            return (tuple(_part(a, rows, m) for a in args),
-                    {k: _part(v, rows, m) for k, v in kwargs.items()})
+            return ([_cut(a, rows, m) if s else a for a, s in zip(args, split, strict=True)],
+                    {k: _cut(v, rows, m) if named[k] else v for k, v in kwargs.items()})
 
         futures = [self._pool.submit(fn, *a, **k) for a, k in map(part, cuts[:-1])]
         a, k = part(cuts[-1])
@@ -311,6 +316,21 @@ class Workers:
         if failed:
             raise WorkerError(failed)
         return value
+
+
+def _splits(value, m: int) -> bool:
+    """Whether :func:`_part` may restrict ``value`` (an array or list of m rows, or a
+    dataclass instance, whose fields it looks into)."""
+    if isinstance(value, np.ndarray):
+        return bool(value.ndim) and value.shape[0] == m
+    if isinstance(value, list):
+        return len(value) == m
+    return dataclasses.is_dataclass(value) and not isinstance(value, type)
+
+
+def _cut(value, rows: slice, m: int):
+    """:func:`_part` of a value :func:`_splits` accepts: an array's rows directly."""
+    return value[rows] if isinstance(value, np.ndarray) else _part(value, rows, m)
 
 
 def _part(value, rows: slice, m: int):
