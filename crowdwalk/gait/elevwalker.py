@@ -40,22 +40,24 @@ from crowdwalk.body import (
     JOINT,
     JOINT_NAMES,
     LEG_JOINTS,
+    PARENTS,
     SUBTALAR_AXIS,
     TALOCRURAL_AXIS,
     Body,
-    forward_kinematics,
+    _forward_kinematics,
     mirrored_axis,
 )
 from crowdwalk.errors import invalid
 from crowdwalk.gait import elevwalker_kernels as ek
-from crowdwalk.gait.complexes import solve_stance_ankle, solve_swing_hip
+from crowdwalk.gait.complexes import MIN_POSE_ROWS, solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
-from crowdwalk.gait.joints import assemble_joints
+from crowdwalk.gait.joints import ASSEMBLE_ARGUMENTS, _assemble, assemble_arguments
 from crowdwalk.gait.posing_kernels import (
     as_rows,
     rows_finite,
 )
+from crowdwalk.workers import row_threads
 
 __all__ = [
     "GaitStyle",
@@ -537,25 +539,30 @@ def elevwalker_pose(
     # stays neutral), push-off toes flat on the ground (double support), every joint's
     # local rotation, upper body (§8: trunk upright along ψ, arms with the opposite
     # thigh) — compiled, per agent.
+    # Then the KLAW upper body and forward kinematics (both compiled): the three on parts
+    # of the rows at once (_joint_rows; each row's values its own)
     toe_given = np.nan if swing_toe_angle is None else swing_toe_angle
-    local, knee_sw, ok_foot_sw = assemble_joints(
+    args = assemble_arguments(
         left, phase, heading, stance_fraction, r_pelvis, stance.r_thigh_st, stance.knee_rel,
         tc_axis, sub_axis, stance.x_ankle, stance.toe_angle, hip_sw, r_thigh_sw, knee_sw,
         r_shank_sw, _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
         style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
     )  # fmt: skip
+    styled = attributes is not None
+    if styled:
+        args += _upper_body_arguments(k, r_pelvis, heading, phase, left, side_st, phi_st,
+                                      phi_sw, attributes, style)
+    args += [body.offsets(), np.ascontiguousarray(stance.root, dtype=float),
+             np.ascontiguousarray(r_pelvis, dtype=float), PARENTS]
+    local, knee_sw, ok_foot_sw, positions, rotations, finite = row_threads().map(
+        _joint_rows, k, styled, *args, min_rows=MIN_POSE_ROWS)
     rows = np.arange(k)
-    if attributes is not None:
-        _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
-                           attributes, style)
-
-    positions, rotations = forward_kinematics(body, stance.root, r_pelvis, local)
     swing_phase = phase + 0.5
     contact = np.empty((k, 2), dtype=bool)
     contact[rows, st_row] = True
     contact[rows, sw_row] = swing_phase < np.asarray(stance_fraction, dtype=float)
     converged = stance.ok_ankle & ok_hip & stance.ok_knee_st & ok_knee_sw & ok_foot_sw
-    converged &= rows_finite(positions, local)  # every joint position and rotation finite
+    converged &= finite  # every joint position and rotation finite
     return WalkerPose(
         root_position=stance.root,
         root_rotation=r_pelvis,
@@ -649,7 +656,16 @@ def _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, p
     trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
     signal); elbows Ry(-elbow): compiled (``elevwalker_kernels.styled_upper_body``), the
     trunk's measured shapes and the sines numpy's."""
-    a, k = attributes, local.shape[0]
+    ek.styled_upper_body(local, *_upper_body_arguments(
+        local.shape[0], r_pelvis, heading, phase, left, side_st, phi_st, phi_sw, attributes,
+        style))
+
+
+def _upper_body_arguments(k: int, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
+                          attributes, style: GaitStyle) -> list:
+    """:func:`_styled_upper_body`'s arguments of ``elevwalker_kernels.styled_upper_body``
+    after ``local`` (a list of :data:`_UPPER_BODY_ARGUMENTS`) for k walkers."""
+    a = attributes
     from_data = bool(style.trunk_from_data)
     if from_data:
         from crowdwalk.gait.datasets import trunk_motion
@@ -659,12 +675,32 @@ def _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, p
     else:
         shape, wave = np.cos(2.0 * np.pi * phase), np.zeros(k)
     f = _vector
-    ek.styled_upper_body(
-        local, np.ascontiguousarray(r_pelvis), f(heading, k), left, side_st, phi_st, phi_sw,
+    return [
+        np.ascontiguousarray(r_pelvis), f(heading, k), left, side_st, phi_st, phi_sw,
         from_data, f(shape, k), f(wave, k), np.sin(2.0 * np.pi * phase),
         f(a.shoulder_rotation, k), f(a.torso_tilt, k), f(a.torso_sway, k), f(a.arm_out, k),
         f(a.arm_swing, k), f(a.elbow_min, k), f(a.elbow_max, k), float(THIGH_MID),
-        float(THIGH_HALF), JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS)
+        float(THIGH_HALF), JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS]
+
+
+_UPPER_BODY_ARGUMENTS = 23
+
+
+def _joint_rows(styled: bool, *args):
+    """The compiled end of :func:`elevwalker_pose` on its rows (all, or a part of them in
+    a row thread): the joints (``joints._assemble``, ``args``' first
+    :data:`~crowdwalk.gait.joints.ASSEMBLE_ARGUMENTS`), the KLAW upper body where
+    ``styled`` (the next :data:`_UPPER_BODY_ARGUMENTS`), forward kinematics (the last
+    four: offsets, root, pelvis, parents) and whether each row is finite. Returns local
+    (k, J, 3, 3), swing knee (k,), swing foot reached (k,), positions (k, J, 3) [m],
+    rotations (k, J, 3, 3), finite (k,) bool."""
+    m = ASSEMBLE_ARGUMENTS
+    local, knee_sw, ok_foot_sw = _assemble(*args[:m])
+    if styled:
+        ek.styled_upper_body(local, *args[m:m + _UPPER_BODY_ARGUMENTS])
+    offsets, root, r_pelvis, parents = args[-4:]
+    positions, rotations = _forward_kinematics(offsets, root, r_pelvis, local, parents)
+    return local, knee_sw, ok_foot_sw, positions, rotations, rows_finite(positions, local)
 
 
 # --- measurements on poses ------------------------------------------------------------

@@ -23,7 +23,7 @@ from crowdwalk.gait.complexes import (
 )
 from crowdwalk.workers import row_threads
 
-__all__ = ["assemble_joints"]
+__all__ = ["ASSEMBLE_ARGUMENTS", "assemble_arguments", "assemble_joints"]
 
 _jit = nb.njit(cache=True, nogil=True)
 _VL5, _SHOULDER, _ELBOW = JOINT["vl5"], (JOINT["l_shoulder"], JOINT["r_shoulder"]), (
@@ -212,18 +212,34 @@ def assemble_joints(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st,
     toe_given : (k,) swing toe angle [rad] where finite.
     arm_swing, elbow_flexion : the style's §8 parameters; n_joints : J.
     """
+    args = assemble_arguments(
+        left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_st, tc_st, sub_st,
+        x_ankle, toe_st, hip_sw, r_thigh_sw, knee_sw, r_shank_sw, tc_sw, phi_sw, phi_st, thigh,
+        shank, use, goal, toe_given, arm_swing, elbow_flexion, n_joints)  # fmt: skip
+    return row_threads().map(_assemble, len(phase), *args, min_rows=MIN_POSE_ROWS)
+
+
+def assemble_arguments(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_st,
+                       tc_st, sub_st, x_ankle, toe_st, hip_sw, r_thigh_sw, knee_sw,
+                       r_shank_sw, tc_sw, phi_sw, phi_st, thigh, shank, use, goal, toe_given,
+                       arm_swing, elbow_flexion, n_joints) -> list:  # fmt: skip
+    """:func:`assemble_joints`'s arguments as the compiled ``_assemble`` takes them (a
+    list, for a caller that runs it on parts of the rows with more after it)."""
     k = len(phase)
     f = np.ascontiguousarray
     ik = use is not None
     use = np.zeros(k, np.bool_) if use is None else f(use, dtype=np.bool_)
     goal = np.zeros((k, 3)) if goal is None else f(goal, dtype=float)
-    return row_threads().map(
-        _assemble, k, f(left, dtype=np.bool_), f(phase, dtype=float), f(heading, dtype=float),
+    return [
+        f(left, dtype=np.bool_), f(phase, dtype=float), f(heading, dtype=float),
         f(np.broadcast_to(stance_fraction, (k,)), dtype=float), f(r_pelvis),
         f(r_thigh_st), f(knee_st), f(tc_st), f(sub_st), f(x_ankle), f(toe_st),
         f(hip_sw), f(r_thigh_sw), f(knee_sw), f(r_shank_sw), f(tc_sw),
         f(phi_sw, dtype=float), f(phi_st, dtype=float), f(thigh), f(shank), ik,
         use, goal, f(np.broadcast_to(toe_given, (k,)), dtype=float),
         float(arm_swing), float(elbow_flexion), int(n_joints),
-        min_rows=MIN_POSE_ROWS,
-    )  # fmt: skip
+    ]  # fmt: skip
+
+
+#: how many arguments ``_assemble`` takes (:func:`assemble_arguments`) [-]
+ASSEMBLE_ARGUMENTS = 27
