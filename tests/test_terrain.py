@@ -434,3 +434,49 @@ def test_footing_tells_obstacles_as_cutting_every_chord_does():
     want[block] = shapely.length(shapely.intersection(lines, polys)) <= stride[block]
     assert want.any() and (~want[block]).any()
     np.testing.assert_array_equal(obstacle, want)
+
+
+def test_compiled_owner_of_boxes_and_stairs_is_the_feature_loop():
+    """Terrain.owner's one-pass bbox tests (every feature a box Block or a StairFlight)
+    and the compiled grouping of owners give what the per-feature loop gives, bit for bit:
+    on the bbox edges and their nextafter neighbours, at a turned flight, in small calls."""
+    from shapely.geometry import Polygon
+
+    from crowdwalk.terrain.features import Block, StairFlight
+
+    features = (
+        Block(Polygon([(0, 10), (20, 10), (20, 20), (0, 20)]), top=1.02),
+        StairFlight((5.0, 10.0), -np.pi / 2, 3.0, 0.3, 0.17, 6, z0=1.02, up=False),
+        StairFlight((14.0, 8.0), 0.4, 2.5, 0.28, 0.15, 5, z0=0.0, up=True),
+        Block(Polygon([(12, 12), (16, 12), (16, 15), (12, 15)]), top=1.5),
+    )
+    t = Terrain((0, 0, 30, 30), base=0.0, features=features)
+    assert t._boxes is not None  # the compiled path
+    rng = np.random.default_rng(3)
+    pts = [rng.uniform(0, 30, (20000, 2))]
+    for f in features:
+        x0, y0, x1, y1 = f.bbox
+        for bx in (x0, x1):
+            ys = rng.uniform(y0, y1, 200)
+            for d in (-np.inf, np.inf):
+                pts.append(np.stack([np.nextafter(np.full(200, bx), d), ys], 1))
+            pts.append(np.stack([np.full(200, bx), ys], 1))
+        for by in (y0, y1):
+            xs = rng.uniform(x0, x1, 200)
+            for d in (-np.inf, np.inf):
+                pts.append(np.stack([xs, np.nextafter(np.full(200, by), d)], 1))
+            pts.append(np.stack([xs, np.full(200, by)], 1))
+    xy = np.concatenate(pts)
+    want = np.full(len(xy), -1, dtype=np.int64)
+    for i, f in enumerate(features):
+        want[f.covers(xy)] = i
+    z = np.full(len(xy), 0.0)
+    for i, f in enumerate(features):
+        k = np.flatnonzero(want == i)
+        if len(k):
+            z[k] = f.surface(xy[k], xy[k])
+    assert np.array_equal(t.owner(xy), want)
+    assert t.height(xy).tobytes() == z.tobytes()
+    for a in range(0, 400, 7):  # small calls: the same rows
+        assert t.height(xy[a:a + 7]).tobytes() == z[a:a + 7].tobytes()
+    assert len(np.unique(want)) == 5  # every feature and the base own points

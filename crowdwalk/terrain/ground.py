@@ -14,8 +14,11 @@ from shapely.geometry import Polygon
 
 from crowdwalk.errors import invalid
 from crowdwalk.terrain.features import (
+    Block,
     Feature,
+    StairFlight,
     TerrainKind,
+    _is_box,
     _points,
     _ring_segments,
 )
@@ -173,6 +176,39 @@ class _FeatureGrid:
 _FEW_FEATURES = 16
 
 
+@nb.njit(cache=True, nogil=True)
+def _in_boxes(xy, boxes):  # pragma: no cover - compiled
+    """(F, n) bool: point j in feature i's closed bbox (``features._in_bbox``'s tests)."""
+    n, nf = xy.shape[0], boxes.shape[0]
+    out = np.zeros((nf, n), np.bool_)
+    for j in range(n):
+        x, y = xy[j, 0], xy[j, 1]
+        for i in range(nf):
+            if x >= boxes[i, 0] and x <= boxes[i, 2] and y >= boxes[i, 1] and y <= boxes[i, 3]:
+                out[i, j] = True
+    return out
+
+
+@nb.njit(cache=True, nogil=True)
+def _owner_groups(own, nf):  # pragma: no cover - compiled
+    """The points of each owner 0..nf-1, ascending (``np.flatnonzero(own == f)`` for every
+    f): indices (m,) and bounds (nf + 1,) of each owner's run in them."""
+    starts = np.zeros(nf + 1, np.int64)
+    for j in range(own.shape[0]):
+        if own[j] >= 0:
+            starts[own[j] + 1] += 1
+    for f in range(nf):
+        starts[f + 1] += starts[f]
+    order = np.empty(starts[nf], np.int64)
+    fill = starts[:nf].copy()
+    for j in range(own.shape[0]):
+        f = own[j]
+        if f >= 0:
+            order[fill[f]] = j
+            fill[f] += 1
+    return order, starts
+
+
 @dataclass(frozen=True, eq=False)
 class Terrain:
     """A flat base plane over ``extent`` plus features composed in override order.
@@ -224,9 +260,40 @@ class Terrain:
     def _grid(self) -> _FeatureGrid | None:
         return _FeatureGrid(self.extent, self.features) if len(self.features) > 16 else None
 
+    @functools.cached_property
+    def _boxes(self) -> np.ndarray | None:
+        """(F, 4) bboxes of the features when there are at most :data:`_FEW_FEATURES` and
+        each is a :class:`Block` that is its own bbox or a :class:`StairFlight` (then
+        :meth:`owner` tests them all in one compiled pass), else None."""
+        if not self.features or len(self.features) > _FEW_FEATURES:
+            return None
+        for f in self.features:
+            if not (isinstance(f, StairFlight)
+                    or (isinstance(f, Block) and _is_box(f.footprint, f.bbox))):
+                return None
+        return np.array([f.bbox for f in self.features], dtype=float)
+
+    def _owner_of_boxes(self, xy: np.ndarray) -> np.ndarray:
+        """:meth:`owner` where :attr:`_boxes` holds: the closed-bbox tests of every
+        feature in one pass (``_in_bbox``'s comparisons), then a flight's own test on the
+        points in its bbox (``StairFlight.covers`` on the same points, in order)."""
+        own = np.full(len(xy), -1, dtype=np.int64)
+        inside = _in_boxes(xy, self._boxes)
+        for i, f in enumerate(self.features):
+            if isinstance(f, StairFlight):
+                idx = np.flatnonzero(inside[i])
+                if idx.size:
+                    u, v = f._uv(xy[idx])
+                    own[idx[(u >= 0) & (u <= f.length) & (np.abs(v) <= f.width / 2)]] = i
+            else:
+                own[inside[i]] = i
+        return own
+
     def owner(self, xy) -> np.ndarray:
         """Index of the feature that decides each point's height, −1 for the base; (n,)."""
         xy = _points(xy)
+        if self._boxes is not None:
+            return self._owner_of_boxes(xy)
         own = np.full(len(xy), -1, dtype=np.int64)
         if self._grid is None or len(xy) < 64:
             for i, f in enumerate(self.features):
@@ -245,6 +312,12 @@ class Terrain:
         """(feature index, point indices) for every feature that owns points, in feature
         order, the indices ascending."""
         if len(self.features) <= _FEW_FEATURES:  # a comparison per feature: no sort
+            if len(self.features) > 1:  # grouped in one compiled pass
+                order, starts = _owner_groups(own, len(self.features))
+                for f in range(len(self.features)):
+                    if starts[f + 1] > starts[f]:
+                        yield f, order[starts[f]:starts[f + 1]]
+                return
             for f in range(len(self.features)):
                 k = np.flatnonzero(own == f)
                 if len(k):
@@ -262,7 +335,9 @@ class Terrain:
     def _surface(self, xy: np.ndarray, ref: np.ndarray, own: np.ndarray) -> np.ndarray:
         z = np.full(len(xy), float(self.base))
         for i, k in self._by_owner(own):
-            z[k] = self.features[i].surface(xy[k], ref[k])
+            f = self.features[i]
+            # a block's top is flat: its surface's value, without gathering its points
+            z[k] = float(f.top) if isinstance(f, Block) else f.surface(xy[k], ref[k])
         return z
 
     def height(self, xy) -> np.ndarray:
