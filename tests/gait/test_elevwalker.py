@@ -256,3 +256,55 @@ def test_a_stance_half_taken_gives_the_pose_solved_afresh():
     for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
         assert np.array_equal(getattr(got.warm, name), getattr(want.warm, name), equal_nan=True)
     assert not np.array_equal(want.local, first.local[rows])
+
+
+@pytest.mark.parametrize("styled", [True, False])
+def test_a_walk_split_over_row_threads_is_the_walk_in_one(styled, monkeypatch):
+    """elevwalker_pose's compiled passes on parts of the rows in row threads (the solves,
+    and the joints, KLAW upper body, forward kinematics and finite check of _joint_rows)
+    give one thread's poses bit for bit, and every part is used (the rows are split)."""
+    import crowdwalk.gait.elevwalker as ew
+    from crowdwalk.style import Style
+    from crowdwalk.workers import RowThreads
+
+    n = 700
+    rng = np.random.default_rng(11)
+    phase = rng.uniform(0.0, 0.49, n)
+    body = Body.from_heights(rng.uniform(1.5, 1.9, n))
+    attrs = Style.default(body.height, 1.3) if styled else None
+    psi = rng.uniform(-np.pi, np.pi, n)
+    foot = StanceFoot.from_foothold(body, rng.normal(0.0, 1.0, (n, 3)), psi, np.zeros(n))
+    left = rng.random(n) < 0.5
+    goal = np.where(rng.random((n, 1)) < 0.3, rng.normal(0.0, 1.0, (n, 3)), np.nan)
+    toe_out, offset = rng.uniform(-0.2, 0.3, n), rng.normal(0.0, 0.01, (n, 3))
+
+    def pose():
+        return elevwalker_pose(
+            body, left, phase, sample(NATURAL, phase), sample(NATURAL, phase + 0.5), psi, foot,
+            toe_out, WarmStart.neutral(n), GaitStyle(), stance_hip_offset=offset,
+            swing_goal=goal, attributes=attrs)  # fmt: skip
+
+    parts = []
+    joint_rows = ew._joint_rows
+
+    def counted(*args):
+        parts.append(len(args[1]))
+        return joint_rows(*args)
+
+    monkeypatch.setattr(ew, "_joint_rows", counted)
+    one, two = RowThreads(1), RowThreads(3)
+    try:
+        monkeypatch.setattr(ew, "row_threads", lambda: one)
+        want = pose()
+        monkeypatch.setattr(ew, "row_threads", lambda: two)
+        got = pose()
+    finally:
+        one.close()
+        two.close()
+    assert sorted(parts) == [233, 233, 234, n]  # one call, then three parts
+    for name in ("root_position", "root_rotation", "local", "positions", "rotations",
+                 "contact", "converged", "solves"):  # fmt: skip
+        assert np.array_equal(getattr(got, name), getattr(want, name)), name
+    for name in ("ankle", "hip", "ankle_jacobian", "hip_jacobian"):
+        assert np.array_equal(getattr(got.warm, name), getattr(want.warm, name), equal_nan=True)
+    assert want.converged.sum() > n // 2
