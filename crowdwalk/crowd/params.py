@@ -225,7 +225,8 @@ class CrowdParams:
         with ``opening_ease`` successive walkers alternate sides 0.82–0.89 (off
         0.55–0.77) and the lanes are 0.43 m apart at 1.0 m (H&D 0.45), but the flows at
         0.8–1.2 m are 1.29 / 1.44 / 1.61 / 1.86 / 1.96 /s (off 1.27 / 1.44 / 1.74 /
-        1.91 / 2.21; full, seeds 4–6): the pace of the queue at the mouth limits them.
+        1.91 / 2.21; full, seeds 4–6; both with ``wake_on_step`` and ``mouth_priority``
+        off): the pace of the queue at the mouth limits them.
     mouth_priority : bool
         Priority in front of narrow openings (:mod:`crowdwalk.crowd.mouth_priority`): a
         walker within 1 m in front of an opening's mouth, heading into it, keeps its step
