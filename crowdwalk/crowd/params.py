@@ -225,7 +225,8 @@ class CrowdParams:
         with ``opening_ease`` successive walkers alternate sides 0.82–0.89 (off
         0.55–0.77) and the lanes are 0.43 m apart at 1.0 m (H&D 0.45), but the flows at
         0.8–1.2 m are 1.29 / 1.44 / 1.61 / 1.86 / 1.96 /s (off 1.27 / 1.44 / 1.74 /
-        1.91 / 2.21; full, seeds 4–6): the pace of the queue at the mouth limits them.
+        1.91 / 2.21; full, seeds 4–6; both with ``wake_on_step`` and ``mouth_priority``
+        off): the pace of the queue at the mouth limits them.
     mouth_priority : bool
         Priority in front of narrow openings (:mod:`crowdwalk.crowd.mouth_priority`): a
         walker within 1 m in front of an opening's mouth, heading into it, keeps its step
@@ -233,19 +234,23 @@ class CrowdParams:
         same-way neighbour there nearer the mouth point (ties by index), so that of the
         two walkers at the wall corners one goes first (Kirchner et al. 2003's conflicts
         resolved without friction). Only the hard test gains constraints (no body
-        overlaps). With ``wake_on_step`` (no zipper) the flows at 0.8–1.2 m are 1.28 /
-        1.55 / 1.77 / 1.98 / 2.20 /s (wake alone 1.16 / 1.49 / 1.76 / 1.96 / 2.20; full,
-        seeds 4–6) and RiMEA 10 passes; 0.8 m stays just below Seyfried's 1.30.
+        overlaps). Named deviation, on by default since session 21 (docs/architecture.md,
+        "Priority at the mouth"): with ``wake_on_step`` (no zipper) the flows at 0.8–1.2 m
+        are 1.28 / 1.55 / 1.77 / 1.98 / 2.20 /s (both off 1.27 / 1.44 / 1.74 / 1.91 /
+        2.21, wake alone 1.16 / 1.49 / 1.76 / 1.96 / 2.20; full, seeds 4–6) and RiMEA 10
+        passes; 0.8 m stays just below Seyfried's 1.30.
     wake_on_step : bool
         A walker standing in or within 1 m of an opening decides again at the tick after
         the first heel strike of a walking same-way neighbour that could be in its way,
         when that comes before its ``wait_time`` is over (:mod:`crowdwalk.crowd.wake`): it
         moves up when the one in front moves. Only the decision times change (no body
-        overlaps). Named deviation, opt-in (docs/architecture.md, "Waking at a
-        neighbour's step"): with ``zipper`` and ``opening_ease`` the flows at 0.8–1.2 m
-        are 1.32 / 1.53 / 1.65 / 1.92 / 2.05 /s (full, seeds 4–6; 0.8 and 0.9 m in
-        Seyfried 2009's band, 1.0 m below it), but RiMEA 10 fails (89 / 120: a gridlock
-        at a side door); alone 0.8 m is less reliable (more arches at the mouth).
+        overlaps). Named deviation, on by default since session 21 with
+        ``mouth_priority`` (docs/architecture.md, "Waking at a neighbour's step"; the
+        two together: see ``mouth_priority``): with ``zipper`` and ``opening_ease`` the
+        flows at 0.8–1.2 m are 1.32 / 1.53 / 1.65 / 1.92 / 2.05 /s (full, seeds 4–6;
+        0.8 and 0.9 m in Seyfried 2009's band, 1.0 m below it), but RiMEA 10 fails (89 /
+        120: a gridlock at a side door); alone 0.8 m is less reliable (more arches at the
+        mouth).
     steering : SteeringParams
     """
 
@@ -286,8 +291,8 @@ class CrowdParams:
     opening_wall_factor: float = 0.0
     opening_personal_factor: float = 1.0
     zipper: bool = False
-    mouth_priority: bool = False
-    wake_on_step: bool = False
+    mouth_priority: bool = True
+    wake_on_step: bool = True
     steering: SteeringParams = field(default_factory=SteeringParams)
 
     def with_overrides(self, fields: Mapping[str, object]) -> CrowdParams:
@@ -325,14 +330,17 @@ def parse_overrides(items: Sequence[str]) -> dict[str, object]:
 #: headway speed model with the free zone at openings, lane keeping and lining up at
 #: doors, same-way leaders by route, and overtaking in the route lane scored at equal
 #: time; ``headway_lane`` 1.75 was chosen on the ring and free-speed cases (calibration).
-#: ``"free"``: the former default, every S175 field back to its value before (no
-#: headway speed model, no overtaking or door switches).
+#: Since session 21 the default (and so S175) also has ``wake_on_step`` and
+#: ``mouth_priority`` on. ``"free"``: the former default, every S175 field back to its
+#: value before (no headway speed model, no overtaking or door switches; waking and
+#: mouth priority off).
 CROWD_MODELS: dict[str, dict[str, object]] = {
     "free": {
         "speed_model": "free", "headway_lane": 2.0, "headway_free_margin": None,
         "lane_keep": False, "headway_same_way": "heading", "line_up": False,
         "headway_overtake": False, "headway_route_lane": False, "headway_same_time": False,
-        "headway_overtake_open_lanes": False},
+        "headway_overtake_open_lanes": False, "wake_on_step": False,
+        "mouth_priority": False},
     "headway_s175": {},
 }
 

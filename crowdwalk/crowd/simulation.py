@@ -163,12 +163,18 @@ class CrowdSimulation:
         self.zipper = None  # zipper: lane targets at openings
         if params.zipper:
             self.zipper = ZipperEntry(world.routes, params.opening_width)
-        self.wake = None  # wake_on_step: standing walkers decide at a neighbour's step
+        # wake_on_step: standing walkers decide at a neighbour's step; mouth_priority:
+        # reserved next steps at mouths. Both act only in opening zones: without an
+        # opening (the zones come from every corridor, shut or open) they are left out,
+        # the same run without their per-tick work.
+        self.wake = None
         if params.wake_on_step:
-            self.wake = WakeOnStep(world.routes, params.opening_width)
-        self.mouth_priority = None  # mouth_priority: reserved next steps at mouths
+            wake = WakeOnStep(world.routes, params.opening_width)
+            self.wake = None if wake.zone.empty else wake
+        self.mouth_priority = None
         if params.mouth_priority:
-            self.mouth_priority = MouthPriority(world.routes, params.opening_width)
+            mouth = MouthPriority(world.routes, params.opening_width)
+            self.mouth_priority = None if mouth.zone.empty else mouth
         self.gait = gait
         self.workers = workers
         self.threads = row_threads() if threads is None else threads

@@ -91,3 +91,25 @@ def test_woken_walkers_decide_one_tick_after_a_near_neighbour_steps_and_never_ov
         near = walking.get(tick - 1, np.zeros((0, 2)))
         assert (np.linalg.norm(near - xy, axis=1) < 0.18 + 0.18 + 0.65 + 0.6).any(), (agent, tick)
     assert over <= 0.01 and over_off <= 0.01
+
+
+def test_the_door_rules_are_on_by_default_and_left_out_where_there_is_no_opening():
+    """Since session 21 ``wake_on_step`` and ``mouth_priority`` are the default (the
+    ``free`` model keeps both off); a world without an opening (corner.yaml: 3 m
+    corridors) runs without them, a bottleneck with them."""
+    from pathlib import Path
+
+    from crowdwalk.crowd.params import crowd_model
+
+    on = CrowdParams()
+    assert on.wake_on_step and on.mouth_priority
+    free = crowd_model("free")
+    assert not free.wake_on_step and not free.mouth_priority
+    door = Scenario.model_validate(_bottleneck(0.8, 1, 10))
+    _, _, sim, _, _ = prepare(door, RunOverrides(poses=False, duration=1.0))
+    assert isinstance(sim.wake, WakeOnStep) and sim.mouth_priority is not None
+    _, _, sim, _, _ = prepare(door, RunOverrides(poses=False, duration=1.0), params=free)
+    assert sim.wake is None and sim.mouth_priority is None
+    corner = Path(__file__).parents[2] / "scenarios" / "corner.yaml"
+    _, _, sim, _, _ = prepare(corner, RunOverrides(poses=False, duration=1.0))
+    assert sim.wake is None and sim.mouth_priority is None

