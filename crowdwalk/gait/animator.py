@@ -636,7 +636,7 @@ class Animator:
         continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
         turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
         self._swing.join_long[a] = had & ~served_before & self.style.clamped_join
-        self._swing.join_whole[a] = restart
+        self._swing.join_whole[a] = stopped  # (rested: over half the step, as stairs)
         self._swing.served[a] = ~data.clamped
         self._swing.trail_root[a] = (had & self.style.trailing_root & flat_before & ~bumpy
                                      & served_before & ~data.clamped

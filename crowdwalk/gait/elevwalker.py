@@ -188,10 +188,10 @@ class GaitStyle:
         29.8 cm).
     restart_c1 : bool
         Without ``stop_settle``: a walker's step that starts after it stood (a restart in
-        a queue) joins the root C¹ from rest over the whole step (the root stood still,
-        so the data's root velocity at the heel strike is blended in rather than taken
-        at once) (an extension: docs/architecture.md "Restart from rest"); False
-        (default): the C⁰ join over half the step.
+        a queue) joins the root C¹ from rest, as stair steps join (the frozen pose's root
+        stood still; the data's root velocity at the heel strike is blended in over half
+        the step rather than taken at once) (an extension: docs/architecture.md "Restart
+        from rest"); False (default): the C⁰ join.
     """
 
     step_width: float = 0.05
