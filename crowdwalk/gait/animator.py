@@ -603,9 +603,12 @@ class Animator:
                     | (np.abs(cmd.step_height) >= _C1_RISE))
         # walkers that stood since their last step's end (stop_settle): the root settled
         stopped = had & (cmd.time > self._step.t0[a] + self._step.duration[a])
+        # ... or, without the settle, whose pose stood frozen (restart_c1): C¹ from rest
+        # (their landed root velocity stays zero: not measured)
+        rested = stopped & (self.style.restart_c1 and not self.style.stop_settle)
         stopped &= self.style.stop_settle
         landed = self._landed(a, had, c1 | stopped, cmd.time, stopped)
-        c1 |= stopped
+        c1 |= stopped | rested
         self._settle.has[a] = self._settle.held[a] = False
         self._settle.good[a] = 0.0
         st = self._stance
@@ -618,10 +621,11 @@ class Animator:
         stance, toe_out, psi0 = self._new_stance(cmd, body, had, landed)
         data = self._start_step(cmd, body, had, stance, toe_out, psi0)
         joined = self._join_root(a, had, landed, c1)
-        if stopped.any():  # the restart's C¹ term at most _SETTLE_SPEED times the step's
-            ast = a[stopped]
+        restart = stopped | rested
+        if restart.any():  # the restart's C¹ term at most _SETTLE_SPEED times the step's
+            ast = a[restart]
             cap = _SETTLE_SPEED * np.linalg.norm(
-                (cmd.target - cmd.start)[stopped, :2], axis=1) / cmd.duration[stopped]
+                (cmd.target - cmd.start)[restart, :2], axis=1) / cmd.duration[restart]
             jump = np.linalg.norm(self._swing.hip_vel[ast], axis=1)
             self._swing.hip_vel[ast] *= np.minimum(1.0, cap / np.maximum(jump, 1e-12))[:, None]
         swing_from = np.where(had[:, None], trail[0], cmd.start)
@@ -632,14 +636,14 @@ class Animator:
         continues = np.abs(self._step.angles[a, half, :3] - trailing_before).max(axis=1)
         turn = np.abs(wrap_angle(cmd.heading - self._step.psi0[a]))
         self._swing.join_long[a] = had & ~served_before & self.style.clamped_join
-        self._swing.join_whole[a] = stopped
+        self._swing.join_whole[a] = stopped  # (rested: over half the step, as stairs)
         self._swing.served[a] = ~data.clamped
         self._swing.trail_root[a] = (had & self.style.trailing_root & flat_before & ~bumpy
                                      & served_before & ~data.clamped
                                      & (np.abs(cmd.step_height) < _LEVEL_RISE)
                                      & (continues < _TRAIL_CONTINUES) & (turn < _TRAIL_TURN)
                                      & ~spun_before & (self._stance.spin[a] == 0.0)
-                                     & ~stopped)
+                                     & ~restart)
         sw = self._swing
         sw.trail_ball[a], sw.trail_yaw[a], sw.trail_slope[a] = trail
         sw.has_trail[a] = had

@@ -188,6 +188,12 @@ class GaitStyle:
         but the crowds' worsts rise (bottleneck heel-down turn 37.5 → 73.8°, foot
         elsewhere 52 → 84 cm, fallbacks 139 → 166; quickstart foot elsewhere 18.3 →
         29.8 cm).
+    restart_c1 : bool
+        Without ``stop_settle``: a walker's step that starts after it stood (a restart in
+        a queue) joins the root C¹ from rest, as stair steps join (the frozen pose's root
+        stood still; the data's root velocity at the heel strike is blended in over half
+        the step rather than taken at once) (an extension: docs/architecture.md "Restart
+        from rest"); False (default): the C⁰ join.
     """
 
     step_width: float = 0.05
@@ -210,6 +216,7 @@ class GaitStyle:
     pin_ball: bool = True
     data_toe_off: bool = False
     stop_settle: bool = False
+    restart_c1: bool = False
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):

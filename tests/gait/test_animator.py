@@ -808,6 +808,28 @@ def test_a_stopping_walker_settles_with_its_feet_planted_and_starts_again_smooth
         assert moved > 0.05  # the root carried on (it did not freeze)
 
 
+def test_a_restart_from_a_frozen_stand_joins_the_root_from_rest():
+    """Without ``stop_settle`` the stand freezes the pose; the next step then takes the
+    data's root velocity at once (1.8 m/s in the restart's first whole frame, 6.7 cm of
+    second difference at 25 fps). With ``restart_c1`` the root starts from rest and takes
+    the data's velocity over the first half of the step, as a stair step's C¹ join does
+    (0.7 m/s in that frame, 3.6 cm); the walk before the restart is the same poses."""
+    base, _, times, (t_stop, t_go) = _stop_and_go(GaitStyle())
+    roots, _, _, _ = _stop_and_go(GaitStyle(restart_c1=True))
+    first = np.flatnonzero(times > t_go)[0]  # the restart's first frame
+    speed = [np.linalg.norm(r[first + 1] - r[first]) * 25.0 for r in (base, roots)]
+    assert speed[1] < 0.5 * speed[0]  # from rest, not at the data's speed at once
+    go = times[1:-1] > t_go - 0.04  # second differences that see a restart frame
+    d2 = [np.linalg.norm(r[2:] - 2.0 * r[1:-1] + r[:-2], axis=1)[go].max() for r in (base, roots)]
+    assert d2[1] < d2[0]
+    before = times <= t_go
+    np.testing.assert_array_equal(roots[before], base[before])
+    # with the settle on, its own C¹ restart is the one used (the switch changes nothing)
+    settled = _stop_and_go(GaitStyle(stop_settle=True))[0]
+    both = _stop_and_go(GaitStyle(stop_settle=True, restart_c1=True))[0]
+    np.testing.assert_array_equal(both, settled)
+
+
 def test_a_stop_posed_at_a_steady_frame_rate_needs_no_walk_of_its_own():
     """The step end a stop settles from (its root velocity, the landed ankle) is measured
     in the walker's last frame before the end, as rows of that frame's walk: the first
