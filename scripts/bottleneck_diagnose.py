@@ -10,7 +10,9 @@ of consecutive pairs more than 0.2 m apart laterally, their time gaps apart and 
 file, and the median torso twist (facing against the walking direction; the disc body
 always faces its step); the mean number of walkers inside the opening and in front of
 it (7 < x < 8, |y − 5| < 1), and the share of those standing (< 0.1 m/s over a frame);
-the gaps longer than 1.5 s with what they add up to; and the mean speed of walkers 0–1,
+the gaps longer than 1.5 s with what they add up to; where they enter (x = 8), the
+median lateral distance between consecutive walkers and their entry time gaps by it
+(under 0.1 m, 0.1–0.3 m, 0.3 m and more); and the mean speed of walkers 0–1,
 1–2 and 2–4 m past the opening's end (``speed_after``: a slow band there holds the door back).
 
 Also, with ``--why``: of the decisions of walkers in front of the opening and inside it,
@@ -60,6 +62,7 @@ def _mean_or_none(values: np.ndarray) -> float | None:
 def diagnose(traj) -> dict:
     """The measures of one finished bottleneck run's trajectories."""
     fps, out, mid, enter, speed = traj.fps, [], [], [], np.full(traj.x.size, np.nan)
+    enter_y = []
     for i in np.unique(traj.id):
         k = np.flatnonzero(traj.id == i)
         x, y = traj.x[k], traj.y[k] - 5.0
@@ -68,6 +71,7 @@ def diagnose(traj) -> dict:
             out.append(traj.frame[k[j]] / fps)
         if (j := _crossing(x, 8.0)) is not None:
             enter.append(traj.frame[k[j]] / fps)
+            enter_y.append((traj.frame[k[j]] / fps, y[j]))
         if (j := _crossing(x, 9.0)) is not None and j > 0:
             walk = np.arctan2(y[j] - y[j - 1], x[j] - x[j - 1])
             face = np.arctan2(traj.ori_y[k[j]], traj.ori_x[k[j]])
@@ -75,6 +79,9 @@ def diagnose(traj) -> dict:
             mid.append((traj.frame[k[j]] / fps, y[j], np.degrees(twist)))
     out, enter = np.sort(out), np.sort(enter)
     n = out.size
+    enter_y.sort()
+    ey = np.array(enter_y[5:len(enter_y) - 5]).reshape(-1, 2)
+    e_dt, e_dy = np.diff(ey[:, 0]), np.abs(np.diff(ey[:, 1]))
     gaps = np.diff(out[5:n - 5])
     mid.sort()
     tm, ys, tw = (np.array(c) for c in zip(*mid, strict=True))
@@ -100,6 +107,14 @@ def diagnose(traj) -> dict:
         else None,
         "gap_one_file_s": round(float(np.median(dt[dy < 0.1]))
                                 if (dy < 0.1).any() else float("nan"), 2),
+        # where they enter (x = 8): consecutive walkers' lateral distance, and their time
+        # gaps [count, median s] by it (one file, partly offset, in two layers)
+        "entry_dy_median": round(float(np.median(e_dy)), 3) if e_dy.size else None,
+        "entry_gap_by_dy": {name: [int(m.sum()), round(float(np.median(e_dt[m])), 2)
+                                   if m.any() else None]
+                            for name, m in (("<0.1", e_dy < 0.1),
+                                            ("0.1-0.3", (e_dy >= 0.1) & (e_dy < 0.3)),
+                                            (">=0.3", e_dy >= 0.3))},
         "twist_median_deg": round(float(np.median(tw)), 1),
         "in_opening_mean": round(float(np.isin(traj.frame[inside], frames).sum()
                                        / frames.size), 2),

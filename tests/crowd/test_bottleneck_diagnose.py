@@ -38,6 +38,11 @@ def test_one_file_and_zipper_told_apart():
     assert one["dy_median"] < 0.01 and one["staggered_share"] == 0.0
     assert zip_["dy_median"] > 0.35 and zip_["staggered_share"] == 1.0
     assert abs(one["exit_gap_median"] - 0.8) < 0.051 and abs(zip_["exit_gap_median"] - 0.5) < 0.051
+    # where they enter: one file in the first bin, the zipper's 0.4 m apart in the last
+    assert one["entry_dy_median"] < 0.01 and one["entry_gap_by_dy"][">=0.3"][0] == 0
+    assert abs(one["entry_gap_by_dy"]["<0.1"][1] - 0.8) < 0.051
+    assert zip_["entry_dy_median"] > 0.35 and zip_["entry_gap_by_dy"]["<0.1"][0] == 0
+    assert abs(zip_["entry_gap_by_dy"][">=0.3"][1] - 0.5) < 0.051
     assert abs(one["flow"] - 1.25) < 0.05 and abs(zip_["flow"] - 2.0) < 0.1
     assert one["in_front_standing_share"] == 0.0
 
