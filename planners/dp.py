@@ -136,6 +136,35 @@ def _least_after(value, m, cost, lo, hi, last_t, last_jp):
     return low, pick
 
 
+#: Relative distance above which two values cannot give the same rounded total with
+#: any cost: fl(v + c) = fl(V + c) needs v - V <= ulp(fl(V + c)) <= 2**-52 |V + c| (1 +
+#: 2**-53) (or the least subnormal; hence + 1e-300); 4.5e-16 leaves a factor of two.
+_TIE = 4.5e-16
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _least_value(value, m, lo, hi):
+    """Over ``value[m, lo:hi]``: the least finite value V, the first j_{k-1} with it, and
+    the least ``v - V`` of the finite values before that one (+inf where none).
+    Rounding is monotone, so V + c is the least total of any cost c, and where ``v - V``
+    exceeds :data:`_TIE` (|V| + |c|) no earlier predecessor ties with it: the first
+    j_{k-1} is then :func:`_least_after`'s first pick (a NaN or infinite total falls
+    back to it)."""
+    least = np.inf
+    first = -1
+    for jp in range(lo, hi):
+        v = value[m, jp]
+        if v < least:
+            least = v
+            first = jp
+    gap = np.inf
+    for jp in range(lo, max(first, lo)):
+        v = value[m, jp]
+        if v < np.inf:
+            gap = min(gap, v - least)
+    return least, first, gap
+
+
 @nb.njit(cache=True, nogil=True)
 def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value, new,
            choice, config):
@@ -219,6 +248,9 @@ def _dp_pass(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, valu
             # the predecessors j_{k-1} whose f_{k-2} = m - j_{k-1} lies in its depth
             lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)
             hi = 1 if k == 1 else min(P, m + 1)
+            # the least finite value over them, the first predecessor with it, and how
+            # far above it the values of the predecessors before that one lie
+            least, first, gap = _least_value(value, m, lo, hi)
             for j in range(J):
                 transitions += reachable
                 step = step_off[k - 1] + m * J + j
@@ -228,7 +260,12 @@ def _dp_pass(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, valu
                 swing0 = swing_off[0] + j if k == 1 else swing_off[k - 1] + j
                 last_t, last_jp = -np.inf, -1  # the last predecessor tried
                 while True:  # the least total not tried yet (the first on ties)
-                    low, pick = _least_after(value, m, cost, lo, hi, last_t, last_jp)
+                    low = least + cost
+                    if last_jp < 0 and low < np.inf and gap > (
+                            _TIE * (abs(least) + abs(cost)) + 1e-300):
+                        pick = first  # (what _least_after finds: see _least_value)
+                    else:
+                        low, pick = _least_after(value, m, cost, lo, hi, last_t, last_jp)
                     if pick < 0 or last or not swings:  # (last depth: the least,
                         break  # its swing unread)
                     swing = swing0 if k == 1 else swing0 + (m - pick) * strides[k - 1] + pick
