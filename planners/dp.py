@@ -32,7 +32,10 @@ class DPWork(NamedTuple):
 
     ``states``: reachable (m_{k-1}, j_{k-1}) states expanded over all depths (a state no
     legal sequence of steps reaches is skipped); ``transitions``: their state -> j_k
-    transitions (each step's legality looked up, then the swing of every legal one).
+    transitions (each step's legality looked up, then the swing of every legal one). Both
+    summed over the passes run (:func:`dp_one`: the pass taking every swing as legal,
+    the swings of its configuration checked, one transition each, and where one is
+    illegal the pass reading the swings).
     """
 
     states: np.ndarray
