@@ -32,7 +32,10 @@ class DPWork(NamedTuple):
 
     ``states``: reachable (m_{k-1}, j_{k-1}) states expanded over all depths (a state no
     legal sequence of steps reaches is skipped); ``transitions``: their state -> j_k
-    transitions (each step's legality looked up, then the swing of every legal one).
+    transitions (each step's legality looked up, then the swing of every legal one). Both
+    summed over the passes run (:func:`dp_one`: the pass taking every swing as legal,
+    the swings of its configuration checked, one transition each, and where one is
+    illegal the pass reading the swings).
     """
 
     states: np.ndarray
@@ -136,14 +139,86 @@ def _least_after(value, m, cost, lo, hi, last_t, last_jp):
     return low, pick
 
 
+#: Relative distance above which two values cannot give the same rounded total with
+#: any cost: fl(v + c) = fl(V + c) needs v - V <= ulp(fl(V + c)) <= 2**-52 |V + c| (1 +
+#: 2**-53) (or the least subnormal; hence + 1e-300); 4.5e-16 leaves a factor of two.
+_TIE = 4.5e-16
+
+
+@nb.njit(cache=True, nogil=True, _nrt=False)
+def _least_value(value, m, lo, hi):
+    """Over ``value[m, lo:hi]``: the least finite value V, the first j_{k-1} with it, and
+    the least ``v - V`` of the finite values before that one (+inf where none).
+    Rounding is monotone, so V + c is the least total of any cost c, and where ``v - V``
+    exceeds :data:`_TIE` (|V| + |c|) no earlier predecessor ties with it: the first
+    j_{k-1} is then :func:`_least_after`'s first pick (a NaN or infinite total falls
+    back to it)."""
+    least = np.inf
+    first = -1
+    for jp in range(lo, hi):
+        v = value[m, jp]
+        if v < least:
+            least = v
+            first = jp
+    gap = np.inf
+    for jp in range(lo, max(first, lo)):
+        v = value[m, jp]
+        if v < np.inf:
+            gap = min(gap, v - least)
+    return least, first, gap
+
+
 @nb.njit(cache=True, nogil=True)
 def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value, new,
            choice, config):
     """The DP of :func:`cheapest` for table row ``a`` and its step costs ``step_cost``
+    (Ns,) into ``config`` (n,): the configuration :func:`_dp_pass` finds reading the
+    swings, found with as few swings read as it can.
+
+    First a pass that takes every swing as legal (a lower bound of every state's value;
+    no swing read), then the swings of the configuration it found (``swing_at``, up to
+    the first illegal one). Where they are all legal, that configuration is the one the
+    pass reading the swings gives, ties included: along its path the two passes have the
+    same values and choices (every other predecessor's total is at least its lower bound,
+    so none comes first in the order (total, j_{k-1})), and no final state before it in
+    (m, j) order can have the same least total (its lower bound would have come first).
+    Only where one of them is illegal is the pass reading the swings run. Where the first
+    pass finds none, neither would the second. ``value``, ``new``, ``choice``:
+    :func:`dp_scratch`. Returns (found, states, transitions): the work of the passes run,
+    the swings of the check counted as transitions."""
+    ok, states, transitions = _dp_pass(step_legal, sw, step_cost, a, J, step_off,
+                                       swing_off, strides, value, new, choice, config,
+                                       False)
+    if not ok:
+        return ok, states, transitions
+    m_prev2, j_prev = 0, 0
+    legal = True
+    for k in range(config.size):  # (:func:`_swings_legal`, counting the look-ups)
+        swing = swing_off[k] + m_prev2 * strides[k] + config[k] + (j_prev if k > 0 else 0)
+        transitions += 1
+        if not swing_at(sw, a, swing):
+            legal = False
+            break
+        if k > 0:
+            m_prev2 += j_prev
+        j_prev = config[k]
+    if legal:
+        return ok, states, transitions
+    ok, more_states, more_transitions = _dp_pass(step_legal, sw, step_cost, a, J, step_off,
+                                                 swing_off, strides, value, new, choice,
+                                                 config, True)
+    return ok, states + more_states, transitions + more_transitions
+
+
+@nb.njit(cache=True, nogil=True)
+def _dp_pass(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value, new,
+             choice, config, swings):
+    """One DP pass for table row ``a`` and its step costs ``step_cost``
     (Ns,): per depth k, the value of each state (m_{k-1}, j_{k-1}) plus each step j_k, the
     least over j_{k-1} of a legal swing (the first on ties), then the way back from the
     least final state (the first in (m, j) order) into ``config`` (n,). States of
     infinite value (no legal way to them) are skipped: they cannot lower any value.
+    With ``swings`` False every swing is taken as legal (none is read).
 
     Only the swings that decide the result are read (``sw``:
     :func:`~planners.lattice_kernel.swing_at`, which builds a deferred curve on first
@@ -176,6 +251,9 @@ def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value,
             # the predecessors j_{k-1} whose f_{k-2} = m - j_{k-1} lies in its depth
             lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)
             hi = 1 if k == 1 else min(P, m + 1)
+            # the least finite value over them, the first predecessor with it, and how
+            # far above it the values of the predecessors before that one lie
+            least, first, gap = _least_value(value, m, lo, hi)
             for j in range(J):
                 transitions += reachable
                 step = step_off[k - 1] + m * J + j
@@ -185,9 +263,14 @@ def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value,
                 swing0 = swing_off[0] + j if k == 1 else swing_off[k - 1] + j
                 last_t, last_jp = -np.inf, -1  # the last predecessor tried
                 while True:  # the least total not tried yet (the first on ties)
-                    low, pick = _least_after(value, m, cost, lo, hi, last_t, last_jp)
-                    if pick < 0 or last:  # (last depth: the least, its swing unread)
-                        break
+                    low = least + cost
+                    if last_jp < 0 and low < np.inf and gap > (
+                            _TIE * (abs(least) + abs(cost)) + 1e-300):
+                        pick = first  # (what _least_after finds: see _least_value)
+                    else:
+                        low, pick = _least_after(value, m, cost, lo, hi, last_t, last_jp)
+                    if pick < 0 or last or not swings:  # (last depth: the least,
+                        break  # its swing unread)
                     swing = swing0 if k == 1 else swing0 + (m - pick) * strides[k - 1] + pick
                     if swing_at(sw, a, swing):
                         break
@@ -214,7 +297,7 @@ def dp_one(step_legal, sw, step_cost, a, J, step_off, swing_off, strides, value,
         jp = choice[k - 1, last_m, last_j]
         swing = (swing_off[0] + j if k == 1
                  else swing_off[k - 1] + j + (m - jp) * strides[k - 1] + jp)
-        if swing_at(sw, a, swing):
+        if not swings or swing_at(sw, a, swing):
             break
         # this state's next predecessor (the state keeps its place in (m, j) order)
         lo = 0 if k == 1 else max(m - (J - 1) * (k - 2), 0)

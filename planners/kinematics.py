@@ -121,10 +121,17 @@ def _angles(hip_s, hip_z, ankle_s, ankle_z, a, b, L, min_reach):
     """:func:`leg_angles` of one leg: thigh and shank elevation, reachable."""
     ds = ankle_s - hip_s
     dz = hip_z - ankle_z
-    d = np.hypot(ds, dz)
+    if ds == 0.0 and dz > 0.0:
+        # the ankle straight below the hip (K1's legs, K1' of the former stance leg):
+        # hypot(+-0, dz) = |dz| and atan2(+-0, dz > 0) = +-0 exactly (C99 Annex F), the
+        # same bits without the two calls
+        d = dz
+        direction = ds
+    else:
+        d = np.hypot(ds, dz)
+        direction = np.arctan2(ds, dz)
     ok = (d <= L * (1 + 1e-9)) and (d >= min_reach)
     dc = min(max(d, max(min_reach, 1e-6)), L)
-    direction = np.arctan2(ds, dz)
     at_hip = np.arccos(min(max((a * a + dc * dc - b * b) / (2 * a * dc), -1.0), 1.0))
     at_ankle = np.arccos(min(max((b * b + dc * dc - a * a) / (2 * b * dc), -1.0), 1.0))
     return direction + at_hip, direction - at_ankle, ok
