@@ -52,7 +52,7 @@ from crowdwalk.gait import elevwalker_kernels as ek
 from crowdwalk.gait.complexes import MIN_POSE_ROWS, solve_stance_ankle, solve_swing_hip
 from crowdwalk.gait.foot import StanceFoot, foot_points, mat_vec, stance_foot_pose
 from crowdwalk.gait.foot import wrap_angle as _wrap
-from crowdwalk.gait.joints import ASSEMBLE_ARGUMENTS, _assemble, assemble_arguments
+from crowdwalk.gait.joints import _assemble, assemble_arguments
 from crowdwalk.gait.posing_kernels import (
     as_rows,
     rows_finite,
@@ -555,14 +555,13 @@ def elevwalker_pose(
         r_shank_sw, _TC_AXES[sw_row], phi_sw, phi_st, body.thigh, body.shank, use, goal, toe_given,
         style.arm_swing, style.elbow_flexion, len(JOINT_NAMES),
     )  # fmt: skip
-    styled = attributes is not None
-    if styled:
-        args += _upper_body_arguments(k, r_pelvis, heading, phase, left, side_st, phi_st,
-                                      phi_sw, attributes, style)
-    args += [body.offsets(), np.ascontiguousarray(stance.root, dtype=float),
-             np.ascontiguousarray(r_pelvis, dtype=float), PARENTS]
+    upper = [] if attributes is None else _upper_body_arguments(
+        k, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw, attributes, style)
+    kinematics = [body.offsets(), np.ascontiguousarray(stance.root, dtype=float),
+                  np.ascontiguousarray(r_pelvis, dtype=float), PARENTS]
     local, knee_sw, ok_foot_sw, positions, rotations, finite = row_threads().map(
-        _joint_rows, k, styled, *args, min_rows=MIN_POSE_ROWS)
+        _joint_rows, k, len(args), len(upper), *args, *upper, *kinematics,
+        min_rows=MIN_POSE_ROWS)
     rows = np.arange(k)
     swing_phase = phase + 0.5
     contact = np.empty((k, 2), dtype=bool)
@@ -652,26 +651,18 @@ THIGH_MID, THIGH_HALF = np.deg2rad(3.97), np.deg2rad(21.38)
 BOUNCE_DIP, BOUNCE_LOW = 0.006, 0.05  # [body heights], stance phase of the lowest hip [1]
 
 
-def _styled_upper_body(local, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
-                       attributes, style: GaitStyle) -> None:
-    """Overwrite trunk, head, arm and elbow rotations in ``local`` (k, J, 3, 3) with the
-    KLAW attributes: trunk tilt and sway over the stance leg, shoulders against the
-    pelvis, arms with the opposite thigh (abducted by arm_out), elbows between their
-    least (arm back) and greatest (arm forward) flexion; the head stays upright.
+def _upper_body_arguments(k: int, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
+                          attributes, style: GaitStyle) -> list:
+    """The arguments of ``elevwalker_kernels.styled_upper_body`` after ``local`` (a list)
+    for k walkers: it overwrites trunk, head, arm and elbow rotations in ``local`` (k, J,
+    3, 3) with the KLAW attributes: trunk tilt and sway over the stance leg, shoulders
+    against the pelvis, arms with the opposite thigh (abducted by arm_out), elbows between
+    their least (arm back) and greatest (arm forward) flexion; the head stays upright.
 
     trunk = Rz(heading + shoulder) Rx(sway) Ry(tilt); vl5 = r_pelvisᵀ trunk; skullbase =
     trunkᵀ Rz(heading); shoulders trunkᵀ Rz(heading + shoulder) Rx(±arm_out) Ry(-swing
     signal); elbows Ry(-elbow): compiled (``elevwalker_kernels.styled_upper_body``), the
     trunk's measured shapes and the sines numpy's."""
-    ek.styled_upper_body(local, *_upper_body_arguments(
-        local.shape[0], r_pelvis, heading, phase, left, side_st, phi_st, phi_sw, attributes,
-        style))
-
-
-def _upper_body_arguments(k: int, r_pelvis, heading, phase, left, side_st, phi_st, phi_sw,
-                          attributes, style: GaitStyle) -> list:
-    """:func:`_styled_upper_body`'s arguments of ``elevwalker_kernels.styled_upper_body``
-    after ``local`` (a list of :data:`_UPPER_BODY_ARGUMENTS`) for k walkers."""
     a = attributes
     from_data = bool(style.trunk_from_data)
     if from_data:
@@ -690,21 +681,18 @@ def _upper_body_arguments(k: int, r_pelvis, heading, phase, left, side_st, phi_s
         float(THIGH_HALF), JOINT["vl5"], JOINT["skullbase"], _SHOULDERS, _ELBOWS]
 
 
-_UPPER_BODY_ARGUMENTS = 23
 
-
-def _joint_rows(styled: bool, *args):
+def _joint_rows(n_joints: int, n_upper: int, *args):
     """The compiled end of :func:`elevwalker_pose` on its rows (all, or a part of them in
-    a row thread): the joints (``joints._assemble``, ``args``' first
-    :data:`~crowdwalk.gait.joints.ASSEMBLE_ARGUMENTS`), the KLAW upper body where
-    ``styled`` (the next :data:`_UPPER_BODY_ARGUMENTS`), forward kinematics (the last
-    four: offsets, root, pelvis, parents) and whether each row is finite. Returns local
-    (k, J, 3, 3), swing knee (k,), swing foot reached (k,), positions (k, J, 3) [m],
-    rotations (k, J, 3, 3), finite (k,) bool."""
-    m = ASSEMBLE_ARGUMENTS
-    local, knee_sw, ok_foot_sw = _assemble(*args[:m])
-    if styled:
-        ek.styled_upper_body(local, *args[m:m + _UPPER_BODY_ARGUMENTS])
+    a row thread): the joints (``joints._assemble`` of ``args``' first ``n_joints``,
+    :func:`~crowdwalk.gait.joints.assemble_arguments`), the KLAW upper body of the next
+    ``n_upper`` (:func:`_upper_body_arguments`; none: no KLAW attributes), forward
+    kinematics (the last four: offsets, root, pelvis, parents) and whether each row is
+    finite. Returns local (k, J, 3, 3), swing knee (k,), swing foot reached (k,),
+    positions (k, J, 3) [m], rotations (k, J, 3, 3), finite (k,) bool."""
+    local, knee_sw, ok_foot_sw = _assemble(*args[:n_joints])
+    if n_upper:
+        ek.styled_upper_body(local, *args[n_joints:n_joints + n_upper])
     offsets, root, r_pelvis, parents = args[-4:]
     positions, rotations = _forward_kinematics(offsets, root, r_pelvis, local, parents)
     return local, knee_sw, ok_foot_sw, positions, rotations, rows_finite(positions, local)

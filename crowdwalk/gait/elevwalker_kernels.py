@@ -143,7 +143,7 @@ def styled_upper_body(local, r_pelvis, heading, left, side, phi_st, phi_sw, from
                       torso_sway, arm_out, arm_swing, elbow_min, elbow_max, thigh_mid,
                       thigh_half, vl5, skullbase, shoulders, elbows
                       ):  # pragma: no cover - compiled
-    """``elevwalker._styled_upper_body``'s terms of k walkers, then
+    """``elevwalker._upper_body_arguments``' terms of k walkers, then
     ``posing_kernels.upper_body`` into ``local`` (k, J, 3, 3): the shoulders' rotation
     −side · rotation · shape (``from_data``: the trunk's measured shape) or side ·
     rotation · cos 2πt (``shoulder_shape`` the one or the other, (k,)), the tilt plus

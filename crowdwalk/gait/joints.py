@@ -15,15 +15,13 @@ import numpy as np
 
 from crowdwalk.body import JOINT, LEG_JOINTS
 from crowdwalk.gait.complexes import (
-    MIN_POSE_ROWS,
     _matmul,
     _rodrigues,
     _times_rotation_y,
     _wrap,
 )
-from crowdwalk.workers import row_threads
 
-__all__ = ["ASSEMBLE_ARGUMENTS", "assemble_arguments", "assemble_joints"]
+__all__ = ["assemble_arguments"]
 
 _jit = nb.njit(cache=True, nogil=True)
 _VL5, _SHOULDER, _ELBOW = JOINT["vl5"], (JOINT["l_shoulder"], JOINT["r_shoulder"]), (
@@ -189,12 +187,14 @@ def _assemble(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_
     return local, knee_out, ok_foot
 
 
-def assemble_joints(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_st,
-                    tc_st, sub_st, x_ankle, toe_st, hip_sw, r_thigh_sw, knee_sw, r_shank_sw,
-                    tc_sw, phi_sw, phi_st, thigh, shank, use, goal, toe_given, arm_swing,
-                    elbow_flexion, n_joints):  # fmt: skip
-    """Local joint rotations (k, J, 3, 3) of k walkers, the swing knee angle (k,) [rad]
-    and whether the swing talocrural angle reaches the data foot elevation (k,).
+def assemble_arguments(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_st,
+                       tc_st, sub_st, x_ankle, toe_st, hip_sw, r_thigh_sw, knee_sw,
+                       r_shank_sw, tc_sw, phi_sw, phi_st, thigh, shank, use, goal, toe_given,
+                       arm_swing, elbow_flexion, n_joints) -> list:  # fmt: skip
+    """The arguments of the compiled ``_assemble`` (a list, for a caller that runs it on
+    parts of the rows with more after it), which returns the local joint rotations (k, J,
+    3, 3) of k walkers, the swing knee angle (k,) [rad] and whether the swing talocrural
+    angle reaches the data foot elevation (k,).
 
     Parameters
     ----------
@@ -212,19 +212,6 @@ def assemble_joints(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st,
     toe_given : (k,) swing toe angle [rad] where finite.
     arm_swing, elbow_flexion : the style's §8 parameters; n_joints : J.
     """
-    args = assemble_arguments(
-        left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_st, tc_st, sub_st,
-        x_ankle, toe_st, hip_sw, r_thigh_sw, knee_sw, r_shank_sw, tc_sw, phi_sw, phi_st, thigh,
-        shank, use, goal, toe_given, arm_swing, elbow_flexion, n_joints)  # fmt: skip
-    return row_threads().map(_assemble, len(phase), *args, min_rows=MIN_POSE_ROWS)
-
-
-def assemble_arguments(left, phase, heading, stance_fraction, r_pelvis, r_thigh_st, knee_st,
-                       tc_st, sub_st, x_ankle, toe_st, hip_sw, r_thigh_sw, knee_sw,
-                       r_shank_sw, tc_sw, phi_sw, phi_st, thigh, shank, use, goal, toe_given,
-                       arm_swing, elbow_flexion, n_joints) -> list:  # fmt: skip
-    """:func:`assemble_joints`'s arguments as the compiled ``_assemble`` takes them (a
-    list, for a caller that runs it on parts of the rows with more after it)."""
     k = len(phase)
     f = np.ascontiguousarray
     ik = use is not None
@@ -239,7 +226,3 @@ def assemble_arguments(left, phase, heading, stance_fraction, r_pelvis, r_thigh_
         use, goal, f(np.broadcast_to(toe_given, (k,)), dtype=float),
         float(arm_swing), float(elbow_flexion), int(n_joints),
     ]  # fmt: skip
-
-
-#: how many arguments ``_assemble`` takes (:func:`assemble_arguments`) [-]
-ASSEMBLE_ARGUMENTS = 27

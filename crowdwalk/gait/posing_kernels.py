@@ -101,7 +101,7 @@ def pelvis_rotations(yaw, lst, tilt):  # pragma: no cover - compiled
 @_jit
 def upper_body(local, r_pelvis, yaw_angle, sway, tilt, heading, arm_out, swing, elbow,
                vl5, skullbase, shoulder, elbow_joint):  # pragma: no cover - compiled
-    """The KLAW upper body of ``elevwalker._styled_upper_body`` into ``local`` (k, J, 3,
+    """The KLAW upper body (``elevwalker._upper_body_arguments``) into ``local`` (k, J, 3,
     3), row by row, numpy's values: trunk = Rz(yaw_angle) Rx(sway) Ry(tilt); vl5 =
     r_pelvisᵀ trunk; skullbase = trunkᵀ Rz(heading); per arm s (0 left, 1 right) the
     shoulder trunkᵀ Rz(yaw_angle) Rx(arm_out[:, s]) Ry(swing[:, s]) and the elbow

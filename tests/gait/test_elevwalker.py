@@ -288,7 +288,7 @@ def test_a_walk_split_over_row_threads_is_the_walk_in_one(styled, monkeypatch):
     joint_rows = ew._joint_rows
 
     def counted(*args):
-        parts.append(len(args[1]))
+        parts.append(len(args[2]))  # (after the two argument counts: the rows)
         return joint_rows(*args)
 
     monkeypatch.setattr(ew, "_joint_rows", counted)

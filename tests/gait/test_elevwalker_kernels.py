@@ -18,7 +18,7 @@ from crowdwalk.gait.elevwalker import (
     THIGH_HALF,
     THIGH_MID,
     GaitStyle,
-    _styled_upper_body,
+    _upper_body_arguments,
 )
 
 RNG = np.random.default_rng(19)
@@ -211,7 +211,8 @@ def test_styled_upper_body_is_the_numpy_code(from_data):
     thigh_right = np.where(left, phi_sw[:, 2], phi_st[:, 2])
     _styled_upper_body_numpy(want, r_pelvis, heading, phase, side, thigh_left, thigh_right,
                              attributes, from_data)  # fmt: skip
-    _styled_upper_body(local, r_pelvis, heading, phase, left, side, phi_st, phi_sw, attributes,
-                       GaitStyle(trunk_from_data=from_data))
+    ek.styled_upper_body(local, *_upper_body_arguments(
+        k, r_pelvis, heading, phase, left, side, phi_st, phi_sw, attributes,
+        GaitStyle(trunk_from_data=from_data)))
     _same(local, want)
     assert (np.abs((thigh_left - THIGH_MID) / THIGH_HALF) > 1).any()  # clipped arms too
