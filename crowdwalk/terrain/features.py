@@ -302,9 +302,13 @@ class StairFlight:
     def covers(self, xy):
         mask = _in_bbox(xy, self.bbox)
         if mask.any():
-            u, v = self._uv(xy[mask])
-            mask[mask] = (u >= 0) & (u <= self.length) & (np.abs(v) <= self.width / 2)
+            mask[mask] = self._on_flight(xy[mask])
         return mask
+
+    def _on_flight(self, xy) -> np.ndarray:
+        """Whether each point (n, 2) [m] (inside the bbox) is on the flight; (n,) bool."""
+        u, v = self._uv(xy)
+        return (u >= 0) & (u <= self.length) & (np.abs(v) <= self.width / 2)
 
     def step_index(self, xy) -> np.ndarray:
         """Tread index (n,) of each point, clipped to 0..steps-1."""

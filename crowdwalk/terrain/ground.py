@@ -276,15 +276,14 @@ class Terrain:
     def _owner_of_boxes(self, xy: np.ndarray) -> np.ndarray:
         """:meth:`owner` where :attr:`_boxes` holds: the closed-bbox tests of every
         feature in one pass (``_in_bbox``'s comparisons), then a flight's own test on the
-        points in its bbox (``StairFlight.covers`` on the same points, in order)."""
+        points in its bbox (``StairFlight._on_flight``, as its ``covers`` does)."""
         own = np.full(len(xy), -1, dtype=np.int64)
         inside = _in_boxes(xy, self._boxes)
         for i, f in enumerate(self.features):
             if isinstance(f, StairFlight):
                 idx = np.flatnonzero(inside[i])
                 if idx.size:
-                    u, v = f._uv(xy[idx])
-                    own[idx[(u >= 0) & (u <= f.length) & (np.abs(v) <= f.width / 2)]] = i
+                    own[idx[f._on_flight(xy[idx])]] = i
             else:
                 own[inside[i]] = i
         return own
