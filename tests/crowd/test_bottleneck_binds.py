@@ -1,0 +1,99 @@
+"""scripts/bottleneck_binds.py: the labels of made-up decisions, the pairing of entrants,
+and one short run (the recorder leaves the run as it is; inside the headway model's free
+zone no step is capped by it)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+
+from crowdwalk.crowd import CrowdParams
+from crowdwalk.record import Trajectories
+from crowdwalk.verify import _bottleneck, _run
+
+_SPEC = importlib.util.spec_from_file_location(
+    "bottleneck_binds", Path(__file__).parents[2] / "scripts" / "bottleneck_binds.py")
+binds = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(binds)
+
+
+def _decision(**kw) -> dict:
+    """A follower's decision that stands with nothing freeing it, then ``kw``."""
+    d = {"t": 1.0, "agent": 1, "x": 7.7, "y": 0.0, "move": False, "free": 0.0,
+         "reach": np.inf, "nominal": 0.7, "nolim": (False, 0.0), "nosoft": (False, 0.0),
+         "alone": (False, 0.0), "single": {}, "plan_move": False, "plan_len": 0.0,
+         "wake": np.inf, "stepped": False, "t1": 1.25}
+    return {**d, **kw}
+
+
+def test_labels_name_what_frees_the_step():
+    lab = binds.label
+    assert lab(_decision(), leader=0) == "stand:walls"
+    assert lab(_decision(nosoft=(True, 0.6)), leader=0) == "stand:soft"
+    assert lab(_decision(nolim=(True, 0.6)), leader=0) == "stand:priority"
+    assert lab(_decision(single={0: (True, 0.6)}), leader=0) == "stand:hard_leader"
+    assert lab(_decision(single={0: (False, 0.0), 2: (True, 0.6)}), 0) == "stand:hard_other"
+    assert lab(_decision(alone=(True, 0.9)), leader=0) == "stand:hard_several"
+    step = {"move": True, "free": 0.3, "plan_move": True, "plan_len": 0.3, "stepped": True,
+            "t1": 1.5}
+    assert lab(_decision(**{**step, "clash": True, "plan_move": False}), 0) == "stand:clash"
+    assert lab(_decision(**{**step, "stepped": False}), 0) == "stand:yield"
+    assert lab(_decision(**step, reach=0.2), 0) == "step:headway"
+    assert lab(_decision(**{**step, "free": 0.9, "plan_len": 0.65}), 0) == "step:full"
+    assert lab(_decision(**step, single={0: (True, 0.6)}), 0) == "step:short_hard_leader"
+    assert lab(_decision(**step, single={0: (True, 0.35)}), 0) == "step:short_walls_or_plan"
+    assert lab(_decision(**step, alone=(True, 0.9)), 0) == "step:short_hard_several"
+
+
+def _entrants(ys, gap=0.5, fps=10.0) -> Trajectories:
+    """Walkers along x from 7 to 9 m at 1 m/s, one every ``gap`` s, walker i at
+    y = 5 + ys[i]."""
+    rows = []
+    for i, y in enumerate(ys):
+        t0 = gap * i
+        for f in range(int(round(t0 * fps)), int(round((t0 + 2.0) * fps)) + 1):
+            rows.append((f, i, 7.0 + (f / fps - t0), 5.0 + y))
+    a = np.array(sorted(rows))
+    n = len(a)
+    return Trajectories(frame=a[:, 0].astype(int), id=a[:, 1].astype(int), x=a[:, 2],
+                        y=a[:, 3], z=np.zeros(n), ori_x=np.ones(n), ori_y=np.zeros(n),
+                        fps=fps)
+
+
+def test_pairs_binned_by_lateral_distance_and_time_summed():
+    ys = [0.2 * (-1) ** i for i in range(20)]  # 0.4 m apart: every pair in the last bin
+    traj = _entrants(ys)
+    # follower 7 stands 0.25 s (woken at 0.15 s) and steps 0.35 s between 6's entry and its own
+    t7 = binds.entries(traj)[7][0]
+    decisions = [_decision(agent=7, t=t7 - 0.4, t1=t7 - 0.25, wake=t7 - 0.25),
+                 _decision(agent=7, t=t7 - 0.7, t1=t7 - 0.6),
+                 _decision(agent=7, t=t7 - 0.35, move=True, free=0.9, plan_move=True,
+                           plan_len=0.7, stepped=True, t1=t7)]
+    acc = {}
+    binds.attribute(decisions, traj, acc)
+    assert set(acc) == {">=0.3"}
+    (row,) = binds.report(acc)
+    assert row["pairs"] == 9 and abs(row["entry_gap_median_s"] - 0.5) < 0.051
+    # the decision before 6's entry (t7 - 0.7 < t6 = t7 - 0.5) is not counted
+    assert abs(row["s_per_pair"]["step:full"] * 9 - 0.35) < 0.01
+    assert abs(row["s_per_pair"]["stand:walls"] * 9 - 0.15) < 0.01
+    assert row["stands_per_pair"] == round(1 / 9, 2) and row["stands_woken_share"] == 1.0
+
+
+def test_recorder_leaves_the_run_and_headway_is_off_at_the_mouth(tmp_path):
+    data, params = _bottleneck(0.8, 5, 24), CrowdParams()
+    plain = _run(data, tmp_path / "plain", params).traj
+    with binds.Recorder() as rec:
+        seen = _run(data, tmp_path / "seen", params).traj
+    for name in ("frame", "id", "x", "y"):
+        assert np.array_equal(getattr(plain, name), getattr(seen, name))
+    assert len(rec.decisions) > 100
+    # within 1 m of the opening (headway_free_margin) the headway model caps no step
+    near = [d for d in rec.decisions if d["x"] > 7.05 and abs(d["y"]) < 0.4]
+    assert near and all(d["reach"] == np.inf for d in near)
+    # and the wrappers are gone afterwards
+    import crowdwalk.crowd.simulation as simulation
+    from crowdwalk.crowd.steering import choose_steps
+    assert simulation.choose_steps is choose_steps
