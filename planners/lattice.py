@@ -83,7 +83,8 @@ def run_parts(kernel, count: int, *args) -> None:
 def run_tasks(task, count: int) -> list:
     """``[task(0), ..., task(count - 1)]``, the tasks shared out on :data:`THREADS`
     threads (the calling one too), each thread taking the next task not yet taken; a
-    task's kernels run on its own thread (:func:`run_parts` gives it one part). For
+    task's kernels run on its own thread (:func:`run_parts` gives it one part). Once a
+    task raises, no thread takes another, and the error is passed on. For
     independent tasks that each hold the GIL part of the time (a chunk of a batch:
     Python around compiled kernels that release it), so one thread's Python overlaps
     another's kernels. One thread below two tasks or with one thread."""
@@ -92,16 +93,20 @@ def run_tasks(task, count: int) -> list:
     results: list = [None] * count
     taken = iter(range(count))
     lock = threading.Lock()
+    failed: list = []  # a task raised (or the caller was interrupted): take no more
 
     def drain() -> None:
         _LOCAL.serial = True
         try:
             while True:
                 with lock:
-                    i = next(taken, None)
+                    i = None if failed else next(taken, None)
                 if i is None:
                     return
                 results[i] = task(i)
+        except BaseException:
+            failed.append(True)
+            raise
         finally:
             _LOCAL.serial = False
 

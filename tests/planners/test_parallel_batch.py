@@ -4,6 +4,7 @@ one thread, whatever the number of threads: an agent's plan does not depend on w
 thread planned it or on the other agents."""
 
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -77,3 +78,20 @@ def test_run_tasks_keeps_order_and_raises():
 
     with pytest.raises(ValueError, match="task 3"):
         lattice.run_tasks(bad, 6)
+
+
+def test_run_tasks_stops_taking_tasks_after_an_error(monkeypatch):
+    """After a task raised, the threads take no further task."""
+    monkeypatch.setattr(lattice, "THREADS", 2)
+    done = []
+
+    def task(i):
+        done.append(i)
+        if i == 0:
+            raise ValueError("first")
+        time.sleep(0.002)  # (the other thread takes few tasks before the error)
+        return i
+
+    with pytest.raises(ValueError, match="first"):
+        lattice.run_tasks(task, 200)
+    assert len(done) < 100
