@@ -309,7 +309,9 @@ def stage_table(repeat: int, agents: int) -> None:
           "and flat caches) + arrays (shifted profiles, lattice arrays) + kernel (the "
           "up-front table kernel; for the lazy planners the nodes only, their steps and "
           "swings are evaluated in the search); other = input checks and the rest; single "
-          f"plans: median of {repeat} per column; batches: amortised over {agents}")
+          f"plans: median of {repeat} per column; batches: amortised over {agents}, "
+          "their stages summed over the threads that plan chunks at once "
+          "(planners.lattice.run_tasks), so they may add up to more than the total")
     head = ("total", "tables", "grids", "arrays", "kernel", "search", "assemble", "other")
     print(f"{'case':<32}{'planner':<23}" + "".join(f"{h:>9}" for h in head)
           + f"{'tables %':>10}{'search %':>10}")

@@ -12,6 +12,7 @@ computed once per (leg, config, shift) and gathered for each batch
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, replace
 
 import numba as nb
@@ -139,6 +140,9 @@ class _Cache:
 
 _CACHES: dict[PlannerConfig, _Cache] = {}
 _LAST: list = [None, None]  # the last configuration and its cache (hashing one is slow)
+#: Held while the caches are read or grown (the chunks of a batch run on several threads,
+#: :func:`planners.lattice.run_tasks`; a cache's rows and arrays change together).
+_LOCK = threading.RLock()
 
 
 def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
@@ -146,19 +150,22 @@ def leg_grids(legs, speeds: np.ndarray, config: PlannerConfig) -> LegGrids:
     [m/s] (entries missing from the cache are computed together; a single walker's
     result is kept whole, per leg and speed: read it, do not write to it)."""
     speeds = np.asarray(speeds, dtype=float)
-    cache = _LAST[1] if _LAST[0] is config else _CACHES.get(config)
-    if cache is None:
-        cache = _CACHES.setdefault(config, _Cache(config))
-    _LAST[:] = config, cache
-    if len(legs) == 1:
-        key = legs[0], float(speeds[0])
-        got = cache.singles.get(key)
-        if got is None:
-            if len(cache.singles) >= CACHE_ENTRIES:
-                cache.singles.clear()
-            got = cache.singles[key] = _gathered(legs, speeds, config, cache)
-        return got
-    return _gathered(legs, speeds, config, cache)
+    with _LOCK:
+        last_config, cache = _LAST
+        if last_config is not config:
+            cache = _CACHES.get(config)
+            if cache is None:
+                cache = _CACHES.setdefault(config, _Cache(config))
+            _LAST[:] = config, cache
+        if len(legs) == 1:
+            key = legs[0], float(speeds[0])
+            got = cache.singles.get(key)
+            if got is None:
+                if len(cache.singles) >= CACHE_ENTRIES:
+                    cache.singles.clear()
+                got = cache.singles[key] = _gathered(legs, speeds, config, cache)
+            return got
+        return _gathered(legs, speeds, config, cache)
 
 
 def _gathered(legs, speeds: np.ndarray, config: PlannerConfig, cache: _Cache) -> LegGrids:

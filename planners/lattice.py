@@ -13,6 +13,7 @@ when it was evaluated).
 
 from __future__ import annotations
 
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -36,7 +37,8 @@ from planners.legality import Reason
 from planners.profile import RASTER_CELL
 from planners.swing import TABLE_LEVELS
 
-__all__ = ["Structure", "StepTables", "TableWork", "build_tables", "run_parts", "structure"]
+__all__ = ["Structure", "StepTables", "TableWork", "build_tables", "run_parts", "run_tasks",
+           "structure"]
 
 
 #: Largest number of configurations J**n whose step and swing indices are tabulated.
@@ -48,22 +50,73 @@ PARALLEL_AGENTS = 8
 #: cores).
 THREADS = nb.config.NUMBA_NUM_THREADS
 _POOL: list = []
+_POOL_LOCK = threading.Lock()
+#: ``serial`` True on a thread that runs its kernels on itself alone (a thread of
+#: :func:`run_tasks`: the other threads run other tasks).
+_LOCAL = threading.local()
+
+
+def _pool() -> ThreadPoolExecutor:
+    """The planners' THREADS - 1 worker threads (made on first use)."""
+    with _POOL_LOCK:
+        if not _POOL:
+            _POOL.append(ThreadPoolExecutor(THREADS - 1, thread_name_prefix="planners"))
+    return _POOL[0]
 
 
 def run_parts(kernel, count: int, *args) -> None:
     """``kernel(*args, part, parts)`` for part = 0..parts-1 on ``parts`` threads (the
     kernels release the GIL and take every ``parts``-th of ``count`` independent agents
-    or groups), or ``kernel(*args, 0, 1)`` below :data:`PARALLEL_AGENTS`."""
-    parts = min(THREADS, count) if count >= PARALLEL_AGENTS else 1
+    or groups), or ``kernel(*args, 0, 1)`` below :data:`PARALLEL_AGENTS` (and on a
+    thread of :func:`run_tasks`)."""
+    parts = (min(THREADS, count) if count >= PARALLEL_AGENTS
+             and not getattr(_LOCAL, "serial", False) else 1)
     if parts <= 1:
         kernel(*args, 0, 1)
         return
-    if not _POOL:
-        _POOL.append(ThreadPoolExecutor(THREADS - 1, thread_name_prefix="planners"))
-    futures = [_POOL[0].submit(kernel, *args, part, parts) for part in range(1, parts)]
+    futures = [_pool().submit(kernel, *args, part, parts) for part in range(1, parts)]
     kernel(*args, 0, parts)
     for future in futures:
         future.result()
+
+
+def run_tasks(task, count: int) -> list:
+    """``[task(0), ..., task(count - 1)]``, the tasks shared out on :data:`THREADS`
+    threads (the calling one too), each thread taking the next task not yet taken; a
+    task's kernels run on its own thread (:func:`run_parts` gives it one part). Once a
+    task raises, no thread takes another, and the error is passed on. For
+    independent tasks that each hold the GIL part of the time (a chunk of a batch:
+    Python around compiled kernels that release it), so one thread's Python overlaps
+    another's kernels. One thread below two tasks or with one thread."""
+    if count < 2 or THREADS < 2 or getattr(_LOCAL, "serial", False):
+        return [task(i) for i in range(count)]
+    results: list = [None] * count
+    taken = iter(range(count))
+    lock = threading.Lock()
+    failed: list = []  # a task raised (or the caller was interrupted): take no more
+
+    def drain() -> None:
+        _LOCAL.serial = True
+        try:
+            while True:
+                with lock:
+                    i = None if failed else next(taken, None)
+                if i is None:
+                    return
+                results[i] = task(i)
+        except BaseException:
+            failed.append(True)
+            raise
+        finally:
+            _LOCAL.serial = False
+
+    futures = [_pool().submit(drain) for _ in range(min(THREADS, count) - 1)]
+    try:
+        drain()
+    finally:
+        for future in futures:
+            future.result()
+    return results
 #: Evaluate only the steps whose stance foothold a legal sequence of steps from the start
 #: reaches (the others get E = +inf and ``Reason.UNREACHED``) and the swing curves of
 #: pairs a legal sequence can use (False: every step, and the swings of every pair of

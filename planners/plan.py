@@ -35,6 +35,10 @@ _SEARCHES = {"best_first": best_first, "best_first_multistart": best_first_multi
 PLANNERS = frozenset(_SEARCHES)
 #: Agents planned together in one vectorised pass (bounds memory).
 BATCH_CHUNK = 64
+#: A batch of several chunks shares its chunks out on the threads
+#: (:func:`~planners.lattice.run_tasks`: each chunk's kernels on one thread) instead of
+#: running each chunk's kernels on every thread in turn (False; the same plans).
+CHUNK_THREADS = True
 OK = "ok"
 NO_FOOTHOLD = "no legal foothold"
 #: The message of a failed plan that was not diagnosed (``plan_batch(diagnose=...)``).
@@ -239,8 +243,9 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     if len(legs) != A or not all(isinstance(leg, Leg) for leg in legs):
         raise invalid("plan", "legs", f"a Leg or {A} Legs", legs)
     speeds = _vector(speeds, A, "speeds")
-    bad = np.flatnonzero(~((speeds > 0) & (speeds <= 3.0)))
-    if bad.size:
+    in_range = (speeds > 0) & (speeds <= 3.0)
+    if not in_range.all():
+        bad = np.flatnonzero(~in_range)
         raise invalid("plan", "speed", "finite and in (0, 3] [m/s]", float(speeds[bad[0]]))
     origins = np.zeros(A) if origins is None else _vector(origins, A, "origins")
     turns = None if heading_change is None else _vector(heading_change, A, "heading_change")
@@ -249,15 +254,16 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     first_foot = list(first_foot)
     if len(first_foot) != A or not set(first_foot) <= {"left", "right", ""}:
         raise invalid("plan", "first_foot", f"{A} of 'left' or 'right'", first_foot)
-    diagnose = np.broadcast_to(np.asarray(diagnose, dtype=bool), (A,))
+    diagnose = (np.ones(A, dtype=bool) if diagnose is True  # (the default, quickly)
+                else np.broadcast_to(np.asarray(diagnose, dtype=bool), (A,)))
     if trailing is not None:
         trailing = _vector(trailing, A, "trailing")
         bad = np.flatnonzero(~((trailing < 0) & (trailing > -3.0)))
         if bad.size:
             raise invalid("plan", "trailing", "in (-3, 0) [m]", float(trailing[bad[0]]))
-    plans: list[Plan] = []
-    for start in range(0, A, BATCH_CHUNK):
-        sl = slice(start, start + BATCH_CHUNK)
+
+    def chunk(i: int) -> list[Plan]:
+        sl = slice(i * BATCH_CHUNK, (i + 1) * BATCH_CHUNK)
         t0 = time.perf_counter()
         tables = build_tables(profiles[sl], legs[sl], speeds[sl],
                               None if trailing is None else trailing[sl], origins[sl], config,
@@ -268,9 +274,16 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
         result = _SEARCHES[planner](tables)
         t2 = stages.add("search", t1)
         elapsed = (t2 - t0) / len(profiles[sl])
-        plans += _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],
-                           origins[sl], elapsed, diagnose[sl])
+        done = _assemble(tables, result, planner, profiles[sl], legs[sl], speeds[sl],
+                         origins[sl], elapsed, diagnose[sl])
         stages.add("assemble", t2)
+        return done
+
+    # chunks on every core (each chunk's kernels on its thread alone), so that one
+    # thread's Python (grids, arrays, assembly) overlaps another's kernels
+    chunks = -(-A // BATCH_CHUNK)
+    plans = [p for done in (lattice.run_tasks(chunk, chunks) if CHUNK_THREADS
+                            else [chunk(i) for i in range(chunks)]) for p in done]
     if turns is None and not any(first_foot):
         return plans
     return [_turned(p, None if turns is None else float(turns[a]), first_foot[a], config)
@@ -323,10 +336,11 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     A = speeds.size
     rows = np.arange(A)[:, None]
     messages = {}
+    all_found = bool(result.found.all())
     undiagnosed = ~result.found & ~diagnose
-    for a in np.flatnonzero(undiagnosed).tolist():
+    for a in [] if all_found else np.flatnonzero(undiagnosed).tolist():
         messages[a] = NOT_DIAGNOSED, 0  # no steps: its configuration is not read
-    if not result.found.all() and diagnose.any():
+    if not all_found and diagnose.any():
         failed = np.flatnonzero(~result.found & diagnose)
         if tables.lazy or tables.deferred:
             tables.complete(failed)  # the diagnosis reads every legal prefix
