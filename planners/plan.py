@@ -243,9 +243,8 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     if len(legs) != A or not all(isinstance(leg, Leg) for leg in legs):
         raise invalid("plan", "legs", f"a Leg or {A} Legs", legs)
     speeds = _vector(speeds, A, "speeds")
-    in_range = (speeds > 0) & (speeds <= 3.0)
-    if not in_range.all():
-        bad = np.flatnonzero(~in_range)
+    bad = np.flatnonzero(~((speeds > 0) & (speeds <= 3.0)))
+    if bad.size:
         raise invalid("plan", "speed", "finite and in (0, 3] [m/s]", float(speeds[bad[0]]))
     origins = np.zeros(A) if origins is None else _vector(origins, A, "origins")
     turns = None if heading_change is None else _vector(heading_change, A, "heading_change")
@@ -254,8 +253,7 @@ def plan_batch(profiles: Sequence[GroundProfile], legs: Leg | Sequence[Leg], spe
     first_foot = list(first_foot)
     if len(first_foot) != A or not set(first_foot) <= {"left", "right", ""}:
         raise invalid("plan", "first_foot", f"{A} of 'left' or 'right'", first_foot)
-    diagnose = (np.ones(A, dtype=bool) if diagnose is True  # (the default, quickly)
-                else np.broadcast_to(np.asarray(diagnose, dtype=bool), (A,)))
+    diagnose = np.broadcast_to(np.asarray(diagnose, dtype=bool), (A,))
     if trailing is not None:
         trailing = _vector(trailing, A, "trailing")
         bad = np.flatnonzero(~((trailing < 0) & (trailing > -3.0)))
@@ -336,11 +334,10 @@ def _assemble(tables: StepTables, result: SearchResult, planner: str, profiles, 
     A = speeds.size
     rows = np.arange(A)[:, None]
     messages = {}
-    all_found = bool(result.found.all())
     undiagnosed = ~result.found & ~diagnose
-    for a in [] if all_found else np.flatnonzero(undiagnosed).tolist():
+    for a in np.flatnonzero(undiagnosed).tolist():
         messages[a] = NOT_DIAGNOSED, 0  # no steps: its configuration is not read
-    if not all_found and diagnose.any():
+    if not result.found.all() and diagnose.any():
         failed = np.flatnonzero(~result.found & diagnose)
         if tables.lazy or tables.deferred:
             tables.complete(failed)  # the diagnosis reads every legal prefix

@@ -40,16 +40,4 @@ def phase_durations(step_length, speed, rise, leg_length) -> np.ndarray:
     the path, as in Eq. 1) split by :func:`phase_fractions`.
     """
     duration = np.asarray(step_length, dtype=float) / np.asarray(speed, dtype=float)
-    x = 0.30 * np.abs(np.asarray(rise, dtype=float)) / np.asarray(leg_length, dtype=float)
-    x = np.minimum(x, 0.30)  # keep T1 >= 14 % (phase_fractions)
-    if duration.shape != x.shape:
-        duration, x = np.broadcast_arrays(duration, x)
-    # duration times each of phase_fractions' columns, written in place (the same
-    # products, without stacking the fractions first)
-    out = np.empty(duration.shape + (3,))
-    t1, t2, t3 = FLAT_FRACTIONS
-    np.multiply(duration, t1 - x, out=out[..., 0])
-    half = 0.5 * x
-    np.multiply(duration, t2 + half, out=out[..., 1])
-    np.multiply(duration, t3 + half, out=out[..., 2])
-    return out
+    return duration[..., None] * phase_fractions(rise, leg_length)
