@@ -53,10 +53,14 @@ MIN_SPLIT_ROWS = 400
 #: ~0.3 ms of Python between numpy calls, against ~60 µs per walker steered).
 MIN_THREAD_ROWS = 32
 #: A split call's rows are cut into up to this many parts per thread [-], taken by the
-#: threads as they come free (:meth:`RowThreads.map`). The 10,000-walker stadium (5 s,
-#: load 4) waited 0.3 s per simulated s for the second thread after its own half of each
-#: call (one part per thread): the steering targets' half took 0.38 s and the wait 0.64.
-CHUNKS_PER_THREAD = 4
+#: threads as they come free, the caller first (:meth:`RowThreads.map`): the
+#: 10,000-walker stadium (5 s, load 4) waited 0.3 s per simulated s for the second thread
+#: after its own half of each call (the steering targets' half took 0.38 s, the wait
+#: 0.64 s); a part that thread has not begun when the caller is done is the caller's now.
+#: Four parts per thread measured the same as one under load 3-5 (0.41 against 0.42 sim s
+#: per wall s at 10,000 walkers, 2.25 against 2.31 for the 1,000-walker room;
+#: ``benchmarks/bench_loop.py ... --variants default c4``), so one.
+CHUNKS_PER_THREAD = 1
 #: The same for a light call, a compiled kernel of a few µs per walker (the crowd's
 #: steering targets, neighbour grid queries, clash tests, footing) [-]: at ~100 deciders
 #: per tick, split in two threads, such calls took 2-10 times their one-thread time

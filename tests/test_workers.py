@@ -66,7 +66,7 @@ def where(x: np.ndarray, labels: list) -> Pair:
     return Pair(total=2.0 * x, rows=[threading.get_ident()] * len(labels))
 
 
-def test_row_threads_equal_one_call_and_use_every_thread():
+def test_row_threads_equal_one_call_and_use_every_thread(monkeypatch):
     x = np.random.default_rng(4).normal(size=(200, 3))
     labels = [f"a{i}" for i in range(200)]
     threads = RowThreads(3)
@@ -74,6 +74,7 @@ def test_row_threads_equal_one_call_and_use_every_thread():
         whole = weighted(x, labels, table=np.eye(3), scale=2.0)
         split = threads.map(weighted, 200, x, labels, table=np.eye(3), scale=2.0)
         assert np.array_equal(split.total, whole.total) and split.rows == whole.rows
+        monkeypatch.setattr(W, "CHUNKS_PER_THREAD", 4)  # 12 parts of 50 ms
         parts = threads.map(where, 200, x, labels, min_rows=10)
         assert np.array_equal(parts.total, 2.0 * x)
         # parts of 50 ms, taken as threads come free: every thread takes some
