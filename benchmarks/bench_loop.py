@@ -51,7 +51,7 @@ def one(path: Path, out: Path, overrides: RunOverrides, variant: str) -> dict:
     """One run of ``variant``: the loop's rates and the simulation thread's times."""
     W._ROW_THREADS = W.RowThreads(int(variant[1:]) if variant.startswith("t") else
                                   W.available_cores())
-    chunks = W.CHUNKS_PER_THREAD
+    chunks = getattr(W, "CHUNKS_PER_THREAD", None)  # (absent before session 22)
     if variant.startswith("c"):
         W.CHUNKS_PER_THREAD = int(variant[1:])
     started: list = []
@@ -63,7 +63,8 @@ def one(path: Path, out: Path, overrides: RunOverrides, variant: str) -> dict:
     try:
         summary = run_scenario(path, out, overrides=overrides, progress=first)
     finally:
-        W.CHUNKS_PER_THREAD = chunks
+        if chunks is not None:
+            W.CHUNKS_PER_THREAD = chunks
         W._ROW_THREADS.close()
     wall, cpu, (run, queue) = time.perf_counter(), time.process_time(), _sched()
     shutil.rmtree(out)
