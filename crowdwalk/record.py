@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from crowdwalk.csv_text import rows_text
 from crowdwalk.errors import InputError, invalid
 from crowdwalk.steps import FOOTSTEP_COLUMNS, FootstepTable, StepBatch
 
@@ -288,6 +289,11 @@ class RunWriter:
         missing = [c for c in FOOTSTEP_COLUMNS if c not in rows]
         if missing:
             raise invalid("RunWriter", "footsteps", f"a table with columns {missing}", sorted(rows))
+        text = rows_text([rows[c] for c in FOOTSTEP_COLUMNS])  # compiled, nogil
+        if text is not None:
+            if text:
+                self._steps_file.write(text.decode("ascii"))
+            return
         columns, plain = [], True
         for c in FOOTSTEP_COLUMNS:
             col = np.asarray(rows[c])

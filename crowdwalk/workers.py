@@ -36,8 +36,8 @@ from itertools import count as _count
 import numpy as np
 
 __all__ = ["Workers", "WorkerError", "RowThreads", "available_cores", "row_threads",
-           "set_row_threads", "split_rows", "worker_count", "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS",
-           "MIN_THREAD_ROWS"]
+           "set_row_threads", "split_rows", "worker_count", "CHUNKS_PER_THREAD",
+           "MIN_PARALLEL_AGENTS", "MIN_SPLIT_ROWS", "MIN_THREAD_ROWS"]
 
 #: A run that writes poses and has fewer walkers stays in one process (workers cost ~2 s
 #: to start) [-]: ``bench_crowd.py --agents 1000 --workers 0 auto --repeats 2 --seconds 6``
@@ -52,6 +52,15 @@ MIN_SPLIT_ROWS = 400
 #: A call with fewer rows per thread is not split among threads [-] (a part's fixed cost,
 #: ~0.3 ms of Python between numpy calls, against ~60 µs per walker steered).
 MIN_THREAD_ROWS = 32
+#: A split call's rows are cut into up to this many parts per thread [-], taken by the
+#: threads as they come free, the caller first (:meth:`RowThreads.map`): the
+#: 10,000-walker stadium (5 s, load 4) waited 0.3 s per simulated s for the second thread
+#: after its own half of each call (the steering targets' half took 0.38 s, the wait
+#: 0.64 s); a part that thread has not begun when the caller is done is the caller's now.
+#: Four parts per thread measured the same as one under load 3-5 (0.41 against 0.42 sim s
+#: per wall s at 10,000 walkers, 2.25 against 2.31 for the 1,000-walker room;
+#: ``benchmarks/bench_loop.py ... --variants default c4``), so one.
+CHUNKS_PER_THREAD = 1
 #: The same for a light call, a compiled kernel of a few µs per walker (the crowd's
 #: steering targets, neighbour grid queries, clash tests, footing) [-]: at ~100 deciders
 #: per tick, split in two threads, such calls took 2-10 times their one-thread time
@@ -101,16 +110,22 @@ class RowThreads:
 
     def map(self, fn: Callable, m: int, /, *args, min_rows: int | None = None,
             light: bool = False, **kwargs):
-        """``fn(*args, **kwargs)`` computed on contiguous parts of its m rows at once, one
-        part per thread (the last in the calling thread), joined in order: the rules of
-        :func:`split_rows` (row-independent ``fn``; arguments with m rows are split).
-        Fewer than ``min_rows`` (default :data:`MIN_THREAD_ROWS`; a ``light`` call's
-        :data:`MIN_LIGHT_ROWS`) rows per part: fewer parts."""
+        """``fn(*args, **kwargs)`` computed on contiguous parts of its m rows at once in
+        the threads, joined in order: the rules of :func:`split_rows` (row-independent
+        ``fn``; arguments with m rows are split). Fewer than ``min_rows`` (default
+        :data:`MIN_THREAD_ROWS`; a ``light`` call's :data:`MIN_LIGHT_ROWS`) rows per part:
+        fewer parts.
+
+        The rows are cut into up to :data:`CHUNKS_PER_THREAD` parts per thread, which
+        the threads take one after another as they come free, the calling thread first
+        (:meth:`_share`): a thread that gets no core for a while (the run's writer, other
+        processes) leaves its parts to the others instead of making the call wait."""
         least = (min_rows if min_rows is not None
                  else MIN_LIGHT_ROWS if light else MIN_THREAD_ROWS)
         parts = min(self.count, m // max(least, 1))
         if parts <= 1 or self._pool is None:
             return fn(*args, **kwargs)
+        parts = min(parts * CHUNKS_PER_THREAD, m // max(least, 1))
         # np.linspace(0, m, parts + 1).round()'s bounds (i · (m / parts), half to even)
         step = m / parts
         bounds = [round(i * step) for i in range(parts)] + [m]
@@ -120,13 +135,43 @@ class RowThreads:
         named = {k: _splits(v, m) for k, v in kwargs.items()}
 
         def part(rows):
-            return ([_cut(a, rows, m) if s else a for a, s in zip(args, split, strict=True)],
-                    {k: _cut(v, rows, m) if named[k] else v for k, v in kwargs.items()})
+            return fn(*[_cut(a, rows, m) if s else a for a, s in zip(args, split, strict=True)],
+                      **{k: _cut(v, rows, m) if named[k] else v for k, v in kwargs.items()})
 
-        futures = [self._pool.submit(fn, *a, **k) for a, k in map(part, cuts[:-1])]
-        a, k = part(cuts[-1])
-        here = fn(*a, **k)
-        return _join([f.result() for f in futures] + [here])
+        return _join(self._share(part, cuts))
+
+    def _share(self, part: Callable, cuts: list) -> list:
+        """``[part(c) for c in cuts]``, the parts taken in order by whichever thread is
+        free: the calling thread and those of the pool that start before every part is
+        taken (one that starts later takes none, and is not waited for)."""
+        results: list = [None] * len(cuts)
+        lock = threading.Lock()
+        state = {"next": 0, "done": 0, "error": None}
+        finished = threading.Event()
+
+        def work() -> None:
+            while True:
+                with lock:
+                    i = state["next"]
+                    if i >= len(cuts):
+                        return
+                    state["next"] = i + 1
+                try:
+                    results[i] = part(cuts[i])
+                except BaseException as exc:  # noqa: BLE001 - raised in the calling thread
+                    state["error"] = state["error"] or exc
+                with lock:
+                    state["done"] += 1
+                    if state["done"] == len(cuts):
+                        finished.set()
+
+        for _ in range(self.count - 1):
+            self._pool.submit(work)
+        work()
+        finished.wait()
+        if state["error"] is not None:
+            raise state["error"]
+        return results
 
     def close(self) -> None:
         """End the threads."""

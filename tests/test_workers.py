@@ -66,7 +66,7 @@ def where(x: np.ndarray, labels: list) -> Pair:
     return Pair(total=2.0 * x, rows=[threading.get_ident()] * len(labels))
 
 
-def test_row_threads_equal_one_call_and_use_every_thread():
+def test_row_threads_equal_one_call_and_use_every_thread(monkeypatch):
     x = np.random.default_rng(4).normal(size=(200, 3))
     labels = [f"a{i}" for i in range(200)]
     threads = RowThreads(3)
@@ -74,13 +74,34 @@ def test_row_threads_equal_one_call_and_use_every_thread():
         whole = weighted(x, labels, table=np.eye(3), scale=2.0)
         split = threads.map(weighted, 200, x, labels, table=np.eye(3), scale=2.0)
         assert np.array_equal(split.total, whole.total) and split.rows == whole.rows
+        monkeypatch.setattr(W, "CHUNKS_PER_THREAD", 4)  # 12 parts of 50 ms
         parts = threads.map(where, 200, x, labels, min_rows=10)
         assert np.array_equal(parts.total, 2.0 * x)
-        assert len(set(parts.rows)) == 3  # three parts in three threads, this one last
-        assert parts.rows[-1] == threading.get_ident()
+        # parts of 50 ms, taken as threads come free: every thread takes some
+        assert set(parts.rows) >= {threading.get_ident()} and len(set(parts.rows)) == 3
         few = threads.map(where, 200, x, labels, min_rows=150)  # too few rows to split
         assert set(few.rows) == {threading.get_ident()}
     finally:
+        threads.close()
+
+
+def test_row_threads_do_not_wait_for_a_thread_that_does_not_start():
+    """A pool thread kept busy elsewhere takes no part: the calling thread computes them
+    all and returns without waiting for it."""
+    x = np.random.default_rng(5).normal(size=(400, 3))
+    labels = [f"a{i}" for i in range(400)]
+    threads = RowThreads(2)
+    release = threading.Event()
+    try:
+        threads._pool.submit(release.wait, 30.0)  # the one pool thread, busy
+        t0 = time.perf_counter()
+        parts = threads.map(weighted, 400, x, labels, table=np.eye(3), scale=2.0, min_rows=10)
+        assert time.perf_counter() - t0 < 10.0
+        assert np.array_equal(parts.total, weighted(x, labels, table=np.eye(3),
+                                                    scale=2.0).total)
+        assert parts.rows == weighted(x, labels, table=np.eye(3), scale=2.0).rows
+    finally:
+        release.set()
         threads.close()
 
 

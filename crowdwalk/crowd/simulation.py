@@ -190,6 +190,7 @@ class CrowdSimulation:
         self.wall_commands = 0.0  # gait engine step commands
         self._pending: list[StepBatch] = []  # steps not yet sent to the gait engine
         self._decided: list[StepBatch] = []  # steps not yet taken by the run's sinks
+        self._directions: np.ndarray | None = None  # _route_directions of this decision
 
     # -- the loop --------------------------------------------------------------------
 
@@ -351,13 +352,16 @@ class CrowdSimulation:
     def _route_directions(self, agents: np.ndarray | None = None) -> np.ndarray:
         """The desired directions (..., 2) of ``agents`` (an index array of any shape;
         default every agent, (n, 2)): the unit direction of each one's current route
-        segment."""
-        st, table = self.state, self.routes.table
-        segment, route = ((st.segment, st.route) if agents is None
-                          else (st.segment[agents], st.route[agents]))
-        seg = np.minimum(segment, table.stop[route] - 1)
-        d = table.xy[seg + 1] - table.xy[seg]
-        return d / np.maximum(np.linalg.norm(d, axis=-1), 1e-12)[..., None]
+        segment. Within a decision (:meth:`_decide`, from its steering to its commit,
+        where no segment or route changes) they are computed once for every agent."""
+        if self._directions is None:  # once per decision: segments and routes are fixed
+            st, table = self.state, self.routes.table
+            seg = np.minimum(st.segment, table.stop[st.route] - 1)
+            d = table.xy[seg + 1] - table.xy[seg]
+            # row by row the same values as for any index array of agents (the norm's
+            # two squares are added in one order whatever the array's shape)
+            self._directions = d / np.maximum(np.linalg.norm(d, axis=-1), 1e-12)[..., None]
+        return self._directions if agents is None else self._directions[agents]
 
     def _opening_scales(self, pos: np.ndarray) -> dict:
         """``opening_ease``: the factors on the soft wall and neighbour terms (k,) for
@@ -405,6 +409,7 @@ class CrowdSimulation:
                 idx, te, pos = idx[~held], te[~held], pos[~held]
                 if idx.size == 0:
                     return
+        self._directions = None  # the segments are this decision's from here on
         target, route_dir = self.threads.map(
             partial(steering_targets, table, clearance=self.clearance, params=prm), idx.size,
             route=st.route[idx], progress=st.progress[idx], xy=pos, heading=st.heading[idx],
@@ -496,6 +501,7 @@ class CrowdSimulation:
                                    nb_bound=self.shape.bound[j], step=self.nominal_step[idx],
                                    direction=self._route_directions(idx),
                                    nb_direction=self._route_directions(j))
+        self._directions = None  # the commit re-routes
         self._commit(idx, te, t, choice.direction, choice.yaw, plan, wake)
 
     def _commit(self, idx, te, t, direction, yaw, plan: StepPlan,

@@ -332,8 +332,10 @@ def choose_steps(
     timed = hard.remaining is not None and step_time is not None
     n_k = nbs.valid.shape[1]
     nb_yaw_now, nb_yaw_end = hard.yaws()
-    none = np.zeros((m, n_k))
-    none_hard = none if hard is nbs else np.zeros(hard.valid.shape)
+    # zeros only where a term is absent (an (m, K) array per call otherwise unused)
+    none = np.zeros((m, n_k)) if nbs.heading is None or (not timed and hard is nbs) else None
+    remaining = (f(hard.remaining, float) if timed
+                 else none if hard is nbs else np.zeros(hard.valid.shape))
     prm = params
     field = (clearance.distance, float(clearance.origin[0]), float(clearance.origin[1]),
              float(clearance.cell))
@@ -344,7 +346,7 @@ def choose_steps(
         np.zeros(m) if lag is None else f(lag, float), nominal_step, timed,
         f(hard.valid, bool), f(hard.now, float), f(hard.end, float), f(hard.radius, float),
         f(nb_yaw_now, float), f(nb_yaw_end, float),
-        f(hard.remaining, float) if timed else none_hard, f(hard.outlines(), float), field[0],
+        remaining, f(hard.outlines(), float), field[0],
         clearance.block_least, *field[1:], np.deg2rad(prm.offsets_deg),
         np.asarray(prm.step_lengths, float), float(prm.foot_clearance),
         float(np.deg2rad(25.0) + 1e-9), bool(prm.keep_facing), np.deg2rad(prm.twists_deg))
