@@ -17,8 +17,8 @@ mouth, their median place, seconds stood, and their single blockers; the mutual 
 wedged against each other); the stands freed by no neighbour set (walls), by the finer
 fan, by dropping the reservations. Then one line of totals over the seeds.
 
-Usage: ``python scripts/bottleneck_jams.py WIDTH SEED [SEED ...] [--stuck 0.5]
-[--set FIELD=VALUE ...]``.
+Usage: ``python scripts/bottleneck_jams.py WIDTH SEED [SEED ...] [--stuck 0.5] [--gap 1.5]
+[--set FIELD=VALUE ...]`` (``--gap``: the entry gaps reported are longer than this [s]).
 """
 
 from __future__ import annotations
@@ -90,13 +90,13 @@ class JamRecorder(Recorder):
         return {}
 
 
-def jams(decisions: list[dict], traj, seed: int) -> list[dict]:
-    """One summary per entry gap over 1.5 s of one run."""
+def jams(decisions: list[dict], traj, seed: int, gap: float = 1.5) -> list[dict]:
+    """One summary per entry gap over ``gap`` [s] of one run."""
     ent = entries(traj)
     ent = ent[5:len(ent) - 5]
     out = []
     for (tl, _, _), (tf, _, _) in zip(ent[:-1], ent[1:], strict=True):
-        if tf - tl <= 1.5:
+        if tf - tl <= gap:
             continue
         ds = [d for d in decisions if tl <= d["t"] < tf]
         by = defaultdict(list)
@@ -129,6 +129,7 @@ def main() -> None:
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--count", type=int, default=60)
     ap.add_argument("--stuck", type=float, default=0.5)
+    ap.add_argument("--gap", type=float, default=1.5)
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
     params = CrowdParams().with_overrides(parse_overrides(args.set))
@@ -136,7 +137,7 @@ def main() -> None:
     for seed in args.seeds:
         with JamRecorder(args.stuck) as rec, tempfile.TemporaryDirectory() as tmp:
             run = _run(_bottleneck(args.width, seed, args.count), Path(tmp) / "run", params)
-        for j in jams(rec.decisions, run.traj, seed):
+        for j in jams(rec.decisions, run.traj, seed, args.gap):
             print(json.dumps(j), flush=True)
             total["gaps"] += 1
             total["gap_s"] += j["gap_s"]
