@@ -144,13 +144,26 @@ class Recorder:
                 one = {**kw, "neighbours": replace(nb, valid=nb.valid & (
                     np.arange(nb.valid.shape[1]) != k)[None, :])}
                 if lim is not None:
-                    one["limits"] = replace(lim, valid=lim.valid & (lim.agent != a))
+                    one["limits"] = without_columns(lim, nb.valid.shape[1], [k])
                 alt = choose(position[r:r + 1], stance[r:r + 1], **_row(one, r, m))
                 single[a] = (bool(alt.move[0]), float(alt.free_length[0]))
             d["single"] = single
             out[int(r)] = d
             self.decisions.append(d)
         return out
+
+
+def without_columns(limits, k_nbs: int, cols) -> object:
+    """The hard-test neighbours ``limits`` without neighbours ``cols`` (columns of the
+    K = ``k_nbs`` gathered ones): their bodies and, when ``limits`` holds reservations
+    (``mouth_priority.with_reservations``: K + K columns, the reservations in the
+    neighbours' order, no ``agent``), their reservations too."""
+    valid = limits.valid.copy()
+    cols = list(cols)
+    valid[:, cols] = False
+    if valid.shape[1] == 2 * k_nbs:
+        valid[:, [k_nbs + c for c in cols]] = False
+    return replace(limits, valid=valid)
 
 
 def label(d: dict, leader: int) -> str:

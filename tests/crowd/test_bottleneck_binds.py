@@ -97,3 +97,48 @@ def test_recorder_leaves_the_run_and_headway_is_off_at_the_mouth(tmp_path):
     import crowdwalk.crowd.simulation as simulation
     from crowdwalk.crowd.steering import choose_steps
     assert simulation.choose_steps is choose_steps
+
+
+def test_without_columns_drops_bodies_and_reservations():
+    """The hard test with reservations (``with_reservations``: K + K columns, no
+    ``agent``) loses both the neighbour's body and its reservation."""
+    from crowdwalk.crowd.mouth_priority import with_reservations
+    from crowdwalk.crowd.steering import Neighbours
+
+    def nbs(valid):
+        z = np.zeros((1, 2, 2))
+        return Neighbours(valid=np.array([valid]), now=z, end=z, velocity=z,
+                          radius=np.full((1, 2), 0.18), heading=np.zeros((1, 2)),
+                          remaining=np.zeros((1, 2)), agent=np.array([[3, 4]]))
+
+    lim = with_reservations(nbs([True, True]), nbs([False, True]))
+    assert lim.valid.shape == (1, 4) and lim.agent is None  # why agents cannot be used
+    out = binds.without_columns(lim, 2, [1])
+    assert out.valid.tolist() == [[True, False, False, False]]
+    plain = nbs([True, True])  # without reservations the K columns only
+    assert binds.without_columns(plain, 2, [0]).valid.tolist() == [[False, True]]
+
+
+def test_jams_find_mutual_blockers_in_long_gaps():
+    import sys
+    sys.path.insert(0, str(Path(__file__).parents[2] / "scripts"))
+    spec = importlib.util.spec_from_file_location(
+        "bottleneck_jams", Path(__file__).parents[2] / "scripts" / "bottleneck_jams.py")
+    jams = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(jams)
+    traj = _entrants([0.0] * 20)
+    ent = binds.entries(traj)
+    t = ent[10][0]  # a long gap: shift the later entrants by 3 s
+    late = traj.frame / traj.fps > t + 0.05
+    traj = Trajectories(frame=traj.frame + np.where(late, int(3 * traj.fps), 0), id=traj.id,
+                        x=traj.x, y=traj.y, z=traj.z, ori_x=traj.ori_x, ori_y=traj.ori_y,
+                        fps=traj.fps)
+    stand = {"x": 7.8, "y": 0.4, "stuck": 1.0, "fine": False, "nolim": False, "alone": True}
+    decisions = [{**stand, "t": t + 1.0, "agent": 31, "blockers": [[35]]},
+                 {**stand, "t": t + 1.5, "agent": 35, "blockers": [[31], [8]]},
+                 {**stand, "t": t + 2.0, "agent": 8, "blockers": [[7, 9]]},
+                 {**stand, "t": t - 5.0, "agent": 8, "blockers": [[35]]}]  # not in the gap
+    (j,) = jams.jams(decisions, traj, seed=0)
+    assert j["gap_s"] > 1.5 and j["stands"] == 3
+    assert j["mutual_pairs"] == [[31, 35]]
+    assert j["by_one"] == 2 and j["by_two_or_three"] == 1 and j["walls_only"] == 0
