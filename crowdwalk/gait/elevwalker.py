@@ -194,6 +194,13 @@ class GaitStyle:
         stood still; the data's root velocity at the heel strike is blended in over half
         the step rather than taken at once) (an extension: docs/architecture.md "Restart
         from rest"); False (default): the C⁰ join.
+    exact_hip_offset : bool
+        The stance hip's offset (``stance_hip_offset``) is reached in 3-D: its sagittal
+        two-link IK is exact only for a leg in the plane of ψ, and with the stance foot
+        turned ~50° from ψ (a turn after a stand) the hip moved 4.4 times the requested
+        drop (docs/architecture.md "Exact stance hip offset"). The offset passed to the
+        IK is rescaled per component (along ψ, vertical) by the requested over the
+        achieved shift, twice (three stance solves more); False (default): one IK.
     """
 
     step_width: float = 0.05
@@ -217,6 +224,7 @@ class GaitStyle:
     data_toe_off: bool = False
     stop_settle: bool = False
     restart_c1: bool = False
+    exact_hip_offset: bool = False
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
@@ -584,11 +592,49 @@ def elevwalker_pose(
     )
 
 
+_EXACT_ROUNDS = 2  # exact_hip_offset's rescalings
+_EXACT_RATIO = (0.1, 1.5)  # ... each at most this factor on a component [1]
+
+
 def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
                  warm: WarmStart, style: GaitStyle, stance_hip_offset, attributes, list_scale,
                  tc_axis, sub_axis) -> StanceHalf:
     """:func:`elevwalker_pose`'s stance leg, pelvis and root (steps 1–3 without the swing
-    hip): arrays (k,) or (k, 4) as it makes them; the stance axes (k, 3)."""
+    hip): arrays (k,) or (k, 4) as it makes them; the stance axes (k, 3). With
+    ``GaitStyle.exact_hip_offset`` the offset given to the stance IK is rescaled until
+    the root moves by ``stance_hip_offset`` along ψ and vertically (secant through 0)."""
+    args = (body, left, phase, heading, phi_st, phi_sw, foot, warm, style)
+    rest = (attributes, list_scale, tc_axis, sub_axis)
+    half = _stance_half_once(*args, stance_hip_offset, *rest)
+    if not (style.exact_hip_offset and stance_hip_offset is not None):
+        return half
+    k = len(body)
+    want = np.array(as_rows(stance_hip_offset, (k, 3)), dtype=float)
+    free = _stance_half_once(*args, None, *rest).root
+    axes = np.zeros((k, 2, 3))  # along ψ, vertical
+    axes[:, 0, 0], axes[:, 0, 1], axes[:, 1, 2] = np.cos(heading), np.sin(heading), 1.0
+    w = np.einsum("kcd,kd->kc", axes, want)
+    used, first = want.copy(), half
+    for _ in range(_EXACT_ROUNDS):
+        got = np.einsum("kcd,kd->kc", axes, half.root - free)
+        u = np.einsum("kcd,kd->kc", axes, used)
+        ratio = np.where(np.abs(got) > 1e-6, w / np.where(np.abs(got) > 1e-6, got, 1.0), 1.0)
+        ratio = np.where(np.abs(w) > 1e-4, np.clip(ratio, *_EXACT_RATIO), 1.0)
+        used = used + np.einsum("kc,kcd->kd", u * ratio - u, axes)
+        half = _stance_half_once(*args, used, *rest)
+    # a row whose rescaled solve failed keeps the first
+    bad = ~half.ok_ankle & first.ok_ankle
+    if bad.any():
+        half = StanceHalf(**{f.name: np.where(
+            bad.reshape((-1,) + (1,) * (getattr(half, f.name).ndim - 1)),
+            getattr(first, f.name), getattr(half, f.name)) for f in fields(half)})
+    return half
+
+
+def _stance_half_once(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
+                      warm: WarmStart, style: GaitStyle, stance_hip_offset, attributes,
+                      list_scale, tc_axis, sub_axis) -> StanceHalf:
+    """One solve of :func:`_stance_half` with the stance hip offset as given."""
     k = len(body)
     h = body.height
     list_shape, rotation_shape = pelvis_shapes(style, phase)
