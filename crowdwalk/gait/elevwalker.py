@@ -200,7 +200,8 @@ class GaitStyle:
         turned ~50° from ψ (a turn after a stand) the hip moved 4.4 times the requested
         drop (docs/architecture.md "Exact stance hip offset"). The offset passed to the
         IK is rescaled per component (along ψ, vertical) by the requested over the
-        achieved shift, twice (three stance solves more); False (default): one IK.
+        achieved shift, twice (three stance solves more), faded in (smoothstep) as the
+        stance foot's yaw turns 15° → 35° from ψ; False (default): one IK.
     """
 
     step_width: float = 0.05
@@ -594,6 +595,7 @@ def elevwalker_pose(
 
 _EXACT_ROUNDS = 2  # exact_hip_offset's rescalings
 _EXACT_RATIO = (0.1, 1.5)  # ... each at most this factor on a component [1]
+_EXACT_TURN = np.radians((15.0, 35.0))  # ... faded in as the stance foot turns from ψ
 
 
 def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
@@ -609,6 +611,12 @@ def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceF
     if not (style.exact_hip_offset and stance_hip_offset is not None):
         return half
     k = len(body)
+    lo, hi = _EXACT_TURN
+    x = np.clip((np.abs(_wrap(foot.yaw - heading)) - lo) / (hi - lo), 0.0, 1.0)
+    fade = (x * x * (3.0 - 2.0 * x))[:, None]  # smoothstep
+    turned = fade[:, 0] > 0.0
+    if not turned.any():
+        return half
     want = np.array(as_rows(stance_hip_offset, (k, 3)), dtype=float)
     free = _stance_half_once(*args, None, *rest).root
     axes = np.zeros((k, 2, 3))  # along ψ, vertical
@@ -620,10 +628,11 @@ def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceF
         u = np.einsum("kcd,kd->kc", axes, used)
         ratio = np.where(np.abs(got) > 1e-6, w / np.where(np.abs(got) > 1e-6, got, 1.0), 1.0)
         ratio = np.where(np.abs(w) > 1e-4, np.clip(ratio, *_EXACT_RATIO), 1.0)
+        ratio = 1.0 + fade * (ratio - 1.0)
         used = used + np.einsum("kc,kcd->kd", u * ratio - u, axes)
         half = _stance_half_once(*args, used, *rest)
-    # a row whose rescaled solve failed keeps the first
-    bad = ~half.ok_ankle & first.ok_ankle
+    # a row not turned, or whose rescaled solve failed, keeps the first
+    bad = ~turned | (~half.ok_ankle & first.ok_ankle)
     if bad.any():
         half = StanceHalf(**{f.name: np.where(
             bad.reshape((-1,) + (1,) * (getattr(half, f.name).ndim - 1)),
