@@ -194,14 +194,6 @@ class GaitStyle:
         stood still; the data's root velocity at the heel strike is blended in over half
         the step rather than taken at once) (an extension: docs/architecture.md "Restart
         from rest"); False (default): the C⁰ join.
-    exact_hip_offset : bool
-        The stance hip's offset (``stance_hip_offset``) is reached in 3-D: its sagittal
-        two-link IK is exact only for a leg in the plane of ψ, and with the stance foot
-        turned ~50° from ψ (a turn after a stand) the hip moved 4.4 times the requested
-        drop (docs/architecture.md "Exact stance hip offset"). The offset passed to the
-        IK is rescaled per component (along ψ, vertical) by the requested over the
-        achieved shift, twice (three stance solves more), faded in (smoothstep) as the
-        stance foot's yaw turns 15° → 35° from ψ; False (default): one IK.
     """
 
     step_width: float = 0.05
@@ -225,7 +217,6 @@ class GaitStyle:
     data_toe_off: bool = False
     stop_settle: bool = False
     restart_c1: bool = False
-    exact_hip_offset: bool = False
 
     def __post_init__(self) -> None:
         for name in ("step_width", "sway", "pelvic_list", "arm_swing", "elbow_flexion"):
@@ -593,57 +584,11 @@ def elevwalker_pose(
     )
 
 
-_EXACT_ROUNDS = 2  # exact_hip_offset's rescalings
-_EXACT_RATIO = (0.1, 1.5)  # ... each at most this factor on a component [1]
-_EXACT_TURN = np.radians((15.0, 35.0))  # ... faded in as the stance foot turns from ψ
-
-
 def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
                  warm: WarmStart, style: GaitStyle, stance_hip_offset, attributes, list_scale,
                  tc_axis, sub_axis) -> StanceHalf:
     """:func:`elevwalker_pose`'s stance leg, pelvis and root (steps 1–3 without the swing
-    hip): arrays (k,) or (k, 4) as it makes them; the stance axes (k, 3). With
-    ``GaitStyle.exact_hip_offset`` the offset given to the stance IK is rescaled until
-    the root moves by ``stance_hip_offset`` along ψ and vertically (secant through 0)."""
-    args = (body, left, phase, heading, phi_st, phi_sw, foot, warm, style)
-    rest = (attributes, list_scale, tc_axis, sub_axis)
-    half = _stance_half_once(*args, stance_hip_offset, *rest)
-    if not (style.exact_hip_offset and stance_hip_offset is not None):
-        return half
-    k = len(body)
-    lo, hi = _EXACT_TURN
-    x = np.clip((np.abs(_wrap(foot.yaw - heading)) - lo) / (hi - lo), 0.0, 1.0)
-    fade = (x * x * (3.0 - 2.0 * x))[:, None]  # smoothstep
-    turned = fade[:, 0] > 0.0
-    if not turned.any():
-        return half
-    want = np.array(as_rows(stance_hip_offset, (k, 3)), dtype=float)
-    free = _stance_half_once(*args, None, *rest).root
-    axes = np.zeros((k, 2, 3))  # along ψ, vertical
-    axes[:, 0, 0], axes[:, 0, 1], axes[:, 1, 2] = np.cos(heading), np.sin(heading), 1.0
-    w = np.einsum("kcd,kd->kc", axes, want)
-    used, first = want.copy(), half
-    for _ in range(_EXACT_ROUNDS):
-        got = np.einsum("kcd,kd->kc", axes, half.root - free)
-        u = np.einsum("kcd,kd->kc", axes, used)
-        ratio = np.where(np.abs(got) > 1e-6, w / np.where(np.abs(got) > 1e-6, got, 1.0), 1.0)
-        ratio = np.where(np.abs(w) > 1e-4, np.clip(ratio, *_EXACT_RATIO), 1.0)
-        ratio = 1.0 + fade * (ratio - 1.0)
-        used = used + np.einsum("kc,kcd->kd", u * ratio - u, axes)
-        half = _stance_half_once(*args, used, *rest)
-    # a row not turned, or whose rescaled solve failed, keeps the first
-    bad = ~turned | (~half.ok_ankle & first.ok_ankle)
-    if bad.any():
-        half = StanceHalf(**{f.name: np.where(
-            bad.reshape((-1,) + (1,) * (getattr(half, f.name).ndim - 1)),
-            getattr(first, f.name), getattr(half, f.name)) for f in fields(half)})
-    return half
-
-
-def _stance_half_once(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
-                      warm: WarmStart, style: GaitStyle, stance_hip_offset, attributes,
-                      list_scale, tc_axis, sub_axis) -> StanceHalf:
-    """One solve of :func:`_stance_half` with the stance hip offset as given."""
+    hip): arrays (k,) or (k, 4) as it makes them; the stance axes (k, 3)."""
     k = len(body)
     h = body.height
     list_shape, rotation_shape = pelvis_shapes(style, phase)
