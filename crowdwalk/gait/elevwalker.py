@@ -629,12 +629,17 @@ def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceF
     # then secants per component
     same = (w * got > 0.0) & (np.abs(got) > 1e-6)
     slope = np.where(same, np.clip(w / np.where(same, got, 1.0), *_EXACT_RATIO), 1.0)
-    first, u_prev, g_prev = half, w.copy(), got
+    u_prev, g_prev = w.copy(), got
+    best, miss = half, np.linalg.norm(w - got, axis=1)
     u = w + fade * slope * (w - got)
     for i in range(_EXACT_ROUNDS):
         used = want + np.einsum("kc,kcd->kd", u - w, axes)
         half = _stance_half_once(*args, used, *rest)
         got = np.einsum("kcd,kd->kc", axes, half.root - free)
+        # each row keeps the solve that missed least (a secant can overshoot)
+        m = np.linalg.norm(w - got, axis=1)
+        better = turned & half.ok_ankle & (m < miss)
+        best, miss = _rows_of(better, half, best), np.where(better, m, miss)
         if i + 1 == _EXACT_ROUNDS:
             break
         dg, du = got - g_prev, u - u_prev
@@ -642,13 +647,14 @@ def _stance_half(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceF
         slope = np.clip(slope, *_EXACT_RATIO)
         u_prev, g_prev = u, got
         u = u + fade * slope * (w - got)
-    # a row the fade leaves out, or whose corrected solve failed, keeps the first
-    bad = ~turned | (~half.ok_ankle & first.ok_ankle)
-    if bad.any():
-        half = StanceHalf(**{f.name: np.where(
-            bad.reshape((-1,) + (1,) * (getattr(half, f.name).ndim - 1)),
-            getattr(first, f.name), getattr(half, f.name)) for f in fields(half)})
-    return half
+    return best
+
+
+def _rows_of(rows: np.ndarray, a: StanceHalf, b: StanceHalf) -> StanceHalf:
+    """The stance half with ``a``'s values at ``rows`` (k,) bool and ``b``'s elsewhere."""
+    return StanceHalf(**{f.name: np.where(
+        rows.reshape((-1,) + (1,) * (getattr(a, f.name).ndim - 1)),
+        getattr(a, f.name), getattr(b, f.name)) for f in fields(a)})
 
 
 def _stance_half_once(body: Body, left, phase, heading, phi_st, phi_sw, foot: StanceFoot,
