@@ -20,7 +20,9 @@ how often and for how long F stands (and how often the stand ends early by the w
 and the seconds per pair by label.
 
 Usage: ``python scripts/bottleneck_binds.py WIDTH SEED [SEED ...] [--count 60]
-[--set FIELD=VALUE ...]`` (``--set``: CrowdParams fields, ``steering.``-prefixed
+[--by dy|gap] [--set FIELD=VALUE ...]`` (``--by gap``: bins of entry gap under 1.0,
+1.0–1.5 and over 1.5 s; a step more than 45° off the door's direction is labelled
+``…:side``) (``--set``: CrowdParams fields, ``steering.``-prefixed
 SteeringParams fields, Python literals). The seeds' pairs are pooled.
 """
 
@@ -42,6 +44,10 @@ from crowdwalk.verify import _bottleneck, _run
 from crowdwalk.workers import _cut, _splits
 
 BINS = {"<0.1": (0.0, 0.1), "0.1-0.3": (0.1, 0.3), ">=0.3": (0.3, np.inf)}
+#: ``--by gap``: the pairs binned by their entry gap [s] instead
+GAP_BINS = {"<1.0": (0.0, 1.0), "1.0-1.5": (1.0, 1.5), ">=1.5": (1.5, np.inf)}
+#: a step more than this [deg] off the +x direction (into the door) is a side step
+SIDE_DEG = 45.0
 
 
 def _region(pos: np.ndarray) -> np.ndarray:
@@ -101,9 +107,10 @@ class Recorder:
             commit(s, idx, te, t, direction, yaw, plan, wake)
             for r, d in rows.items():
                 a = int(idx[r])
-                d.update(stepped=bool(s.state.t1[a] > t + 1e-9
-                                      and np.any(s.state.pos1[a] != s.state.pos0[a])),
-                         t1=float(s.state.t1[a]))
+                step = s.state.pos1[a] - s.state.pos0[a]
+                d.update(stepped=bool(s.state.t1[a] > t + 1e-9 and np.any(step != 0)),
+                         t1=float(s.state.t1[a]),
+                         heading=float(np.degrees(np.arctan2(step[1], step[0]))))
 
         sim._decide, sim._gap_steps, sim._commit = _decide, _gap_steps, _commit
         simulation.choose_steps, simulation.clashes_with_neighbours = _choose, _clashes
@@ -216,26 +223,30 @@ def entries(traj) -> list[tuple[float, int, float]]:
     return sorted(out)
 
 
-def attribute(decisions: list[dict], traj, acc: dict) -> None:
-    """Add one run's pairs (steady part: entrants 6 to n − 5) to ``acc`` (per bin)."""
-    by = defaultdict(list)
+def attribute(decisions: list[dict], traj, acc: dict, by: str = "dy") -> None:
+    """Add one run's pairs (steady part: entrants 6 to n − 5) to ``acc`` (per bin of
+    lateral distance, ``by="dy"``, or of entry gap, ``by="gap"``). A step more than
+    :data:`SIDE_DEG` off +x gets its label with ``:side`` appended."""
+    mine = defaultdict(list)
     for d in decisions:
-        by[d["agent"]].append(d)
+        mine[d["agent"]].append(d)
     ent = entries(traj)
     ent = ent[5:len(ent) - 5]
     for (tl, il, yl), (tf, jf, yf) in zip(ent[:-1], ent[1:], strict=True):
-        b = next(k for k, (lo, hi) in BINS.items() if lo <= abs(yf - yl) < hi)
+        key, bins = (tf - tl, GAP_BINS) if by == "gap" else (abs(yf - yl), BINS)
+        b = next(k for k, (lo, hi) in bins.items() if lo <= key < hi)
         a = acc.setdefault(b, {"gaps": [], "dist": [], "lat": [], "stands": 0, "woke": 0,
                                "stand_s": 0.0, "s": Counter()})
         a["gaps"].append(tf - tl)
-        before = [d for d in by[jf] if d["t"] <= tl]
+        before = [d for d in mine[jf] if d["t"] <= tl]
         if before:
             a["dist"].append(8.0 - before[-1]["x"])
             a["lat"].append(abs(before[-1]["y"] - yl))
-        for d in by[jf]:
+        for d in mine[jf]:
             if not tl <= d["t"] < tf or "t1" not in d:
                 continue
-            a["s"][label(d, il)] += d["t1"] - d["t"]
+            side = d["stepped"] and abs(d.get("heading", 0.0)) > SIDE_DEG
+            a["s"][label(d, il) + (":side" if side else "")] += d["t1"] - d["t"]
             if not d["stepped"]:
                 a["stands"] += 1
                 a["stand_s"] += d["t1"] - d["t"]
@@ -245,13 +256,14 @@ def attribute(decisions: list[dict], traj, acc: dict) -> None:
 def report(acc: dict) -> list[dict]:
     """One summary per bin."""
     out = []
-    for b in BINS:
+    for b in (*BINS, *GAP_BINS):
         if b not in acc:
             continue
         a, n = acc[b], len(acc[b]["gaps"])
         out.append({"dy": b, "pairs": n,
                     "entry_gap_median_s": round(float(np.median(a["gaps"])), 2),
                     "entry_gap_mean_s": round(float(np.mean(a["gaps"])), 2),
+                    "gap_s_sum": round(float(np.sum(a["gaps"])), 1),
                     "follower_to_mouth_m": round(float(np.median(a["dist"])), 2),
                     "follower_lateral_m": round(float(np.median(a["lat"])), 2),
                     "stands_per_pair": round(a["stands"] / n, 2),
@@ -266,6 +278,8 @@ def main() -> None:
     ap.add_argument("width", type=float)
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--count", type=int, default=60)
+    ap.add_argument("--by", choices=("dy", "gap"), default="dy",
+                    help="bin the pairs by lateral distance or by entry gap")
     ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
     params = CrowdParams().with_overrides(parse_overrides(args.set))
@@ -273,7 +287,7 @@ def main() -> None:
     for seed in args.seeds:
         with Recorder() as rec, tempfile.TemporaryDirectory() as tmp:
             run = _run(_bottleneck(args.width, seed, args.count), Path(tmp) / "run", params)
-        attribute(rec.decisions, run.traj, acc)
+        attribute(rec.decisions, run.traj, acc, args.by)
     for row in report(acc):
         print(json.dumps({"width": args.width, "seeds": args.seeds, **row}))
 

@@ -142,3 +142,25 @@ def test_jams_find_mutual_blockers_in_long_gaps():
     assert j["gap_s"] > 1.5 and j["stands"] == 3
     assert j["mutual_pairs"] == [[31, 35]]
     assert j["by_one"] == 2 and j["by_two_or_three"] == 1 and j["walls_only"] == 0
+
+
+def test_pairs_binned_by_entry_gap_and_side_steps_labelled():
+    ys = [0.2 * (-1) ** i for i in range(20)]  # 0.4 m apart, but one every 1.2 s
+    traj = _entrants(ys, gap=1.2)
+    t7 = binds.entries(traj)[7][0]
+    # follower 7 steps sideways (90° off +x) for 0.3 s, then a full step into the door
+    decisions = [_decision(agent=7, t=t7 - 0.45, move=True, free=0.9, plan_move=True,
+                           plan_len=0.7, stepped=True, t1=t7 - 0.15, heading=90.0),
+                 _decision(agent=7, t=t7 - 0.15, move=True, free=0.9, plan_move=True,
+                           plan_len=0.7, stepped=True, t1=t7, heading=-10.0)]
+    acc = {}
+    binds.attribute(decisions, traj, acc, by="gap")
+    assert set(acc) == {"1.0-1.5"}
+    (row,) = binds.report(acc)
+    assert row["dy"] == "1.0-1.5" and row["pairs"] == 9
+    assert abs(row["gap_s_sum"] - 9 * 1.2) < 0.1
+    assert abs(row["s_per_pair"]["step:full:side"] * 9 - 0.3) < 0.01
+    assert abs(row["s_per_pair"]["step:full"] * 9 - 0.15) < 0.01
+    acc = {}
+    binds.attribute(decisions, traj, acc)  # by lateral distance, as before
+    assert set(acc) == {">=0.3"}
