@@ -20,8 +20,8 @@ how often and for how long F stands (and how often the stand ends early by the w
 and the seconds per pair by label.
 
 Usage: ``python scripts/bottleneck_binds.py WIDTH SEED [SEED ...] [--count 60]
-[--by dy|gap] [--set FIELD=VALUE ...]`` (``--by gap``: bins of entry gap under 1.0,
-1.0–1.5 and over 1.5 s; a step more than 45° off the door's direction is labelled
+[--by dy|gap] [--set FIELD=VALUE ...]`` (``--by gap``: bins of entry gap up to 1.0,
+1.1–1.5 and over 1.5 s; a step more than 45° off the door's direction is labelled
 ``…:side``) (``--set``: CrowdParams fields, ``steering.``-prefixed
 SteeringParams fields, Python literals). The seeds' pairs are pooled.
 """
@@ -44,8 +44,10 @@ from crowdwalk.verify import _bottleneck, _run
 from crowdwalk.workers import _cut, _splits
 
 BINS = {"<0.1": (0.0, 0.1), "0.1-0.3": (0.1, 0.3), ">=0.3": (0.3, np.inf)}
-#: ``--by gap``: the pairs binned by their entry gap [s] instead
-GAP_BINS = {"<1.0": (0.0, 1.0), "1.0-1.5": (1.0, 1.5), ">=1.5": (1.5, np.inf)}
+#: ``--by gap``: the pairs binned by their entry gap [s] instead; the edges sit half a
+#: frame of the 10 fps trajectories above 1.0 and 1.5 s (gaps of exactly 1.0 s go into the
+#: first bin, of 1.5 s into the second, as ``bottleneck_jams.py --gap``'s "over 1.0 s")
+GAP_BINS = {"<=1.0": (0.0, 1.05), "1.1-1.5": (1.05, 1.55), ">1.5": (1.55, np.inf)}
 #: a step more than this [deg] off the +x direction (into the door) is a side step
 SIDE_DEG = 45.0
 

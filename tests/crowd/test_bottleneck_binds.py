@@ -155,12 +155,15 @@ def test_pairs_binned_by_entry_gap_and_side_steps_labelled():
                            plan_len=0.7, stepped=True, t1=t7, heading=-10.0)]
     acc = {}
     binds.attribute(decisions, traj, acc, by="gap")
-    assert set(acc) == {"1.0-1.5"}
+    assert set(acc) == {"1.1-1.5"}
     (row,) = binds.report(acc)
-    assert row["dy"] == "1.0-1.5" and row["pairs"] == 9
+    assert row["dy"] == "1.1-1.5" and row["pairs"] == 9
     assert abs(row["gap_s_sum"] - 9 * 1.2) < 0.1
     assert abs(row["s_per_pair"]["step:full:side"] * 9 - 0.3) < 0.01
     assert abs(row["s_per_pair"]["step:full"] * 9 - 0.15) < 0.01
+    acc = {}
+    binds.attribute(decisions, _entrants(ys, gap=1.0), acc, by="gap")  # 1.0 s: first bin
+    assert set(acc) == {"<=1.0"}
     acc = {}
     binds.attribute(decisions, traj, acc)  # by lateral distance, as before
     assert set(acc) == {">=0.3"}
