@@ -32,6 +32,7 @@ import argparse
 import json
 import tempfile
 from collections import Counter, defaultdict
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 
@@ -275,20 +276,34 @@ def report(acc: dict) -> list[dict]:
     return out
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def bottleneck_arguments(doc: str) -> argparse.ArgumentParser:
+    """The diagnosis scripts' common arguments: door width [m], seeds, ``--count``
+    walkers and ``--set FIELD=VALUE`` crowd parameter overrides."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("width", type=float)
     ap.add_argument("seeds", type=int, nargs="+")
     ap.add_argument("--count", type=int, default=60)
+    ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
+    return ap
+
+
+def recorded_runs(args: argparse.Namespace, recorder) -> Iterator[tuple[int, Recorder, object]]:
+    """(seed, its recorder, its run) for each of ``args.seeds``: verify's bottleneck run
+    with ``recorder()`` (a :class:`Recorder`) recording its decisions."""
+    params = CrowdParams().with_overrides(parse_overrides(args.set))
+    for seed in args.seeds:
+        with recorder() as rec, tempfile.TemporaryDirectory() as tmp:
+            run = _run(_bottleneck(args.width, seed, args.count), Path(tmp) / "run", params)
+        yield seed, rec, run
+
+
+def main() -> None:
+    ap = bottleneck_arguments(__doc__)
     ap.add_argument("--by", choices=("dy", "gap"), default="dy",
                     help="bin the pairs by lateral distance or by entry gap")
-    ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
-    params = CrowdParams().with_overrides(parse_overrides(args.set))
     acc: dict = {}
-    for seed in args.seeds:
-        with Recorder() as rec, tempfile.TemporaryDirectory() as tmp:
-            run = _run(_bottleneck(args.width, seed, args.count), Path(tmp) / "run", params)
+    for _, rec, run in recorded_runs(args, Recorder):
         attribute(rec.decisions, run.traj, acc, args.by)
     for row in report(acc):
         print(json.dumps({"width": args.width, "seeds": args.seeds, **row}))

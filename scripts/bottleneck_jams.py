@@ -23,20 +23,20 @@ Usage: ``python scripts/bottleneck_jams.py WIDTH SEED [SEED ...] [--stuck 0.5] [
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import json
-import tempfile
 from collections import Counter, defaultdict
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
-from bottleneck_binds import Recorder, _row, entries, without_columns
-
-from crowdwalk.crowd import CrowdParams
-from crowdwalk.crowd.params import parse_overrides
-from crowdwalk.verify import _bottleneck, _run
+from bottleneck_binds import (
+    Recorder,
+    _row,
+    bottleneck_arguments,
+    entries,
+    recorded_runs,
+    without_columns,
+)
 
 #: the finer fan of step directions [deg] (every 5° to ±90°)
 FINE = (0.0, *(s * a for a in range(5, 95, 5) for s in (-1.0, 1.0)))
@@ -124,19 +124,12 @@ def jams(decisions: list[dict], traj, seed: int, gap: float = 1.5) -> list[dict]
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("width", type=float)
-    ap.add_argument("seeds", type=int, nargs="+")
-    ap.add_argument("--count", type=int, default=60)
+    ap = bottleneck_arguments(__doc__)
     ap.add_argument("--stuck", type=float, default=0.5)
     ap.add_argument("--gap", type=float, default=1.5)
-    ap.add_argument("--set", nargs="*", default=[], metavar="FIELD=VALUE")
     args = ap.parse_args()
-    params = CrowdParams().with_overrides(parse_overrides(args.set))
     total: Counter = Counter()
-    for seed in args.seeds:
-        with JamRecorder(args.stuck) as rec, tempfile.TemporaryDirectory() as tmp:
-            run = _run(_bottleneck(args.width, seed, args.count), Path(tmp) / "run", params)
+    for seed, rec, run in recorded_runs(args, lambda: JamRecorder(args.stuck)):
         for j in jams(rec.decisions, run.traj, seed, args.gap):
             print(json.dumps(j), flush=True)
             total["gaps"] += 1
